@@ -1,0 +1,122 @@
+"""What ``shc workspace`` reports: workspaces, walkspace and limits of a robot and gait.
+
+The computation follows OpenSHC's start-up exactly: plan the direct start-up from the joint
+defaults (which gives the default stance configuration), search each leg's workspace from there,
+intersect them into the walkspace and derive speed limits for the gait (study §3, §9.2).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from shc_cli.control.gait import StepCycle, step_cycle
+from shc_cli.control.limits import Limits, generate_limits
+from shc_cli.control.startup import plan_direct_startup
+from shc_cli.model.chains import Chains, FloatArray
+from shc_cli.model.workspace import Workplane, polygon_area, search_workspaces, volumetric_workspaces, walkspace
+from shc_cli.spec.gait import Gait
+from shc_cli.spec.robot import Robot
+
+
+@dataclass(frozen=True)
+class WorkspaceReport:
+    """Everything ``shc workspace`` prints, writes and plots."""
+
+    robot: Robot
+    gait: Gait
+    step_frequency: float
+    cycle: StepCycle
+    default_joints: FloatArray
+    identity_tips: FloatArray
+    planes: dict[str, Workplane]
+    layers: dict[str, dict[float, Workplane]] | None
+    walkspace: Workplane
+    limits: Limits
+
+    def area(self, leg: str) -> float:
+        """Area of a leg's workplane polygon [m²]."""
+        return polygon_area(self.planes[leg])
+
+    def forward_stride(self, leg: str) -> float:
+        """Longest straight stride along x through the identity position, ``r(0°) + r(180°)`` [m]."""
+        plane = self.planes[leg]
+        return plane[0] + plane[180]
+
+    def to_json(self) -> dict[str, Any]:
+        """The ``--json`` document: radii in m, speeds in m/s and rad/s, keyed by bearing in degrees."""
+        by_bearing = self.limits.bearings
+        document: dict[str, Any] = {
+            "robot": self.robot.name,
+            "gait": self.gait.name,
+            "step_frequency": self.step_frequency,
+            "legs": {leg: {str(b): r for b, r in plane.items()} for leg, plane in self.planes.items()},
+            "leg_area_m2": {leg: self.area(leg) for leg in self.planes},
+            "leg_forward_stride_m": {leg: self.forward_stride(leg) for leg in self.planes},
+            "walkspace": {str(b): r for b, r in self.walkspace.items()},
+            "max_linear_speed": {str(b): lim.linear_speed for b, lim in by_bearing.items()},
+            "max_linear_acceleration": {str(b): lim.linear_acceleration for b, lim in by_bearing.items()},
+            "max_angular_speed": {str(b): lim.angular_speed for b, lim in by_bearing.items()},
+            "max_angular_acceleration": {str(b): lim.angular_acceleration for b, lim in by_bearing.items()},
+            "step_period_cycles": self.cycle.period,
+            "swing_period_cycles": self.cycle.swing_period,
+            "stance_period_cycles": self.cycle.stance_period,
+            "cycle_frequency_hz": self.cycle.frequency,
+            "duty_factor": self.cycle.duty_factor,
+            "time_to_max_stride_s": self.limits.time_to_max_stride,
+            "default_joints": {
+                leg: dict(zip(self.robot.legs[leg].joints, map(float, self.default_joints[i]), strict=False))
+                for i, leg in enumerate(self.robot.legs)
+            },
+        }
+        if self.layers is not None:
+            document["layers"] = {
+                leg: {f"{h:.6f}": {str(b): r for b, r in plane.items()} for h, plane in stack.items()}
+                for leg, stack in self.layers.items()
+            }
+        return document
+
+
+def analyse_workspace(
+    robot: Robot,
+    gait: Gait,
+    step_frequency: float | None = None,
+    bearing_count: int = 8,
+    volumetric: bool = False,
+) -> WorkspaceReport:
+    """Run OpenSHC's start-up computations for ``robot`` walking ``gait``."""
+    chains = Chains.from_robot(robot)
+    default_joints = plan_direct_startup(robot, chains, chains.default_joints())
+    clearance = robot.walker.body_clearance
+    identity = np.array([[leg.stance.x, leg.stance.y, -clearance] for leg in robot.legs.values()])
+    layers = None
+    if volumetric:
+        layers = volumetric_workspaces(chains, default_joints, identity, robot.time_delta, bearing_count)
+        planes = {leg: _plane_at(stack, 0.0) for leg, stack in layers.items()}
+    else:
+        planes = search_workspaces(chains, default_joints, identity, robot.time_delta, bearing_count).planes
+    stance = {leg: (spec.stance.x, spec.stance.y) for leg, spec in robot.legs.items()}
+    common = walkspace(planes, stance, robot.walker.overlapping_walkspaces)
+    frequency = robot.walker.step_frequency.default if step_frequency is None else step_frequency
+    cycle = step_cycle(gait, frequency, robot.time_delta)
+    first = next(iter(robot.legs.values())).stance
+    limits = generate_limits(common, cycle, robot.time_delta, math.hypot(first.x, first.y))
+    return WorkspaceReport(robot, gait, frequency, cycle, default_joints, identity, planes, layers, common, limits)
+
+
+def _plane_at(stack: dict[float, Workplane], height: float) -> Workplane:
+    """Workplane at ``height`` by linear interpolation between the bounding layers."""
+    heights = sorted(stack)
+    if height <= heights[0]:
+        return stack[heights[0]]
+    if height >= heights[-1]:
+        return stack[heights[-1]]
+    upper = next(h for h in heights if h >= height)
+    lower = max(h for h in heights if h <= height)
+    if upper == lower:
+        return stack[upper]
+    share = (height - lower) / (upper - lower)
+    return {b: stack[lower][b] * (1.0 - share) + stack[upper][b] * share for b in stack[lower]}

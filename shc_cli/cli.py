@@ -1,0 +1,122 @@
+"""The ``shc`` command line: thin commands over spec → model → control → outputs.
+
+Each command reads its files, builds the objects it needs and writes its outputs; heavy imports
+(numpy, numba, matplotlib, pybullet) happen inside the commands so ``shc --help`` starts fast.
+User errors (:class:`~shc_cli.errors.ShcError`) print one line per problem and exit with code 2.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from shc_cli import __version__
+from shc_cli.errors import ShcError
+
+app = typer.Typer(
+    name="shc",
+    help="OpenSHC's multilegged gait controller in Python: check robots, see workspaces, plan gaits.",
+    add_completion=False,
+    no_args_is_help=True,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,
+)
+
+_state = {"debug": False}
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"shc {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    debug: Annotated[bool, typer.Option("--debug", help="Show tracebacks instead of one-line errors.")] = False,
+    version: Annotated[
+        bool, typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit.")
+    ] = False,
+) -> None:
+    """OpenSHC's multilegged gait controller in Python."""
+    _state["debug"] = debug
+
+
+@app.command()
+def validate(
+    files: Annotated[list[str], typer.Argument(help="Robot and gait files (paths or bundled names).")],
+    show: Annotated[bool, typer.Option("--show", help="Print each robot fully expanded, as TOML.")] = False,
+) -> None:
+    """Check robot and gait files: schema, limits, reachability, gait fit. One line per problem."""
+    from shc_cli.commands.validate import run_validate
+
+    run_validate(files, show=show)
+
+
+@app.command()
+def workspace(
+    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
+    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    step_frequency: Annotated[
+        float | None, typer.Option(help="Step frequency [Hz] (default: the robot's).")
+    ] = None,
+    bearings: Annotated[int, typer.Option(help="Search directions; 8 = OpenSHC's 45° steps.")] = 8,
+    volumetric: Annotated[bool, typer.Option(help="Search a stack of planes (rough-terrain mode).")] = False,
+    out: Annotated[Path | None, typer.Option(help="Write workspace.csv, limits.csv and workspace.png here.")] = None,
+    json_output: Annotated[bool, typer.Option("--json", help="Print one JSON object and nothing else.")] = False,
+) -> None:
+    """Per-leg workspaces, the common walkspace and speed/acceleration limits (paper Table II, Fig. 13)."""
+    from shc_cli.commands.workspace import run_workspace
+
+    run_workspace(robot, gait, step_frequency, bearings, volumetric, out, json_output)
+
+
+@app.command()
+def schema(
+    kind: Annotated[str, typer.Argument(help="'robot' or 'gait'.")],
+) -> None:
+    """Print the JSON Schema of robot or gait files (for editor completion)."""
+    import json
+
+    from shc_cli.errors import NotFoundError
+    from shc_cli.spec.gait import Gait
+    from shc_cli.spec.loading import robot_file_schema
+
+    if kind == "robot":
+        document = robot_file_schema()
+    elif kind == "gait":
+        document = Gait.model_json_schema()
+    else:
+        raise NotFoundError(f"schema: unknown kind '{kind}' (use 'robot' or 'gait')")
+    typer.echo(json.dumps(document, indent=2))
+
+
+def main() -> None:
+    """Console entry point: run the app, turning user errors into one line and exit code 2."""
+    debug = "--debug" in sys.argv[1:]
+    try:
+        app(standalone_mode=False)
+    except ShcError as error:
+        if debug:
+            raise
+        for line in str(error).splitlines():
+            typer.echo(f"error: {line}", err=True)
+        sys.exit(2)
+    except typer.Exit as done:
+        sys.exit(done.exit_code)
+    except typer.Abort:
+        typer.echo("aborted", err=True)
+        sys.exit(130)
+    except KeyboardInterrupt:
+        typer.echo("interrupted", err=True)
+        sys.exit(130)
+    except __import__("click").ClickException as error:
+        error.show()
+        sys.exit(2)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,117 @@
+"""``shc validate``: check robot and gait files and summarise the robots."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+
+import typer
+
+from shc_cli.errors import Issue, NotFoundError, ShcError, SpecError
+from shc_cli.spec.loading import LoadedGait, LoadedRobot, bundled, load_gait, load_robot
+from shc_cli.spec.robot import Robot
+from shc_cli.spec.toml_out import dump_toml
+
+GAIT_KEYS = ("stance_phase", "swing_phase", "offset_multiplier")
+
+
+def _kind(name: str) -> str:
+    """'robot' or 'gait' for a path (by its keys) or a bundled name."""
+    path = Path(name)
+    if path.is_file():
+        try:
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError, OSError):
+            return "robot"  # the robot loader reports the syntax error with its line
+        return "gait" if any(key in data for key in GAIT_KEYS) else "robot"
+    if name in bundled("gaits") and name not in bundled("robots"):
+        return "gait"
+    return "robot"
+
+
+def run_validate(files: list[str], *, show: bool) -> None:
+    """Validate every file; print a summary per robot; raise one SpecError listing every problem."""
+    from shc_cli.spec.checks import check_gait, check_gait_pattern, check_robot
+
+    issues: list[Issue] = []
+    robots: list[LoadedRobot] = []
+    gaits: list[LoadedGait] = []
+    for name in files:
+        try:
+            if _kind(name) == "gait":
+                gaits.append(load_gait(name))
+            else:
+                loaded = load_robot(name)
+                found = check_robot(loaded)
+                issues += found
+                if not found:
+                    issues += _check_own_gait(loaded)
+                    robots.append(loaded)
+        except SpecError as error:
+            issues += error.issues
+        except NotFoundError as error:
+            issues.append(Issue(None, None, "", str(error)))
+    for gait in gaits:
+        found = [i for robot in robots if robot.robot for i in check_gait(gait, robot.robot)]
+        issues += found if robots else check_gait_pattern(gait)
+    if issues:
+        raise SpecError(issues)
+    for loaded in robots:
+        assert loaded.robot is not None
+        if show:
+            typer.echo(f"# {loaded.path} (expanded)")
+            typer.echo(dump_toml(loaded.robot.model_dump(mode="json")))
+        typer.echo(summary(loaded.robot, [g for g in gaits if g.gait]))
+    for gait in gaits:
+        assert gait.gait is not None
+        typer.echo(f"{gait.path}: gait '{gait.gait.name}' ok (duty factor {gait.gait.duty_factor:.3f})")
+
+
+def _check_own_gait(loaded: LoadedRobot) -> list[Issue]:
+    """The gait named in walker.gait must exist and fit the robot."""
+    from shc_cli.spec.checks import check_gait
+
+    assert loaded.robot is not None
+    file, _ = loaded.where(("walker", "gait"))
+    try:
+        gait = load_gait(loaded.robot.walker.gait, relative_to=file.parent)
+    except ShcError as error:
+        return [loaded.issue(("walker", "gait"), str(error).splitlines()[0], "name a bundled gait or a gait file")]
+    return check_gait(gait, loaded.robot)
+
+
+def summary(robot: Robot, extra_gaits: list[LoadedGait]) -> str:
+    """A short table: legs, DOF, mass, stance and the duty factor and period of each fitting gait."""
+    from shc_cli.control.gait import step_cycle
+
+    dof = sorted({len(leg.joints) for leg in robot.legs.values()})
+    lines = [
+        f"{robot.name}: {len(robot.legs)} legs, {'/'.join(map(str, dof))} DOF per leg, "
+        f"{sum(len(leg.joints) for leg in robot.legs.values())} joints, mass {robot.total_mass():.2f} kg, "
+        f"body clearance {robot.walker.body_clearance:g} m, control period {robot.time_delta * 1000:g} ms",
+        f"  {'leg':<5}{'joints':<36}{'stance x':>9}{'stance y':>9}",
+    ]
+    for leg_id, leg in robot.legs.items():
+        lines.append(f"  {leg_id:<5}{', '.join(leg.joints):<36}{leg.stance.x:>9.3f}{leg.stance.y:>9.3f}")
+    gaits = {}
+    for name in bundled("gaits"):
+        try:
+            gait = load_gait(name).gait
+        except ShcError:
+            continue
+        if gait is not None and set(gait.offset_multiplier) == set(robot.legs):
+            gaits[gait.name] = gait
+    for loaded in extra_gaits:
+        if loaded.gait is not None and set(loaded.gait.offset_multiplier) == set(robot.legs):
+            gaits[loaded.gait.name] = loaded.gait
+    frequency = robot.walker.step_frequency.default
+    lines.append(f"  {'gait':<10}{'duty':>6}{'period':>9}{'period':>9}   (step frequency {frequency:g} Hz)")
+    for name, gait in gaits.items():
+        cycle = step_cycle(gait, frequency, robot.time_delta)
+        default = " (default)" if name == robot.walker.gait else ""
+        lines.append(f"  {name:<10}{cycle.duty_factor:>6.3f}{cycle.period:>6} cyc"
+                     f"{cycle.period * robot.time_delta:>8.2f} s{default}")
+    return "\n".join(lines)
+
+
+__all__ = ["NotFoundError", "run_validate", "summary"]

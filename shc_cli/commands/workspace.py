@@ -1,0 +1,123 @@
+"""``shc workspace``: per-leg workspaces, walkspace and speed limits of a robot and gait."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+from pathlib import Path
+
+import typer
+
+from shc_cli.analysis.workspace import WorkspaceReport, analyse_workspace
+from shc_cli.errors import SpecError
+from shc_cli.outputs import atomic_path, write_text
+from shc_cli.spec.loading import load_gait, load_robot
+
+
+def run_workspace(
+    robot_name: str,
+    gait_name: str | None,
+    step_frequency: float | None,
+    bearing_count: int,
+    volumetric: bool,
+    out: Path | None,
+    json_output: bool,
+) -> None:
+    from shc_cli.spec.checks import check_gait, check_robot
+
+    loaded = load_robot(robot_name)
+    robot = loaded.robot
+    assert robot is not None
+    problems = check_robot(loaded)
+    if problems:
+        raise SpecError(problems)
+    file, _ = loaded.where(("walker", "gait"))
+    gait_loaded = load_gait(gait_name or robot.walker.gait, relative_to=None if gait_name else file.parent)
+    problems = check_gait(gait_loaded, robot)
+    if problems:
+        raise SpecError(problems)
+    assert gait_loaded.gait is not None
+    if bearing_count < 1 or 360 % bearing_count:
+        raise SpecError([_option_issue("--bearings", f"{bearing_count} does not divide 360", "use 8, 12, 24, 36 or 72")])
+    if step_frequency is not None and step_frequency <= 0:
+        raise SpecError([_option_issue("--step-frequency", f"{step_frequency:g} must be > 0", "give a frequency in Hz")])
+    report = analyse_workspace(robot, gait_loaded.gait, step_frequency, bearing_count, volumetric)
+    if out is not None:
+        write_outputs(report, out)
+    if json_output:
+        typer.echo(json.dumps(report.to_json(), indent=1))
+    else:
+        typer.echo(render_table(report))
+        if out is not None:
+            typer.echo(f"wrote {out}/workspace.csv, {out}/limits.csv, {out}/workspace.png")
+
+
+def _option_issue(option: str, problem: str, fix: str):  # type: ignore[no-untyped-def]
+    from shc_cli.errors import Issue
+
+    return Issue(None, None, option, problem, fix)
+
+
+def render_table(report: WorkspaceReport) -> str:
+    """The terminal table: legs (area, stride, radii), walkspace and limits per bearing."""
+    bearings = [b for b in report.walkspace if b != 360]
+    head = "".join(f"{b:>8}°" for b in bearings)
+    lines = [
+        f"{report.robot.name} / {report.gait.name}: step frequency {report.step_frequency:g} Hz, "
+        f"cycle {report.cycle.period} cycles ({report.cycle.period * report.robot.time_delta:.2f} s, "
+        f"{report.cycle.frequency:.4f} Hz), swing {report.cycle.swing_period}, stance {report.cycle.stance_period}, "
+        f"duty factor {report.cycle.duty_factor:.3f}",
+        "",
+        f"{'leg':<6}{'area m²':>9}{'stride m':>10}   radius [m] at bearing{head}",
+    ]
+    pad = " " * 24
+    for leg, plane in report.planes.items():
+        radii = "".join(f"{plane[b]:>9.4f}" for b in bearings)
+        lines.append(f"{leg:<6}{report.area(leg):>9.4f}{report.forward_stride(leg):>10.4f}{pad}{radii}")
+    walk = "".join(f"{report.walkspace[b]:>9.4f}" for b in bearings)
+    lines.append(f"{'walkspace':<25}{pad}{walk}")
+    lines.append("")
+    rows = [
+        ("max linear speed m/s", "linear_speed"),
+        ("max linear acc m/s²", "linear_acceleration"),
+        ("max angular speed rad/s", "angular_speed"),
+        ("max angular acc rad/s²", "angular_acceleration"),
+    ]
+    for label, field in rows:
+        values = "".join(f"{getattr(report.limits.bearings[b], field):>9.4f}" for b in bearings)
+        lines.append(f"{label:<49}{values}")
+    lines.append(f"time to max stride {report.limits.time_to_max_stride:.3f} s, "
+                 f"stance radius {report.limits.stance_radius:.4f} m")
+    return "\n".join(lines)
+
+
+def write_outputs(report: WorkspaceReport, out: Path) -> None:
+    """workspace.csv (radius per leg, height, bearing), limits.csv and workspace.png, atomically."""
+    table = io.StringIO()
+    writer = csv.writer(table, lineterminator="\n")
+    writer.writerow(["leg", "height_m", "bearing_deg", "radius_m"])
+    stacks = report.layers or {leg: {0.0: plane} for leg, plane in report.planes.items()}
+    for leg, stack in stacks.items():
+        for height, plane in stack.items():
+            for bearing, radius in plane.items():
+                writer.writerow([leg, f"{height:.9f}", bearing, f"{radius:.9f}"])
+    for bearing, radius in report.walkspace.items():
+        writer.writerow(["walkspace", f"{0.0:.9f}", bearing, f"{radius:.9f}"])
+    write_text(out / "workspace.csv", table.getvalue())
+
+    limits = io.StringIO()
+    writer = csv.writer(limits, lineterminator="\n")
+    writer.writerow(["bearing_deg", "walkspace_radius_m", "scaled_radius_m", "stance_overshoot_m", "swing_overshoot_m",
+                     "max_linear_speed_mps", "max_linear_acceleration_mps2", "max_angular_speed_radps",
+                     "max_angular_acceleration_radps2"])
+    for bearing, lim in report.limits.bearings.items():
+        writer.writerow([bearing] + [f"{v:.9f}" for v in (
+            lim.walkspace_radius, lim.scaled_radius, lim.stance_overshoot, lim.swing_overshoot, lim.linear_speed,
+            lim.linear_acceleration, lim.angular_speed, lim.angular_acceleration)])
+    write_text(out / "limits.csv", limits.getvalue())
+
+    from shc_cli.plots import plot_workspace
+
+    with atomic_path(out / "workspace.png") as temporary:
+        plot_workspace(report, temporary)

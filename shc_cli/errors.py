@@ -1,0 +1,67 @@
+"""The one exception tree of shc.
+
+Every error a user can cause derives from :class:`ShcError` and renders as one line
+(``str(error)``) that names the file, the line or field, what is wrong and how to fix it.
+The CLI prints that line and exits with code 2; tracebacks appear only with ``--debug``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+
+class ShcError(Exception):
+    """Base class of every error shc reports to a user."""
+
+
+@dataclass(frozen=True)
+class Issue:
+    """One problem found in an input file.
+
+    Attributes:
+        file: The file the problem is in (or the file that was read, if the field has no line).
+        line: 1-based line of the offending key, or ``None`` when it cannot be located.
+        field: Dotted path of the field, e.g. ``legs.AR.joints.coxa.max``; empty for whole-file problems.
+        problem: What is wrong, e.g. ``max (0.2) must be greater than min (0.5)``.
+        fix: How to fix it, e.g. ``swap the two values``; may be empty.
+    """
+
+    file: Path | None
+    line: int | None
+    field: str
+    problem: str
+    fix: str = ""
+
+    def __str__(self) -> str:
+        where = "" if self.file is None else str(self.file)
+        if self.line is not None:
+            where += f":{self.line}"
+        parts = [p for p in (where, self.field) if p]
+        text = ": ".join([*parts, self.problem])
+        return f"{text} ({self.fix})" if self.fix else text
+
+
+class SpecError(ShcError):
+    """A robot, gait or command file is malformed or inconsistent; carries every issue found."""
+
+    def __init__(self, issues: list[Issue]) -> None:
+        if not issues:
+            raise ValueError("SpecError needs at least one issue")
+        self.issues = issues
+        super().__init__(str(issues[0]))
+
+    def __str__(self) -> str:
+        return "\n".join(str(issue) for issue in self.issues)
+
+
+class NotFoundError(ShcError):
+    """A named robot, gait or file does not exist; lists what does."""
+
+
+class KinematicsError(ShcError):
+    """A kinematic computation cannot be done (e.g. a leg with no reachable stance)."""
+
+
+class OutputError(ShcError):
+    """An output cannot be written (e.g. the output directory is not writable)."""

@@ -1,0 +1,293 @@
+"""Compiled inner loops of the kinematics: FK and one OpenSHC IK step, per chain.
+
+These are plain Python loops compiled by numba (``cache=True``: compiled once per machine, then
+loaded in milliseconds). They run every control cycle and thousands of times in a workspace
+search, where NumPy's per-call overhead on small arrays would dominate. Set ``NUMBA_DISABLE_JIT=1``
+to step through them as ordinary Python. Arrays are ``(B, n)`` over chains ``B`` and joints ``n``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+DLS_COEFFICIENT = 0.02
+JOINT_LIMIT_COST_WEIGHT = 0.1
+POSITION_LIMIT_SHARE = 0.25
+IK_TOLERANCE = 0.005
+
+
+@njit(cache=True)
+def chain_frames(base, d, theta, r, alpha, q, out):  # type: ignore[no-untyped-def]
+    """Fill ``out[k]`` (``(n+1, 4, 4)``) with the frame of joint k+1 in the leg frame; ``out[n]`` = tip.
+
+    ``base`` is unused here (frames are in the leg frame) but kept for a uniform signature.
+    """
+    n = d.shape[0]
+    for i in range(4):
+        for j in range(4):
+            out[0, i, j] = 1.0 if i == j else 0.0
+    link = np.empty((4, 4))
+    for k in range(n):
+        ct = math.cos(theta[k] + q[k])
+        st = math.sin(theta[k] + q[k])
+        ca = math.cos(alpha[k])
+        sa = math.sin(alpha[k])
+        link[0, 0] = ct
+        link[0, 1] = -st * ca
+        link[0, 2] = st * sa
+        link[0, 3] = r[k] * ct
+        link[1, 0] = st
+        link[1, 1] = ct * ca
+        link[1, 2] = -ct * sa
+        link[1, 3] = r[k] * st
+        link[2, 0] = 0.0
+        link[2, 1] = sa
+        link[2, 2] = ca
+        link[2, 3] = d[k]
+        link[3, 0] = 0.0
+        link[3, 1] = 0.0
+        link[3, 2] = 0.0
+        link[3, 3] = 1.0
+        for i in range(4):
+            for j in range(4):
+                acc = 0.0
+                for m in range(4):
+                    acc += out[k, i, m] * link[m, j]
+                out[k + 1, i, j] = acc
+    return out
+
+
+@njit(cache=True)
+def position_jacobian(frames, jac):  # type: ignore[no-untyped-def]
+    """Linear Jacobian in the leg frame (``(3, n)``): column k = z_k × (p_tip − o_k) (paper eq. 7–8)."""
+    n = jac.shape[1]
+    px, py, pz = frames[n, 0, 3], frames[n, 1, 3], frames[n, 2, 3]
+    for k in range(n):
+        zx, zy, zz = frames[k, 0, 2], frames[k, 1, 2], frames[k, 2, 2]
+        ex = px - frames[k, 0, 3]
+        ey = py - frames[k, 1, 3]
+        ez = pz - frames[k, 2, 3]
+        jac[0, k] = zy * ez - zz * ey
+        jac[1, k] = zz * ex - zx * ez
+        jac[2, k] = zx * ey - zy * ex
+    return jac
+
+
+@njit(cache=True)
+def tip_kernel_one(base, d, theta, r, alpha, q, frames, tip):  # type: ignore[no-untyped-def]
+    """Tip position of one chain in base_link into ``tip`` (3,), using ``frames`` as scratch."""
+    n = d.shape[0]
+    chain_frames(base, d, theta, r, alpha, q, frames)
+    for i in range(3):
+        acc = 0.0
+        for m in range(3):
+            acc += base[i, m] * frames[n, m, 3]
+        tip[i] = acc + base[i, 3]
+    return tip
+
+
+@njit(cache=True)
+def tips_kernel(base, d, theta, r, alpha, q, tips):  # type: ignore[no-untyped-def]
+    """Tip positions in base_link for every chain, written into ``tips`` ``(B, 3)``."""
+    chains, n = d.shape
+    frames = np.empty((n + 1, 4, 4))
+    for b in range(chains):
+        chain_frames(base[b], d[b], theta[b], r[b], alpha[b], q[b], frames)
+        for i in range(3):
+            acc = 0.0
+            for m in range(3):
+                acc += base[b, i, m] * frames[n, m, 3]
+            tips[b, i] = acc + base[b, i, 3]
+    return tips
+
+
+@njit(cache=True)
+def ik_step_one(  # type: ignore[no-untyped-def]
+    base, d, theta, r, alpha, lower, upper, max_vel,
+    q, qd, current_tip, desired_tip, dt, clamp_positions, clamp_velocities,
+    q_out, qd_out, tip_out, frames,
+):
+    """One DLS step with joint-limit avoidance for one chain (study §2.1–§2.2).
+
+    Returns ``(flags, proximity)``: flags bit 0 = tip within tolerance, bit 1 = a position was clamped,
+    bit 2 = a velocity was clamped; proximity ρ ∈ [0, 1] as OpenSHC's ``updateJointPositions``.
+    ``frames`` is scratch space of shape ``(n + 1, 4, 4)``.
+    """
+    n = d.shape[0]
+    w = JOINT_LIMIT_COST_WEIGHT
+    lam2 = DLS_COEFFICIENT * DLS_COEFFICIENT
+    jac = np.empty((3, n))
+    z = np.empty((n, 3))
+    v = np.empty(n)
+    delta = np.empty(3)
+    chain_frames(base, d, theta, r, alpha, q, frames)
+    # Tip displacement in the leg frame: T_leg⁻¹·p_des − T_leg⁻¹·p_cur.
+    for i in range(3):
+        des = 0.0
+        cur = 0.0
+        for m in range(3):
+            des += base[m, i] * (desired_tip[m] - base[m, 3])
+            cur += base[m, i] * (current_tip[m] - base[m, 3])
+        delta[i] = des - cur
+    position_jacobian(frames, jac)
+    # Z = Jᵀ (J Jᵀ + λ² I)⁻¹ through the 3×3 position block (the rotation rows of J are zero).
+    m00 = lam2
+    m01 = 0.0
+    m02 = 0.0
+    m11 = lam2
+    m12 = 0.0
+    m22 = lam2
+    for k in range(n):
+        m00 += jac[0, k] * jac[0, k]
+        m01 += jac[0, k] * jac[1, k]
+        m02 += jac[0, k] * jac[2, k]
+        m11 += jac[1, k] * jac[1, k]
+        m12 += jac[1, k] * jac[2, k]
+        m22 += jac[2, k] * jac[2, k]
+    c00 = m11 * m22 - m12 * m12
+    c01 = m02 * m12 - m01 * m22
+    c02 = m01 * m12 - m02 * m11
+    c11 = m00 * m22 - m02 * m02
+    c12 = m01 * m02 - m00 * m12
+    c22 = m00 * m11 - m01 * m01
+    det = m00 * c00 + m01 * c01 + m02 * c02
+    for k in range(n):
+        z[k, 0] = (jac[0, k] * c00 + jac[1, k] * c01 + jac[2, k] * c02) / det
+        z[k, 1] = (jac[0, k] * c01 + jac[1, k] * c11 + jac[2, k] * c12) / det
+        z[k, 2] = (jac[0, k] * c02 + jac[1, k] * c12 + jac[2, k] * c22) / det
+    # Joint-limit avoidance: normalised gradients of the position and velocity costs.
+    cost_p = 0.0
+    cost_v = 0.0
+    for k in range(n):
+        span = upper[k] - lower[k]
+        if span != 0.0:
+            centre = lower[k] + span / 2.0
+            t = w * (q[k] - centre) / span
+            cost_p += t * t
+        tv = w * qd[k] / (2.0 * max_vel[k])
+        cost_v += tv * tv
+    norm_p = math.sqrt(cost_p)
+    norm_v = math.sqrt(cost_v)
+    for k in range(n):
+        span = upper[k] - lower[k]
+        gp = 0.0
+        if span != 0.0 and norm_p > 0.0:
+            centre = lower[k] + span / 2.0
+            gp = -(w * w) * (q[k] - centre) / (span * span) / norm_p
+        gv = 0.0
+        if norm_v > 0.0:
+            vspan = 2.0 * max_vel[k]
+            gv = -(w * w) * qd[k] / (vspan * vspan) / norm_v
+        v[k] = POSITION_LIMIT_SHARE * gp + (1.0 - POSITION_LIMIT_SHARE) * gv
+    # Δq = Z Δs + (I − Z J) v, then velocity and position clamping.
+    jv0 = 0.0
+    jv1 = 0.0
+    jv2 = 0.0
+    for k in range(n):
+        jv0 += jac[0, k] * v[k]
+        jv1 += jac[1, k] * v[k]
+        jv2 += jac[2, k] * v[k]
+    flags = 0
+    for k in range(n):
+        step = z[k, 0] * delta[0] + z[k, 1] * delta[1] + z[k, 2] * delta[2]
+        step += v[k] - (z[k, 0] * jv0 + z[k, 1] * jv1 + z[k, 2] * jv2)
+        rate = step / dt
+        if clamp_velocities:
+            if rate > max_vel[k]:
+                rate = max_vel[k]
+                flags |= 4
+            elif rate < -max_vel[k]:
+                rate = -max_vel[k]
+                flags |= 4
+        value = q[k] + rate * dt
+        if clamp_positions:
+            if value > upper[k]:
+                value = upper[k]
+                flags |= 2
+            elif value < lower[k]:
+                value = lower[k]
+                flags |= 2
+        qd_out[k] = rate
+        q_out[k] = value
+    prox = 1.0
+    for k in range(n):
+        half = (upper[k] - lower[k]) / 2.0
+        if half != 0.0:
+            near = min(abs(q_out[k] - lower[k]), abs(q_out[k] - upper[k])) / half
+            prox = min(prox, near)
+    # Forward kinematics of the result and the 5 mm deviation check.
+    chain_frames(base, d, theta, r, alpha, q_out, frames)
+    ok = True
+    for i in range(3):
+        acc = 0.0
+        for m in range(3):
+            acc += base[i, m] * frames[n, m, 3]
+        acc += base[i, 3]
+        tip_out[i] = acc
+        if abs(acc - desired_tip[i]) > IK_TOLERANCE:
+            ok = False
+    if ok:
+        flags |= 1
+    return flags, prox
+
+
+@njit(cache=True)
+def ik_step_kernel(  # type: ignore[no-untyped-def]
+    base, d, theta, r, alpha, lower, upper, max_vel,
+    q, qd, current_tip, desired_tip, dt, clamp_positions, clamp_velocities,
+    q_out, qd_out, tip_out, flags_out, proximity_out,
+):
+    """:func:`ik_step_one` for every chain ``b`` of ``(B, n)`` arrays."""
+    chains, n = d.shape
+    frames = np.empty((n + 1, 4, 4))
+    for b in range(chains):
+        flags_out[b], proximity_out[b] = ik_step_one(
+            base[b], d[b], theta[b], r[b], alpha[b], lower[b], upper[b], max_vel[b],
+            q[b], qd[b], current_tip[b], desired_tip[b], dt, clamp_positions, clamp_velocities,
+            q_out[b], qd_out[b], tip_out[b], frames,
+        )
+
+
+@njit(cache=True)
+def linear_search_kernel(  # type: ignore[no-untyped-def]
+    base, d, theta, r, alpha, lower, upper, max_vel,
+    q, start_tip, end_tip, origin, steps, dt, stop_on_failure, distance_out,
+):
+    """Move each chain's tip target from ``start_tip`` to ``end_tip`` in ``steps`` equal IK steps.
+
+    Simulation steps as in OpenSHC's workspace search: positions clamped, velocities not. With
+    ``stop_on_failure`` a chain stops at the first step whose result is 0 (tip error > 5 mm or a joint at a
+    limit). ``q`` is updated in place; ``distance_out[b]`` receives |tip − origin| at the last step taken.
+    """
+    chains, n = d.shape
+    frames = np.empty((n + 1, 4, 4))
+    qd = np.zeros(n)
+    q_new = np.empty(n)
+    qd_new = np.empty(n)
+    tip = np.empty(3)
+    tip_new = np.empty(3)
+    target = np.empty(3)
+    for b in range(chains):
+        qd[:] = 0.0
+        tip_kernel_one(base[b], d[b], theta[b], r[b], alpha[b], q[b], frames, tip)
+        distance_out[b] = 0.0
+        for i in range(1, steps + 1):
+            share = i / steps
+            for a in range(3):
+                target[a] = start_tip[b, a] * (1.0 - share) + end_tip[b, a] * share
+            flags, prox = ik_step_one(
+                base[b], d[b], theta[b], r[b], alpha[b], lower[b], upper[b], max_vel[b],
+                q[b], qd, tip, target, dt, True, False, q_new, qd_new, tip_new, frames,
+            )
+            q[b, :] = q_new
+            qd[:] = qd_new
+            tip[:] = tip_new
+            dist = 0.0
+            for a in range(3):
+                dist += (tip[a] - origin[b, a]) ** 2
+            distance_out[b] = math.sqrt(dist)
+            if stop_on_failure and ((flags & 1) == 0 or prox == 0.0):
+                break

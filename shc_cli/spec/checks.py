@@ -1,0 +1,190 @@
+"""Semantic checks of a schema-valid robot and its gaits: what pydantic alone cannot see.
+
+Each check returns :class:`~shc_cli.errors.Issue` objects located at the line the user wrote.
+Checks that need kinematics import :mod:`shc_cli.model` lazily.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from shc_cli.errors import Issue
+from shc_cli.spec.loading import LoadedGait, LoadedRobot
+from shc_cli.spec.robot import Robot
+
+REACH_TOLERANCE = 0.001
+"""Largest stance-position error [m] the reachability check accepts."""
+MIN_STANCE_SEPARATION = 0.02
+"""Smallest distance between two legs' stance positions [m] (or two foot diameters, if larger)."""
+MIN_LEGS_IN_STANCE = 2
+
+
+def check_robot(loaded: LoadedRobot) -> list[Issue]:
+    """Every semantic check of a robot file, cheapest first."""
+    robot = loaded.robot
+    assert robot is not None
+    issues = _joint_positions(loaded, robot) + _stance_overlap(loaded, robot)
+    if issues:
+        return issues
+    issues = _mirrors(loaded, robot)
+    return issues or _stance_reachable(loaded, robot)
+
+
+def _joint_positions(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
+    issues = []
+    for leg_id, leg in robot.legs.items():
+        for name, joint in leg.joints.items():
+            if not joint.min <= joint.unpacked <= joint.max:
+                issues.append(loaded.issue(
+                    ("legs", leg_id, "joints", name, "unpacked"),
+                    f"unpacked ({joint.unpacked:g}) lies outside [min, max] = [{joint.min:g}, {joint.max:g}]",
+                    "move it inside the joint limits",
+                ))
+    return issues
+
+
+def _stance_overlap(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
+    issues = []
+    legs = list(robot.legs.items())
+    for i, (leg_id, leg) in enumerate(legs):
+        for other_id, other in legs[:i]:
+            gap = math.hypot(leg.stance.x - other.stance.x, leg.stance.y - other.stance.y)
+            needed = max(MIN_STANCE_SEPARATION, leg.foot_radius + other.foot_radius)
+            if gap < needed:
+                issues.append(loaded.issue(
+                    ("legs", leg_id, "stance"),
+                    f"stance ({leg.stance.x:g}, {leg.stance.y:g}) is {gap * 1000:.0f} mm from leg {other_id}'s stance "
+                    f"(at least {needed * 1000:.0f} mm needed)",
+                    "give each leg its own stance position",
+                ))
+    return issues
+
+
+def _mirrors(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
+    """A mirrored leg must be the reflection of its source through the x–z plane."""
+    from shc_cli.model.chains import Chains
+
+    if not loaded.mirrors:
+        return []
+    chains = Chains.from_robot(robot)
+    order = {leg: i for i, leg in enumerate(robot.legs)}
+    rng = np.random.default_rng(0)
+    issues = []
+    for leg_id, (source_id, negated) in loaded.mirrors.items():
+        source, mirror = order[source_id], order[leg_id]
+        pair = chains.take(np.array([source, mirror]))
+        lo, hi = pair.lower[0], pair.upper[0]
+        q = rng.uniform(lo, hi, size=(8, len(lo)))
+        names = list(robot.legs[source_id].joints)
+        sign = np.array([-1.0 if name in negated else 1.0 for name in names] + [1.0] * (len(lo) - len(names)))
+        tips_source = pair.take(np.zeros(8, dtype=np.int64)).tips(q)
+        tips_mirror = pair.take(np.ones(8, dtype=np.int64)).tips(q * sign)
+        error = float(np.abs(tips_mirror - tips_source * np.array([1.0, -1.0, 1.0])).max())
+        if error > 1e-3:
+            issues.append(loaded.issue(
+                ("legs", leg_id),
+                f"the mirror of {source_id} is not its reflection: tips differ by up to {error * 1000:.0f} mm",
+                "check [mirror] negate_dh and negate_joints against the leg's DH chain",
+            ))
+    return issues
+
+
+def _stance_reachable(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
+    """Each stance position at the body clearance must be reachable within the joint limits."""
+    from shc_cli.model.chains import Chains
+    from shc_cli.model.ik import solve
+
+    chains = Chains.from_robot(robot)
+    clearance = robot.walker.body_clearance
+    targets = np.array([[leg.stance.x, leg.stance.y, -clearance] for leg in robot.legs.values()])
+    best = np.full(chains.size, np.inf)
+    seeds = [chains.default_joints(), _unpacked(robot, chains.joints), (chains.lower + chains.upper) / 2.0]
+    for seed in seeds:
+        _, error = solve(chains, seed, targets, tolerance=REACH_TOLERANCE / 10, max_steps=400, dt=robot.time_delta)
+        best = np.minimum(best, error)
+        if (best < REACH_TOLERANCE).all():
+            return []
+    issues = []
+    for i, (leg_id, leg) in enumerate(robot.legs.items()):
+        if best[i] >= REACH_TOLERANCE:
+            issues.append(loaded.issue(
+                ("legs", leg_id, "stance"),
+                f"stance ({leg.stance.x:g}, {leg.stance.y:g}) at body_clearance {clearance:g} m is out of reach "
+                f"by {best[i] * 1000:.0f} mm within the joint limits",
+                "move the stance towards the leg's base, lower walker.body_clearance or widen the joint limits",
+            ))
+    return issues
+
+
+def _unpacked(robot: Robot, joints: int) -> np.ndarray:
+    out = np.zeros((len(robot.legs), joints))
+    for i, leg in enumerate(robot.legs.values()):
+        for k, joint in enumerate(leg.joints.values()):
+            out[i, k] = joint.unpacked
+    return out
+
+
+def check_gait(loaded_gait: LoadedGait, robot: Robot) -> list[Issue]:
+    """The gait must name exactly the robot's legs and keep enough legs on the ground."""
+    from shc_cli.control.gait import step_cycle
+
+    gait = loaded_gait.gait
+    assert gait is not None
+    missing = [leg for leg in robot.legs if leg not in gait.offset_multiplier]
+    extra = [leg for leg in gait.offset_multiplier if leg not in robot.legs]
+    if missing or extra:
+        parts = []
+        if missing:
+            parts.append(f"has no offset for {', '.join(missing)}")
+        if extra:
+            parts.append(f"names legs the robot does not have: {', '.join(extra)}")
+        return [loaded_gait.issue(("offset_multiplier",),
+                                  f"gait '{gait.name}' does not fit robot '{robot.name}': {'; '.join(parts)}",
+                                  f"give one multiplier for each of {', '.join(robot.legs)}")]
+    frequency = robot.walker.step_frequency.default
+    cycle = step_cycle(gait, frequency, robot.time_delta)
+    if cycle.period == 0:
+        return [loaded_gait.issue(("swing_phase",),
+                                  f"step frequency {frequency:g} Hz is too high for time_delta {robot.time_delta:g} s",
+                                  "lower walker.step_frequency")]
+    fewest, at = _fewest_in_stance(cycle.period, cycle.swing_start, cycle.swing_end, cycle.offsets)
+    needed = min(MIN_LEGS_IN_STANCE, len(robot.legs))
+    if fewest < needed:
+        return [loaded_gait.issue(("offset_multiplier",),
+                                  f"offsets make no walking pattern: at phase {at} of {cycle.period} only {fewest} "
+                                  f"of {len(robot.legs)} legs are on the ground",
+                                  "spread the offset multipliers so swings do not all coincide")]
+    return []
+
+
+def _fewest_in_stance(period: int, swing_start: int, swing_end: int,
+                      offsets: dict[str, int]) -> tuple[int, int]:
+    """Fewest legs in stance over one cycle, and the first iteration where it happens."""
+    phases = np.arange(period)
+    counts = np.zeros(period, dtype=int)
+    for offset in offsets.values():
+        phase = (phases + offset) % period
+        counts += ~((phase >= swing_start) & (phase < swing_end))
+    at = int(np.argmin(counts))
+    return int(counts[at]), at
+
+
+def check_gait_pattern(loaded_gait: LoadedGait) -> list[Issue]:
+    """A gait on its own: enough legs on the ground at every phase (robot-independent, normaliser 2)."""
+    gait = loaded_gait.gait
+    assert gait is not None
+    normaliser = 2
+    period = gait.base_length * normaliser
+    swing_start = (gait.stance_phase // 2) * normaliser
+    swing_end = swing_start + gait.swing_phase * normaliser
+    offsets = {leg: (gait.phase_offset * normaliser * m) % period for leg, m in gait.offset_multiplier.items()}
+    fewest, at = _fewest_in_stance(period, swing_start, swing_end, offsets)
+    needed = min(MIN_LEGS_IN_STANCE, len(offsets))
+    if fewest < needed:
+        return [loaded_gait.issue(("offset_multiplier",),
+                                  f"offsets make no walking pattern: at {at / normaliser:g} of {gait.base_length} "
+                                  f"base units only {fewest} of {len(offsets)} legs are on the ground",
+                                  "spread the offset multipliers so swings do not all coincide")]
+    return []

@@ -1,0 +1,248 @@
+"""The robot description: pydantic models of a fully expanded robot file, in SI units.
+
+A robot file (TOML) may use ``extends``, ``[templates.*]`` and ``mirror = "AR"``; those are
+resolved by :mod:`shc_cli.spec.loading` before validation, so these models always describe what
+the controller sees. Field names follow OpenSHC where one exists (study §11.1); the OpenSHC
+parameter name is given in each description as ``[OpenSHC: name]``.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+MAX_JOINTS = 6
+MIN_JOINTS = 1
+
+
+class Strict(BaseModel):
+    """Base of every spec model: unknown keys are errors, numbers stay numbers."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=False, validate_default=True)
+
+
+Metres = Annotated[float, Field(allow_inf_nan=False)]
+Radians = Annotated[float, Field(allow_inf_nan=False)]
+Positive = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False)]
+
+
+class DH(Strict):
+    """Classical (distal) Denavit–Hartenberg link: ``Rot_z(theta)·Trans_z(d)·Trans_x(r)·Rot_x(alpha)``."""
+
+    d: Metres = Field(0.0, description="offset along the previous z axis [m]")
+    theta: Radians = Field(0.0, description="constant angle about the previous z axis, added to the joint angle [rad]")
+    r: Metres = Field(0.0, description="link length along the new x axis (DH a) [m]")
+    alpha: Radians = Field(0.0, description="twist about the new x axis [rad]")
+
+
+class Joint(DH):
+    """One revolute joint and the DH link it moves (OpenSHC ``<LEG>_<joint>_joint_parameters`` + link)."""
+
+    min: Radians = Field(description="lower position limit [rad]")
+    max: Radians = Field(description="upper position limit [rad]")
+    offset: Radians = Field(0.0, description="servo zero offset added to commands sent to hardware [rad]")
+    packed: list[Radians] = Field(
+        default_factory=list,
+        description="packed configurations in order (OpenSHC packed_0, packed_1, ...); the last one is 'packed' [rad]",
+    )
+    unpacked: Radians = Field(0.0, description="the READY (unpacked) position [rad]")
+    max_vel: Positive = Field(5.0, description="joint speed limit [rad/s]")
+    mass: NonNegative | None = Field(None, description="mass of the link this joint moves [kg] (simulation)")
+
+    @model_validator(mode="after")
+    def _limits_ordered(self) -> Joint:
+        if self.min >= self.max:
+            raise ValueError(f"min ({self.min:g}) must be less than max ({self.max:g}); swap the two values")
+        return self
+
+
+class StanceXY(Strict):
+    """Identity (default) tip position in the walk plane, z = 0 [OpenSHC: <LEG>_stance_position]."""
+
+    x: Metres = Field(description="forward [m]")
+    y: Metres = Field(description="left [m]")
+
+
+class Leg(Strict):
+    """One leg: the fixed base link, its joints from body to tip, and its stance position."""
+
+    base: DH = Field(description="constant transform from base_link to the first joint's frame [OpenSHC: base link]")
+    joints: dict[str, Joint] = Field(description="joints from body to tip, in order; 1 to 6 of them")
+    stance: StanceXY = Field(description="default tip position in the walk plane [m]")
+    foot_radius: NonNegative = Field(0.0, description="radius of the spherical foot at the tip [m] (simulation)")
+
+    @model_validator(mode="after")
+    def _joint_count(self) -> Leg:
+        if not MIN_JOINTS <= len(self.joints) <= MAX_JOINTS:
+            raise ValueError(
+                f"a leg needs {MIN_JOINTS} to {MAX_JOINTS} joints, this one has {len(self.joints)}"
+            )
+        return self
+
+
+class Adjustable(Strict):
+    """A run-time adjustable parameter ``{default, min, max, step}`` (OpenSHC dynamic parameters)."""
+
+    default: float = Field(description="value at start-up")
+    min: float = Field(description="lowest value reachable at run time")
+    max: float = Field(description="highest value reachable at run time")
+    step: NonNegative = Field(description="increment of one adjustment")
+
+    @model_validator(mode="after")
+    def _default_inside(self) -> Adjustable:
+        if self.min > self.max:
+            raise ValueError(f"min ({self.min:g}) must not exceed max ({self.max:g})")
+        if not self.min <= self.default <= self.max:
+            raise ValueError(f"default ({self.default:g}) must lie in [min, max] = [{self.min:g}, {self.max:g}]")
+        return self
+
+
+def _adj(default: float, lo: float, hi: float, step: float) -> Adjustable:
+    return Adjustable(default=default, min=lo, max=hi, step=step)
+
+
+class Body(Strict):
+    """The body (torso) as a box; its origin is base_link."""
+
+    size: tuple[Positive, Positive, Positive] = Field(
+        (0.3, 0.2, 0.05), description="box length x, width y, height z [m]"
+    )
+    mass: Positive = Field(1.0, description="body mass without legs [kg]")
+    com: tuple[Metres, Metres, Metres] = Field((0.0, 0.0, 0.0), description="centre of mass in base_link [m]")
+    inertia: tuple[NonNegative, NonNegative, NonNegative] | None = Field(
+        None, description="principal moments ixx, iyy, izz about the COM [kg·m²]; derived from the box if absent"
+    )
+
+
+class Walker(Strict):
+    """Walk controller parameters (study §4–§6)."""
+
+    gait: str = Field("tripod", description="initial gait: a bundled gait name or a path [OpenSHC: gait_type]")
+    body_clearance: Positive = Field(0.1, description="body (base_link) height above the walk plane [m]")
+    step_frequency: Adjustable = Field(
+        _adj(1.0, 0.001, 2.0, 0.1), description="≈ 1 / swing duration [Hz]; cycle frequency ≈ this × swing share"
+    )
+    swing_height: Adjustable = Field(_adj(0.02, 0.01, 0.05, 0.005), description="swing apex height [m]")
+    swing_width: Adjustable = Field(_adj(0.0, -0.3, 0.3, 0.01), description="outward shift of the swing apex [m]")
+    step_depth: Adjustable = Field(_adj(0.0, 0.0, 0.0, 0.0), description="reactive target lowering (rough terrain) [m]")
+    stance_span_modifier: Adjustable = Field(
+        _adj(0.0, -1.0, 1.0, 0.1), description="fraction of the lateral workspace to widen (+) or narrow (−) stance [ratio]"
+    )
+    velocity_input_mode: Literal["throttle", "real"] = Field(
+        "throttle", description="'throttle': inputs are −1..1 of the maximum; 'real': m/s and rad/s"
+    )
+    body_velocity_scaler: Positive = Field(1.0, description="multiplies velocity and cruise inputs [ratio]")
+    overlapping_walkspaces: bool = Field(False, description="skip the neighbour-overlap walkspace limit")
+    force_normal_touchdown: bool = Field(False, description="reshape the swing for a vertical final descent")
+    gravity_aligned_tips: bool = Field(False, description=">3-DOF legs: keep the tip x axis along gravity")
+    rough_terrain_mode: bool = Field(False, description="volumetric workspace and adaptive footholds")
+
+
+class Cruise(Strict):
+    """Cruise control (study §6)."""
+
+    force_velocity: bool = Field(True, description="use the velocities below, else latch the current input")
+    linear: tuple[float, float] = Field((1.0, 0.0), description="cruise x, y (throttle or m/s)")
+    angular: float = Field(0.0, description="cruise yaw rate (throttle or rad/s)")
+    time_limit: NonNegative = Field(0.0, description="cruise duration, 0 = unlimited [s]")
+
+
+class InverseKinematics(Strict):
+    """IK options (study §2)."""
+
+    clamp_joint_positions: bool = Field(True, description="clamp IK output to [min, max]")
+    clamp_joint_velocities: bool = Field(True, description="clamp IK joint speed to max_vel")
+    ignore_warnings: bool = Field(False, description="do not report IK deviation/clamping [OpenSHC: ignore_IK_warnings]")
+
+
+class XYZ(Strict):
+    x: float
+    y: float
+    z: float
+
+
+class RPY(Strict):
+    roll: float
+    pitch: float
+    yaw: float
+
+
+class PID(Strict):
+    p: float
+    i: float
+    d: float
+
+
+class Pose(Strict):
+    """Body posing (study §7)."""
+
+    manual: bool = Field(True, description="manual 6-DOF body posing [OpenSHC: manual_posing]")
+    auto: bool = Field(False, description="cyclic auto posing [OpenSHC: auto_posing]")
+    auto_pose_type: str = Field("auto", description="auto-pose set; 'auto' = the set named after the gait")
+    inclination: bool = Field(False, description="shift the body against tilt [OpenSHC: inclination_posing]")
+    imu: bool = Field(False, description="roll/pitch PID levelling [OpenSHC: imu_posing]")
+    rotation_pid_gains: PID = Field(PID(p=0.0, i=0.0, d=0.0), description="IMU posing PID gains")
+    max_translation: XYZ = Field(XYZ(x=0.025, y=0.025, z=0.025), description="posing translation limits [m]")
+    max_rotation: RPY = Field(RPY(roll=0.25, pitch=0.25, yaw=0.25), description="posing rotation limits [rad]")
+    max_translation_velocity: Positive = Field(0.05, description="manual posing speed at input 1 [m/s]")
+    max_rotation_velocity: Positive = Field(0.2, description="manual rotation speed at input 1 [rad/s]")
+
+
+class StartUp(Strict):
+    """Start-up behaviour (study §9.2–§9.3)."""
+
+    sequence: bool = Field(False, description="stepped start-up/shut-down with pack/unpack [OpenSHC: start_up_sequence]")
+    time_to_start: Positive = Field(6.0, description="duration of the direct start-up [s]")
+
+
+class Manipulation(Strict):
+    """Manual leg manipulation (study §9.5)."""
+
+    mode: Literal["tip_control", "joint_control"] = Field(
+        "tip_control", description="[OpenSHC: leg_manipulation_mode]"
+    )
+
+
+class Admittance(Strict):
+    """Admittance control (study §8)."""
+
+    enabled: bool = Field(False, description="[OpenSHC: admittance_control]")
+    dynamic_stiffness: bool = Field(True, description="swing/adjacent-leg stiffness scaling")
+    use_joint_effort: bool = Field(False, description="estimate tip force from joint efforts (else foot sensors)")
+    integrator_step_time: Positive = Field(0.5, description="virtual time advanced per control cycle [s]")
+    virtual_mass: Adjustable = Field(_adj(10.0, 1.0, 100.0, 5.0), description="[kg]")
+    virtual_stiffness: Adjustable = Field(_adj(12.0, 1.0, 50.0, 5.0), description="[N/m]")
+    virtual_damping_ratio: Adjustable = Field(_adj(0.8, 0.1, 10.0, 0.05), description="[ratio]")
+    force_gain: Adjustable = Field(_adj(0.1, 0.001, 100.0, 1.0), description="tip force multiplier [ratio]")
+    load_stiffness_scaler: Positive = Field(5.0, description="stiffness factor of legs next to a swinging leg")
+    swing_stiffness_scaler: Positive = Field(0.1, description="stiffness factor of a swinging leg")
+    touchdown_threshold: NonNegative = Field(0.9, description="tip force above which touchdown is registered [N]")
+    liftoff_threshold: NonNegative = Field(0.1, description="tip force below which contact is cleared [N]")
+
+
+class Robot(Strict):
+    """A fully expanded robot: what ``shc validate --show`` prints and the controller uses."""
+
+    name: str = Field(description="short name, e.g. 'bullet'")
+    description: str = Field("", description="one sentence for people")
+    time_delta: Positive = Field(description="control period [s]")
+    body: Body = Field(default_factory=Body)
+    legs: dict[str, Leg] = Field(description="legs by id, in id order (clockwise from front right)")
+    walker: Walker = Field(default_factory=Walker)
+    cruise: Cruise = Field(default_factory=Cruise)
+    ik: InverseKinematics = Field(default_factory=InverseKinematics)
+    pose: Pose = Field(default_factory=Pose)
+    start_up: StartUp = Field(default_factory=StartUp)
+    manipulation: Manipulation = Field(default_factory=Manipulation)
+    admittance: Admittance = Field(default_factory=Admittance)
+
+    @property
+    def leg_ids(self) -> list[str]:
+        return list(self.legs)
+
+    def total_mass(self) -> float:
+        """Body plus every link mass given in the file [kg]."""
+        links = sum(j.mass or 0.0 for leg in self.legs.values() for j in leg.joints.values())
+        return self.body.mass + links
