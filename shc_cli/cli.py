@@ -47,7 +47,9 @@ def _main(
 
 @app.command()
 def validate(
-    files: Annotated[list[str], typer.Argument(help="Robot and gait files (paths or bundled names).")],
+    files: Annotated[
+        list[str], typer.Argument(help="Robot and gait files (paths or bundled names).", metavar="FILE...")
+    ],
     show: Annotated[bool, typer.Option("--show", help="Print each robot fully expanded, as TOML.")] = False,
 ) -> None:
     """Check robot and gait files: schema, limits, reachability, gait fit. One line per problem."""
@@ -95,27 +97,22 @@ def schema(
 
 
 def main() -> None:
-    """Console entry point: run the app, turning user errors into one line and exit code 2."""
+    """Console entry point: user errors become one line and exit code 2; no traceback unless --debug."""
     debug = "--debug" in sys.argv[1:]
     try:
-        app(standalone_mode=False)
+        app()
     except ShcError as error:
         if debug:
             raise
         for line in str(error).splitlines():
             typer.echo(f"error: {line}", err=True)
         sys.exit(2)
-    except typer.Exit as done:
-        sys.exit(done.exit_code)
-    except typer.Abort:
-        typer.echo("aborted", err=True)
-        sys.exit(130)
-    except KeyboardInterrupt:
-        typer.echo("interrupted", err=True)
-        sys.exit(130)
-    except __import__("click").ClickException as error:
-        error.show()
-        sys.exit(2)
+    except Exception as error:  # a bug in shc, not bad input: still one line unless --debug
+        if debug:
+            raise
+        typer.echo(f"error: internal error: {type(error).__name__}: {error} (rerun with --debug and report it)",
+                   err=True)
+        sys.exit(1)
 
 
 if __name__ == "__main__":

@@ -31,7 +31,7 @@ def _kind(name: str) -> str:
 
 def run_validate(files: list[str], *, show: bool) -> None:
     """Validate every file; print a summary per robot; raise one SpecError listing every problem."""
-    from shc_cli.spec.checks import check_gait, check_gait_pattern, check_robot
+    from shc_cli.spec.checks import check_robot
 
     issues: list[Issue] = []
     robots: list[LoadedRobot] = []
@@ -52,8 +52,7 @@ def run_validate(files: list[str], *, show: bool) -> None:
         except NotFoundError as error:
             issues.append(Issue(None, None, "", str(error)))
     for gait in gaits:
-        found = [i for robot in robots if robot.robot for i in check_gait(gait, robot.robot)]
-        issues += found if robots else check_gait_pattern(gait)
+        issues += _check_gait_against(gait, [r.robot for r in robots if r.robot is not None])
     if issues:
         raise SpecError(issues)
     for loaded in robots:
@@ -65,6 +64,22 @@ def run_validate(files: list[str], *, show: bool) -> None:
     for gait in gaits:
         assert gait.gait is not None
         typer.echo(f"{gait.path}: gait '{gait.gait.name}' ok (duty factor {gait.gait.duty_factor:.3f})")
+
+
+def _check_gait_against(gait: LoadedGait, robots: list[Robot]) -> list[Issue]:
+    """Check a gait against the robots of the same invocation whose legs it names; if it fits none, say so."""
+    from shc_cli.spec.checks import check_gait, check_gait_pattern
+
+    if not robots:
+        return check_gait_pattern(gait)
+    assert gait.gait is not None
+    fitting = [robot for robot in robots if set(robot.legs) == set(gait.gait.offset_multiplier)]
+    if not fitting:
+        return check_gait(gait, robots[0]) if len(robots) == 1 else [gait.issue(
+            ("offset_multiplier",),
+            f"gait '{gait.gait.name}' fits none of the robots given ({', '.join(r.name for r in robots)})",
+            "name exactly the leg ids of one of them")]
+    return [issue for robot in fitting for issue in check_gait(gait, robot)]
 
 
 def _check_own_gait(loaded: LoadedRobot) -> list[Issue]:
@@ -105,11 +120,11 @@ def summary(robot: Robot, extra_gaits: list[LoadedGait]) -> str:
         if loaded.gait is not None and set(loaded.gait.offset_multiplier) == set(robot.legs):
             gaits[loaded.gait.name] = loaded.gait
     frequency = robot.walker.step_frequency.default
-    lines.append(f"  {'gait':<10}{'duty':>6}{'period':>9}{'period':>9}   (step frequency {frequency:g} Hz)")
+    lines.append(f"  {'gait':<18}{'duty':>6}{'period':>9}{'period':>9}   (step frequency {frequency:g} Hz)")
     for name, gait in gaits.items():
         cycle = step_cycle(gait, frequency, robot.time_delta)
         default = " (default)" if name == robot.walker.gait else ""
-        lines.append(f"  {name:<10}{cycle.duty_factor:>6.3f}{cycle.period:>6} cyc"
+        lines.append(f"  {name:<18}{cycle.duty_factor:>6.3f}{cycle.period:>6} cyc"
                      f"{cycle.period * robot.time_delta:>8.2f} s{default}")
     return "\n".join(lines)
 

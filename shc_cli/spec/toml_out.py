@@ -16,7 +16,8 @@ def _value(value: Any) -> str:
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_value(v) for v in value) + "]"
     if isinstance(value, dict):
-        return "{ " + ", ".join(f"{_key(k)} = {_value(v)}" for k, v in value.items()) + " }"
+        items = [(k, v) for k, v in value.items() if v is not None]
+        return "{ " + ", ".join(f"{_key(k)} = {_value(v)}" for k, v in items) + " }"
     if value is None:
         raise ValueError("TOML has no null")
     raise TypeError(f"cannot write {type(value).__name__} as TOML")
@@ -35,9 +36,11 @@ def dump_toml(data: dict[str, Any], _prefix: str = "") -> str:
     for key, table in tables:
         name = f"{_prefix}{_key(key)}"
         body = dump_toml(table, f"{name}.")
-        if lines or _prefix:
-            lines.append("")
-        lines.append(f"[{name}]")
+        has_scalars = any(not _is_table(v) and v is not None for v in table.values())
+        if has_scalars:
+            if lines or _prefix:
+                lines.append("")
+            lines.append(f"[{name}]")
         lines.append(body)
     return "\n".join(line for line in lines).rstrip() + ("\n" if not _prefix else "")
 
