@@ -25,10 +25,11 @@ def plot_workspace(report: WorkspaceReport, path: Path) -> None:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.patches import Rectangle
 
     figure, axes = plt.subplots(figsize=(7, 8), dpi=120)
     length, width, _ = report.robot.body.size
-    axes.add_patch(plt.Rectangle((-length / 2, -width / 2), length, width, fill=False, color="0.3", lw=1.5,
+    axes.add_patch(Rectangle((-length / 2, -width / 2), length, width, fill=False, color="0.3", lw=1.5,
                                  label="body"))
     colours = plt.get_cmap("tab10")
     for index, (leg, plane) in enumerate(report.planes.items()):

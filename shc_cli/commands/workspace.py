@@ -10,7 +10,7 @@ from pathlib import Path
 import typer
 
 from shc_cli.analysis.workspace import WorkspaceReport, analyse_workspace
-from shc_cli.errors import SpecError
+from shc_cli.errors import Issue, SpecError
 from shc_cli.outputs import atomic_path, write_text
 from shc_cli.spec.loading import load_gait, load_robot
 
@@ -39,9 +39,11 @@ def run_workspace(
         raise SpecError(problems)
     assert gait_loaded.gait is not None
     if bearing_count < 1 or 360 % bearing_count:
-        raise SpecError([_option_issue("--bearings", f"{bearing_count} does not divide 360", "use 8, 12, 24, 36 or 72")])
+        raise SpecError([_option_issue("--bearings", f"{bearing_count} does not divide 360",
+                                       "use 8, 12, 24, 36 or 72")])
     if step_frequency is not None and step_frequency <= 0:
-        raise SpecError([_option_issue("--step-frequency", f"{step_frequency:g} must be > 0", "give a frequency in Hz")])
+        raise SpecError([_option_issue("--step-frequency", f"{step_frequency:g} must be > 0",
+                                       "give a frequency in Hz")])
     report = analyse_workspace(robot, gait_loaded.gait, step_frequency, bearing_count, volumetric)
     if out is not None:
         write_outputs(report, out)
@@ -53,9 +55,7 @@ def run_workspace(
             typer.echo(f"wrote {out}/workspace.csv, {out}/limits.csv, {out}/workspace.png")
 
 
-def _option_issue(option: str, problem: str, fix: str):  # type: ignore[no-untyped-def]
-    from shc_cli.errors import Issue
-
+def _option_issue(option: str, problem: str, fix: str) -> Issue:
     return Issue(None, None, option, problem, fix)
 
 

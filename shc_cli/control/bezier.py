@@ -6,11 +6,7 @@ order of multiplications so results match the reference recordings bit for bit w
 
 from __future__ import annotations
 
-from typing import TypeVar
-
 import numpy as np
-
-T = TypeVar("T", float, np.ndarray)
 
 
 def smooth_step(x: float) -> float:
@@ -21,20 +17,21 @@ def smooth_step(x: float) -> float:
 def quartic(points: np.ndarray, t: float) -> np.ndarray:
     """Point of the quartic Bézier with control points ``points`` (5, …) at ``t`` ∈ [0, 1]."""
     s = 1.0 - t
-    return (points[0] * (s * s * s * s) + points[1] * (4.0 * t * s * s * s) + points[2] * (6.0 * t * t * s * s)
-            + points[3] * (4.0 * t * t * t * s) + points[4] * (t * t * t * t))
+    return np.asarray(
+        points[0] * (s * s * s * s) + points[1] * (4.0 * t * s * s * s) + points[2] * (6.0 * t * t * s * s)
+        + points[3] * (4.0 * t * t * t * s) + points[4] * (t * t * t * t)
+    )
 
 
 def quartic_dot(points: np.ndarray, t: float) -> np.ndarray:
     """Derivative ``dB/dt`` of the quartic Bézier at ``t``."""
     s = 1.0 - t
-    return (4.0 * s * s * s * (points[1] - points[0]) + 12.0 * s * s * t * (points[2] - points[1])
+    return np.asarray(4.0 * s * s * s * (points[1] - points[0]) + 12.0 * s * s * t * (points[2] - points[1])
             + 12.0 * s * t * t * (points[3] - points[2]) + 4.0 * t * t * t * (points[4] - points[3]))
 
 
 def cubic(points: np.ndarray, t: float) -> np.ndarray:
     """Point of the cubic Bézier with control points ``points`` (4, …) at ``t`` ∈ [0, 1]."""
     s = 1.0 - t
-    return points[0] * (s * s * s) + points[1] * (3.0 * t * s * s) + points[2] * (3.0 * t * t * s) + points[3] * (
-        t * t * t
-    )
+    return np.asarray(points[0] * (s * s * s) + points[1] * (3.0 * t * s * s) + points[2] * (3.0 * t * t * s)
+                      + points[3] * (t * t * t))

@@ -146,4 +146,4 @@ class Chains:
 
     def tip_transforms(self, q: FloatArray) -> FloatArray:
         """Tip poses in base_link as homogeneous transforms, ``(B, 4, 4)``."""
-        return np.matmul(self.base, self.frames(q)[:, -1])
+        return np.asarray(np.matmul(self.base, self.frames(q)[:, -1]), dtype=np.float64)

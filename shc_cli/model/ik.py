@@ -62,6 +62,7 @@ def ik_step(
     *,
     clamp_positions: bool = True,
     clamp_velocities: bool = False,
+    avoid_limits: bool = True,
 ) -> StepResult:
     """One OpenSHC IK step for every chain (study §2.1–§2.2, position only).
 
@@ -74,6 +75,7 @@ def ik_step(
         dt: control period [s].
         clamp_positions: clamp to the joint limits.
         clamp_velocities: clamp ``|q̇|`` to ``max_vel`` (OpenSHC skips this in its "simulation" calls).
+        avoid_limits: add OpenSHC's null-space limit avoidance (off only to polish planning solutions).
     """
     count, joints = chains.d.shape
     q_new = np.empty((count, joints))
@@ -85,7 +87,7 @@ def ik_step(
         chains.base, chains.d, chains.theta, chains.r, chains.alpha, chains.lower, chains.upper, chains.max_vel,
         np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(qd, dtype=float),
         np.ascontiguousarray(current_tip, dtype=float), np.ascontiguousarray(desired_tip, dtype=float),
-        float(dt), clamp_positions, clamp_velocities, q_new, qd_new, tip, flags, near,
+        float(dt), clamp_positions, clamp_velocities, q_new, qd_new, tip, flags, near, 1.0 if avoid_limits else 0.0,
     )
     return StepResult(q_new, qd_new, tip, (flags & 1) != 0, near, (flags & 2) != 0, (flags & 4) != 0)
 
@@ -128,11 +130,12 @@ def solve(
     qd = np.zeros_like(q)
     tip = chains.tips(q)
     error = np.linalg.norm(targets - tip, axis=1)
-    for _ in range(max_steps):
+    for count in range(max_steps):
         if (error < tolerance).all():
             break
-        step = ik_step(chains, q, qd, tip, targets, dt)
+        # Limit avoidance keeps joints central on the way; the last steps polish without it.
+        polish = count >= max_steps // 2 or bool((error < 1e-3).all())
+        step = ik_step(chains, q, qd, tip, targets, dt, avoid_limits=not polish)
         q, tip = step.q, step.tip
-        qd = np.zeros_like(q)
         error = np.linalg.norm(targets - tip, axis=1)
     return q, error

@@ -108,13 +108,14 @@ def tips_kernel(base, d, theta, r, alpha, q, tips):  # type: ignore[no-untyped-d
 def ik_step_one(  # type: ignore[no-untyped-def]
     base, d, theta, r, alpha, lower, upper, max_vel,
     q, qd, current_tip, desired_tip, dt, clamp_positions, clamp_velocities,
-    q_out, qd_out, tip_out, frames,
+    q_out, qd_out, tip_out, frames, null_space=1.0,
 ):
     """One DLS step with joint-limit avoidance for one chain (study §2.1–§2.2).
 
     Returns ``(flags, proximity)``: flags bit 0 = tip within tolerance, bit 1 = a position was clamped,
     bit 2 = a velocity was clamped; proximity ρ ∈ [0, 1] as OpenSHC's ``updateJointPositions``.
-    ``frames`` is scratch space of shape ``(n + 1, 4, 4)``.
+    ``frames`` is scratch space of shape ``(n + 1, 4, 4)``. ``null_space`` scales the limit-avoidance
+    motion: 1 is OpenSHC; 0 gives a plain damped-least-squares step (used to polish planning solutions).
     """
     n = d.shape[0]
     w = JOINT_LIMIT_COST_WEIGHT
@@ -181,7 +182,7 @@ def ik_step_one(  # type: ignore[no-untyped-def]
         if norm_v > 0.0:
             vspan = 2.0 * max_vel[k]
             gv = -(w * w) * qd[k] / (vspan * vspan) / norm_v
-        v[k] = POSITION_LIMIT_SHARE * gp + (1.0 - POSITION_LIMIT_SHARE) * gv
+        v[k] = (POSITION_LIMIT_SHARE * gp + (1.0 - POSITION_LIMIT_SHARE) * gv) * null_space
     # Δq = Z Δs + (I − Z J) v, then velocity and position clamping.
     jv0 = 0.0
     jv1 = 0.0
@@ -238,7 +239,7 @@ def ik_step_one(  # type: ignore[no-untyped-def]
 def ik_step_kernel(  # type: ignore[no-untyped-def]
     base, d, theta, r, alpha, lower, upper, max_vel,
     q, qd, current_tip, desired_tip, dt, clamp_positions, clamp_velocities,
-    q_out, qd_out, tip_out, flags_out, proximity_out,
+    q_out, qd_out, tip_out, flags_out, proximity_out, null_space=1.0,
 ):
     """:func:`ik_step_one` for every chain ``b`` of ``(B, n)`` arrays."""
     chains, n = d.shape
@@ -247,7 +248,7 @@ def ik_step_kernel(  # type: ignore[no-untyped-def]
         flags_out[b], proximity_out[b] = ik_step_one(
             base[b], d[b], theta[b], r[b], alpha[b], lower[b], upper[b], max_vel[b],
             q[b], qd[b], current_tip[b], desired_tip[b], dt, clamp_positions, clamp_velocities,
-            q_out[b], qd_out[b], tip_out[b], frames,
+            q_out[b], qd_out[b], tip_out[b], frames, null_space,
         )
 
 

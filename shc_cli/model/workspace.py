@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from shc_cli.model.chains import Chains, FloatArray
 from shc_cli.model import kernels
+from shc_cli.model.chains import Chains, FloatArray
 from shc_cli.model.ik import IK_TOLERANCE
 
 BEARING_STEP_DEG = 45

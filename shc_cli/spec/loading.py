@@ -367,7 +367,7 @@ def _check_mirror_table(data: dict[str, Any], loaded: Located) -> None:
             issues.append(loaded.issue(("mirror", key), "expected a list of names", 'e.g. ["coxa", "coxat"]'))
         elif key == "negate_dh":
             for item in value.value:
-                link, _, angle = item.partition(".")
+                _, _, angle = item.partition(".")
                 if angle not in DH_ANGLES:
                     issues.append(loaded.issue(("mirror", key), f"'{item}' is not LINK.theta or LINK.alpha",
                                                'e.g. "base.alpha" or "coxat.theta"'))

@@ -128,7 +128,8 @@ class Walker(Strict):
     swing_width: Adjustable = Field(_adj(0.0, -0.3, 0.3, 0.01), description="outward shift of the swing apex [m]")
     step_depth: Adjustable = Field(_adj(0.0, 0.0, 0.0, 0.0), description="reactive target lowering (rough terrain) [m]")
     stance_span_modifier: Adjustable = Field(
-        _adj(0.0, -1.0, 1.0, 0.1), description="fraction of the lateral workspace to widen (+) or narrow (−) stance [ratio]"
+        _adj(0.0, -1.0, 1.0, 0.1),
+        description="fraction of the lateral workspace to widen (+) or narrow (−) stance [ratio]",
     )
     velocity_input_mode: Literal["throttle", "real"] = Field(
         "throttle", description="'throttle': inputs are −1..1 of the maximum; 'real': m/s and rad/s"
@@ -154,7 +155,9 @@ class InverseKinematics(Strict):
 
     clamp_joint_positions: bool = Field(True, description="clamp IK output to [min, max]")
     clamp_joint_velocities: bool = Field(True, description="clamp IK joint speed to max_vel")
-    ignore_warnings: bool = Field(False, description="do not report IK deviation/clamping [OpenSHC: ignore_IK_warnings]")
+    ignore_warnings: bool = Field(
+        False, description="do not report IK deviation/clamping [OpenSHC: ignore_IK_warnings]"
+    )
 
 
 class XYZ(Strict):
@@ -193,7 +196,9 @@ class Pose(Strict):
 class StartUp(Strict):
     """Start-up behaviour (study §9.2–§9.3)."""
 
-    sequence: bool = Field(False, description="stepped start-up/shut-down with pack/unpack [OpenSHC: start_up_sequence]")
+    sequence: bool = Field(
+        False, description="stepped start-up/shut-down with pack/unpack [OpenSHC: start_up_sequence]"
+    )
     time_to_start: Positive = Field(6.0, description="duration of the direct start-up [s]")
 
 

@@ -163,7 +163,8 @@ class Document:
 
     def sourced(self) -> dict[str, Any]:
         """The data with every leaf wrapped in :class:`Sourced` (lists are leaves)."""
-        return _wrap(self.data, self.path, ())
+        wrapped: dict[str, Any] = _wrap(self.data, self.path, ())
+        return wrapped
 
 
 def _wrap(value: Any, file: Path, path: KeyPath) -> Any:

@@ -1,0 +1,99 @@
+"""The shipped TOML robots expand to exactly the parameters of OpenSHC's own YAML files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from ruamel.yaml import YAML
+
+from shc_cli.spec.loading import bundled, load_gait, load_robot
+
+from .conftest import GOLDEN, ROOT
+
+PAIRS = [
+    ("bullet", "bullet_insectoid.yaml"),
+    ("bullet_mammalian", "bullet_mammalian.yaml"),
+    ("openshc_default", "openshc_default.yaml"),
+]
+
+
+def _yaml(name: str) -> dict:  # type: ignore[type-arg]
+    data = YAML(typ="safe").load((GOLDEN / "openshc" / name).read_text())
+    return data["syropod"]["parameters"]  # type: ignore[no-any-return]
+
+
+@pytest.mark.parametrize(("robot_name", "yaml_name"), PAIRS)
+def test_every_leg_parameter_matches_openshc(robot_name: str, yaml_name: str) -> None:
+    params = _yaml(yaml_name)
+    robot = load_robot(robot_name).robot
+    assert robot is not None
+    assert list(robot.legs) == params["leg_id"]
+    assert robot.time_delta == params["time_delta"]
+    assert robot.walker.body_clearance == params["body_clearance"]
+    for leg_id, leg in robot.legs.items():
+        assert len(leg.joints) == params["leg_DOF"][leg_id]
+        assert list(leg.joints) == params["joint_id"][: len(leg.joints)]
+        base = params[f"{leg_id}_base_link_parameters"]
+        assert (leg.base.d, leg.base.theta, leg.base.r, leg.base.alpha) == (
+            base["d"], base["theta"], base["r"], base["alpha"]), leg_id
+        stance = params[f"{leg_id}_stance_position"]
+        assert (leg.stance.x, leg.stance.y) == (stance["x"], stance["y"])
+        for name, joint in leg.joints.items():
+            link = params[f"{leg_id}_{name}_link_parameters"]
+            assert (joint.d, joint.theta, joint.r, joint.alpha) == (
+                link["d"], link["theta"], link["r"], link["alpha"]), f"{leg_id} {name}"
+            spec = params[f"{leg_id}_{name}_joint_parameters"]
+            assert (joint.min, joint.max, joint.unpacked, joint.max_vel, joint.offset) == (
+                spec["min"], spec["max"], spec["unpacked"], spec["max_vel"], spec["offset"]), f"{leg_id} {name}"
+            numbered = [spec[k] for k in sorted(spec) if k.startswith("packed_")]
+            packed = [spec["packed"]] if "packed" in spec else numbered
+            assert joint.packed == packed, f"{leg_id} {name}"
+
+
+@pytest.mark.parametrize(("robot_name", "yaml_name"), PAIRS)
+def test_walker_parameters_match_openshc(robot_name: str, yaml_name: str) -> None:
+    params = _yaml(yaml_name)
+    robot = load_robot(robot_name).robot
+    assert robot is not None
+    walker = robot.walker
+    for name in ("step_frequency", "swing_height", "swing_width", "step_depth", "stance_span_modifier"):
+        expected = params[name]
+        got = getattr(walker, name)
+        assert (got.default, got.min, got.max, got.step) == (
+            expected["default"], expected["min"], expected["max"], expected["step"]), name
+    assert walker.gait == params["gait_type"].removesuffix("_gait")
+    assert robot.ik.clamp_joint_velocities == params["clamp_joint_velocities"]
+    assert robot.ik.ignore_warnings == params["ignore_IK_warnings"]
+    assert robot.start_up.time_to_start == params["time_to_start"]
+
+
+def test_gaits_match_openshc_gait_file() -> None:
+    gaits = YAML(typ="safe").load((GOLDEN / "openshc" / "gait.yaml").read_text())["syropod"]["gait_parameters"]
+    for key, expected in gaits.items():
+        gait = load_gait(key.removesuffix("_gait")).gait
+        assert gait is not None
+        assert (gait.stance_phase, gait.swing_phase, gait.phase_offset) == (
+            expected["stance_phase"], expected["swing_phase"], expected["phase_offset"])
+        assert gait.offset_multiplier == expected["offset_multiplier"]
+
+
+def test_every_bundled_robot_and_gait_loads_from_any_directory(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert {"bullet", "bullet_mammalian", "openshc_default", "athena", "quadruped", "octopod"} <= set(bundled("robots"))
+    for name in bundled("robots"):
+        assert load_robot(name).robot is not None
+    for name in bundled("gaits"):
+        assert load_gait(name).gait is not None
+    assert (ROOT / "robots" / "bullet.toml").is_file()
+
+
+def test_mammalian_extends_bullet_and_overrides_only_what_it_says() -> None:
+    bullet = load_robot("bullet").robot
+    mammal = load_robot("bullet_mammalian").robot
+    assert bullet is not None and mammal is not None
+    assert mammal.walker.gait == "bipod" and bullet.walker.gait == "tripod"
+    assert mammal.legs["CL"].joints["coxat"].min == 0.0 and mammal.legs["CL"].joints["coxat"].max == 3.142
+    assert mammal.legs["AL"].joints["tarsus"].min == -3.142
+    assert mammal.body == bullet.body
+    assert mammal.admittance == bullet.admittance
