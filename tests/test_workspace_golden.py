@@ -143,3 +143,48 @@ def test_volumetric_mode_contains_the_flat_plane(bullet: Robot, tripod) -> None:
         assert abs(flat) < 1e-9
         for bearing, radius in stack[flat].items():
             assert radius == pytest.approx(result.planes[leg][bearing], abs=1e-6), leg
+
+
+# openshc-study.md §14A (values printed to 3 decimals; the insectoid rows equal the binary's print).
+STUDY_RADII = {
+    ("bullet_mammalian", "AR"): (0.298, 0.280, 0.301, 0.353, 0.409, 0.363, 0.313, 0.292),
+    ("bullet_mammalian", "BR"): (0.323, 0.432, 0.525, 0.438, 0.284, 0.187, 0.165, 0.207),
+    ("bullet_mammalian", "CR"): (0.448, 0.437, 0.364, 0.296, 0.258, 0.260, 0.304, 0.387),
+}
+STUDY_FORWARD_LIMITS = [  # robot, gait, r, v_max, a_max, ω_max at bearing 0
+    ("bullet_mammalian", "bipod", 0.196, 0.445, 0.225, 1.126),
+    ("bullet_mammalian", "tripod", 0.196, 0.284, 0.123, 0.718),
+    ("openshc_default", "tripod", 0.060, 0.077, 0.030, 0.513),
+    ("bullet", "wave", 0.160, 0.054, 0.009, 0.117),
+    ("bullet", "ripple", 0.160, 0.125, 0.039, 0.271),
+    ("bullet", "amble", 0.160, 0.125, 0.046, 0.272),
+    ("bullet", "bipod", 0.160, 0.364, 0.184, 0.789),
+]
+
+
+@pytest.mark.parametrize(("robot_name", "leg"), list(STUDY_RADII))
+def test_mammalian_workspace_matches_the_study(robot_name: str, leg: str) -> None:
+    from shc_cli.spec.loading import load_gait, load_robot
+
+    robot = load_robot(robot_name).robot
+    gait = load_gait("bipod").gait
+    assert robot is not None and gait is not None
+    plane = analyse_workspace(robot, gait).planes[leg]
+    for bearing, expected in zip(range(0, 360, 45), STUDY_RADII[(robot_name, leg)], strict=True):
+        assert plane[bearing] == pytest.approx(expected, abs=6e-4), bearing
+
+
+@pytest.mark.parametrize(("robot_name", "gait_name", "radius", "speed", "acceleration", "angular"),
+                         STUDY_FORWARD_LIMITS)
+def test_forward_limits_match_the_study(robot_name: str, gait_name: str, radius: float, speed: float,
+                                        acceleration: float, angular: float) -> None:
+    from shc_cli.spec.loading import load_gait, load_robot
+
+    robot = load_robot(robot_name).robot
+    gait = load_gait(gait_name).gait
+    assert robot is not None and gait is not None
+    limit = analyse_workspace(robot, gait).limits.bearings[0]
+    assert limit.walkspace_radius == pytest.approx(radius, abs=6e-4)
+    assert limit.linear_speed == pytest.approx(speed, abs=6e-4)
+    assert limit.linear_acceleration == pytest.approx(acceleration, abs=6e-4)
+    assert limit.angular_speed == pytest.approx(angular, abs=6e-4)
