@@ -83,7 +83,11 @@ def _check_gait_against(gait: LoadedGait, robots: list[Robot]) -> list[Issue]:
 
 
 def _check_own_gait(loaded: LoadedRobot) -> list[Issue]:
-    """The gait named in walker.gait must exist and fit the robot."""
+    """The gait named in walker.gait must exist and fit the robot.
+
+    Problems are reported at walker.gait in the robot file: choosing that gait is the robot's doing,
+    and the gait file may be a bundled one the user never edits.
+    """
     from shc_cli.spec.checks import check_gait
 
     assert loaded.robot is not None
@@ -92,7 +96,7 @@ def _check_own_gait(loaded: LoadedRobot) -> list[Issue]:
         gait = load_gait(loaded.robot.walker.gait, relative_to=file.parent)
     except ShcError as error:
         return [loaded.issue(("walker", "gait"), str(error).splitlines()[0], "name a bundled gait or a gait file")]
-    return check_gait(gait, loaded.robot)
+    return [loaded.issue(("walker", "gait"), issue.problem, issue.fix) for issue in check_gait(gait, loaded.robot)]
 
 
 def summary(robot: Robot, extra_gaits: list[LoadedGait]) -> str:
@@ -122,7 +126,10 @@ def summary(robot: Robot, extra_gaits: list[LoadedGait]) -> str:
     frequency = robot.walker.step_frequency.default
     lines.append(f"  {'gait':<18}{'duty':>6}{'period':>9}{'period':>9}   (step frequency {frequency:g} Hz)")
     for name, gait in gaits.items():
-        cycle = step_cycle(gait, frequency, robot.time_delta)
+        try:
+            cycle = step_cycle(gait, frequency, robot.time_delta)
+        except ZeroDivisionError:  # no whole cycle at this frequency and control period: not usable
+            continue
         default = " (default)" if name == robot.walker.gait else ""
         lines.append(f"  {name:<18}{cycle.duty_factor:>6.3f}{cycle.period:>6} cyc"
                      f"{cycle.period * robot.time_delta:>8.2f} s{default}")

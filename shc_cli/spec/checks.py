@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from shc_cli.errors import Issue
-from shc_cli.spec.loading import LoadedGait, LoadedRobot
+from shc_cli.spec.loading import LoadedGait, LoadedRobot, one_per_mistake
 from shc_cli.spec.robot import Robot
 
 REACH_TOLERANCE = 0.001
@@ -22,14 +22,15 @@ MIN_LEGS_IN_STANCE = 2
 
 
 def check_robot(loaded: LoadedRobot) -> list[Issue]:
-    """Every semantic check of a robot file, cheapest first."""
+    """Every semantic check of a robot file, cheapest first; each mistake reported once."""
     robot = loaded.robot
     assert robot is not None
     issues = _joint_positions(loaded, robot) + _stance_overlap(loaded, robot)
-    if issues:
-        return issues
-    issues = _mirrors(loaded, robot)
-    return issues or _stance_reachable(loaded, robot)
+    if not issues:
+        issues = _mirrors(loaded, robot)
+    if not issues:
+        issues = _stance_reachable(loaded, robot)
+    return one_per_mistake(issues, loaded.mirrors)
 
 
 def _joint_positions(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
@@ -46,13 +47,18 @@ def _joint_positions(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
 
 
 def _stance_overlap(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
+    """No two stance positions closer than the feet allow; a pair's mirror image is not reported again."""
     issues = []
     legs = list(robot.legs.items())
+    source = {leg_id: mirrored[0] for leg_id, mirrored in loaded.mirrors.items()}
+    reported: set[frozenset[str]] = set()
     for i, (leg_id, leg) in enumerate(legs):
         for other_id, other in legs[:i]:
             gap = math.hypot(leg.stance.x - other.stance.x, leg.stance.y - other.stance.y)
             needed = max(MIN_STANCE_SEPARATION, leg.foot_radius + other.foot_radius)
-            if gap < needed:
+            pair = frozenset(source.get(name, name) for name in (leg_id, other_id))
+            if gap < needed and pair not in reported:
+                reported.add(pair)
                 issues.append(loaded.issue(
                     ("legs", leg_id, "stance"),
                     f"stance ({leg.stance.x:g}, {leg.stance.y:g}) is {gap * 1000:.0f} mm from leg {other_id}'s stance "
@@ -63,7 +69,10 @@ def _stance_overlap(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
 
 
 def _mirrors(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
-    """A mirrored leg must be the reflection of its source through the x–z plane."""
+    """A mirrored leg must be the reflection of its source through the x–z plane.
+
+    With a ``[mirror]`` table its rules are the likely mistake: one issue there for all failing legs.
+    """
     from shc_cli.model.chains import Chains
 
     if not loaded.mirrors:
@@ -71,7 +80,7 @@ def _mirrors(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
     chains = Chains.from_robot(robot)
     order = {leg: i for i, leg in enumerate(robot.legs)}
     rng = np.random.default_rng(0)
-    issues = []
+    failures: list[tuple[str, str, float]] = []
     for leg_id, (source_id, negated) in loaded.mirrors.items():
         source, mirror = order[source_id], order[leg_id]
         pair = chains.take(np.array([source, mirror]))
@@ -83,12 +92,16 @@ def _mirrors(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
         tips_mirror = pair.take(np.ones(8, dtype=np.int64)).tips(q * sign)
         error = float(np.abs(tips_mirror - tips_source * np.array([1.0, -1.0, 1.0])).max())
         if error > 1e-3:
-            issues.append(loaded.issue(
-                ("legs", leg_id),
-                f"the mirror of {source_id} is not its reflection: tips differ by up to {error * 1000:.0f} mm",
-                "check [mirror] negate_dh and negate_joints against the leg's DH chain",
-            ))
-    return issues
+            failures.append((leg_id, source_id, error))
+    fix = "check [mirror] negate_dh and negate_joints against the leg's DH chain"
+    if failures and any(path[0] == "mirror" for path in loaded.origin_map):
+        pairs = ", ".join(f"{source_id} -> {leg_id}" for leg_id, source_id, _ in failures)
+        worst = max(error for *_, error in failures)
+        return [loaded.issue(("mirror",), f"these rules do not reflect {pairs}: tips differ by up to "
+                                          f"{worst * 1000:.0f} mm", fix)]
+    return [loaded.issue(("legs", leg_id), f"the mirror of {source_id} is not its reflection: tips differ by "
+                                           f"up to {error * 1000:.0f} mm", fix)
+            for leg_id, source_id, error in failures]
 
 
 def _stance_reachable(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
@@ -106,6 +119,14 @@ def _stance_reachable(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
         best = np.minimum(best, error)
         if (best < REACH_TOLERANCE).all():
             return []
+    if len(robot.legs) > 1 and (best >= REACH_TOLERANCE).all():
+        short = sorted({f"{error * 1000:.0f}" for error in (best.min(), best.max())}, key=float)
+        return [loaded.issue(
+            ("walker", "body_clearance"),
+            f"no leg reaches its stance at body_clearance {clearance:g} m (short by {' to '.join(short)} mm "
+            "within the joint limits)",
+            "lower walker.body_clearance, move the stances towards the legs' bases or widen the joint limits",
+        )]
     issues = []
     for i, (leg_id, leg) in enumerate(robot.legs.items()):
         if best[i] >= REACH_TOLERANCE:
@@ -144,8 +165,11 @@ def check_gait(loaded_gait: LoadedGait, robot: Robot) -> list[Issue]:
                                   f"gait '{gait.name}' does not fit robot '{robot.name}': {'; '.join(parts)}",
                                   f"give one multiplier for each of {', '.join(robot.legs)}")]
     frequency = robot.walker.step_frequency.default
-    cycle = step_cycle(gait, frequency, robot.time_delta)
-    if cycle.period == 0:
+    try:
+        cycle = step_cycle(gait, frequency, robot.time_delta)
+    except ZeroDivisionError:  # a cycle of 0 iterations: the frequency is above what time_delta resolves
+        cycle = None
+    if cycle is None or cycle.period == 0:
         return [loaded_gait.issue(("swing_phase",),
                                   f"step frequency {frequency:g} Hz is too high for time_delta {robot.time_delta:g} s",
                                   "lower walker.step_frequency")]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator
 
 from shc_cli.spec.robot import Strict
 
@@ -22,11 +22,13 @@ class Gait(Strict):
     phase_offset: int = Field(ge=0, description="base offset between legs [units]")
     offset_multiplier: dict[str, int] = Field(description="leg id → multiple of phase_offset")
 
-    @model_validator(mode="after")
-    def _has_legs(self) -> Gait:
-        if not self.offset_multiplier:
-            raise ValueError("offset_multiplier must name at least one leg")
-        return self
+    @field_validator("offset_multiplier")
+    @classmethod
+    def _has_legs(cls, offset_multiplier: dict[str, int]) -> dict[str, int]:
+        """On the field, so the error points at the [offset_multiplier] table."""
+        if not offset_multiplier:
+            raise ValueError("names no leg; give one multiplier per leg, e.g. AR = 0")
+        return offset_multiplier
 
     @property
     def base_length(self) -> int:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import difflib
 import json
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -71,9 +72,16 @@ class Located:
     documents: dict[Path, Document] = field(default_factory=dict)
 
     def where(self, loc: KeyPath) -> tuple[Path, int | None]:
-        """File and line that set the field at ``loc`` (or its nearest written ancestor)."""
+        """File and line that set the field at ``loc``.
+
+        In order: the value's own origin; the key as written in the loaded file itself (a table, or a
+        value with nothing inside such as ``joints = {}``); the nearest written ancestor.
+        """
         origin = self.origin_map.get(loc)
         if origin is None:
+            own = self.documents.get(self.path)
+            if own is not None and loc in own.lines:
+                return self.path, own.lines[loc]
             origin = self._ancestor_origin(loc)
         if origin is None:
             return self.path, None
@@ -87,7 +95,9 @@ class Located:
             if not below:
                 continue
             same = [o for _, o in below if o.path[:depth] == prefix]
-            chosen = same[0] if same else below[0][1]
+            pool = same or [o for _, o in below]
+            # A value the loaded file wrote over its parent's is likelier the mistake than the parent's.
+            chosen = next((o for o in pool if o.file == self.path), pool[0])
             return Origin(chosen.file, chosen.path[:depth])
         return None
 
@@ -195,6 +205,7 @@ def _expand_legs(
         return data
     templates = data.get("templates", {})
     expanded: dict[str, Any] = {}
+    failed: set[str] = set()
     issues: list[Issue] = []
 
     def where(origin: Origin) -> int | None:
@@ -202,8 +213,19 @@ def _expand_legs(
         return doc.line(origin.path) if doc else None
 
     def expand(leg_id: str, stack: tuple[str, ...]) -> dict[str, Any] | None:
+        """The expanded leg, or None if it cannot be built (its issue is reported once)."""
         if leg_id in expanded:
             return expanded[leg_id]  # type: ignore[no-any-return]
+        if leg_id in failed:
+            return None
+        result = build(leg_id, stack)
+        if result is None:
+            failed.add(leg_id)
+        else:
+            expanded[leg_id] = result
+        return result
+
+    def build(leg_id: str, stack: tuple[str, ...]) -> dict[str, Any] | None:
         leg = raw_legs[leg_id]
         if not isinstance(leg, dict):
             return None
@@ -226,10 +248,15 @@ def _expand_legs(
         if mirror_ref is not None:
             name = mirror_ref.value
             if not isinstance(name, str) or name not in raw_legs or name == leg_id or name in stack:
-                problem = (f"cannot mirror '{name}'" if name in stack or name == leg_id
-                           else f"no leg named '{name}' to mirror")
-                close = difflib.get_close_matches(str(name), [k for k in raw_legs if k != leg_id], n=1)
-                fix = f"did you mean '{close[0]}'?" if close and name not in stack else "name another leg"
+                if name == leg_id:
+                    problem, fix = "a leg cannot mirror itself", "name the leg it reflects on the other side"
+                elif name in stack:
+                    cycle = " -> ".join((*stack[stack.index(name):], leg_id, name))
+                    problem, fix = f"mirror cycle: {cycle}", "give one of these legs a template instead"
+                else:
+                    close = difflib.get_close_matches(str(name), [k for k in raw_legs if k != leg_id], n=1)
+                    problem = f"no leg named '{name}' to mirror"
+                    fix = f"did you mean '{close[0]}'?" if close else f"legs: {', '.join(raw_legs)}"
                 issues.append(Issue(mirror_ref.origin.file, where(mirror_ref.origin),
                                     f"legs.{leg_id}.mirror", problem, fix))
                 return None
@@ -238,9 +265,7 @@ def _expand_legs(
                 return None
             base = _reflect(data, source)
             mirrors[leg_id] = (name, _mirror_rules(data, source)[1])
-        result = deep_merge(base, own)
-        expanded[leg_id] = result
-        return result
+        return deep_merge(base, own)
 
     legs_out = {}
     for leg_id in raw_legs:
@@ -271,6 +296,14 @@ def _model_at(model: type[BaseModel], loc: KeyPath) -> type[BaseModel] | None:
     return current if isinstance(current, type) and issubclass(current, BaseModel) else None
 
 
+def _did_you_mean(model: type[BaseModel], loc: KeyPath) -> str | None:
+    """The allowed key closest to the unknown key at ``loc`` (letter case ignored), if any is close."""
+    owner = _model_at(model, loc)
+    lowered = {name.lower(): name for name in (owner.model_fields if owner else [])}
+    close = difflib.get_close_matches(str(loc[-1]).lower(), list(lowered), n=1, cutoff=0.6)
+    return lowered[close[0]] if close else None
+
+
 _UNIT_HINT = "write a plain number in SI units (m, rad, s, kg) without a unit"
 
 
@@ -281,16 +314,23 @@ def _describe(error: dict[str, Any], model: type[BaseModel]) -> tuple[str, str]:
     if kind == "extra_forbidden":
         owner = _model_at(model, loc)
         allowed = list(owner.model_fields) if owner else []
-        close = difflib.get_close_matches(name, allowed, n=1, cutoff=0.6)
-        fix = f"did you mean '{close[0]}'?" if close else (f"allowed: {', '.join(allowed)}" if allowed else "remove it")
+        close = _did_you_mean(model, loc)
+        fix = f"did you mean '{close}'?" if close else (f"allowed: {', '.join(allowed)}" if allowed else "remove it")
         return f"unknown key '{name}'", fix
     if kind == "missing":
+        if loc and isinstance(loc[-1], int) and isinstance(given, list):  # an item of a fixed-length list
+            return f"too few values ({len(given)} given)", "give one value per item, as 'shc schema robot' lists them"
         return "missing required field", f"add '{name} = ...'"
     if kind in ("float_parsing", "float_type", "int_parsing", "int_type", "int_from_float"):
         wanted = "a whole number" if kind.startswith("int") else "a number"
+        plain = _UNIT_HINT if wanted == "a number" else "write an integer"
         if isinstance(given, str) and any(c.isalpha() for c in given):
-            return f"expected {wanted}, got the text '{given}'", _UNIT_HINT
-        return f"expected {wanted}, got {given!r}", _UNIT_HINT if wanted == "a number" else "write an integer"
+            return f"expected {wanted}, got the text '{given}'", plain
+        if isinstance(given, str):
+            return f"expected {wanted}, got '{given}'", "remove the quotes"
+        if isinstance(given, bool):
+            return f"expected {wanted}, got {str(given).lower()}", f"write {wanted}, not true or false"
+        return f"expected {wanted}, got {given!r}", plain
     if kind == "finite_number":
         return f"must be a finite number, got {given!r}", "replace nan/inf with a real value"
     if kind in ("bool_type", "bool_parsing"):
@@ -301,6 +341,7 @@ def _describe(error: dict[str, Any], model: type[BaseModel]) -> tuple[str, str]:
         return f"{given!r} is not allowed", error["msg"].replace("Input should be", "use")
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
         bound = next(iter(error.get("ctx", {}).values()), "")
+        bound = f"{bound:g}" if isinstance(bound, float) else bound
         op = {"greater_than": ">", "greater_than_equal": "≥", "less_than": "<", "less_than_equal": "≤"}[kind]
         return f"must be {op} {bound}, got {given!r}", "change the value"
     if kind in ("dict_type", "model_type", "model_attributes_type"):
@@ -320,20 +361,51 @@ def _validate(model: type[BaseModel], data: dict[str, Any], located: Located) ->
     try:
         return model.model_validate(data)
     except ValidationError as error:
+        errors: list[dict[str, Any]] = [dict(item) for item in error.errors()]
+        # A misspelt required key is one mistake: its "did you mean" already names the missing field.
+        suggested: set[KeyPath] = set()
+        for item in errors:
+            loc: KeyPath = tuple(item["loc"])
+            close = _did_you_mean(model, loc) if item["type"] == "extra_forbidden" else None
+            if close is not None:
+                suggested.add((*loc[:-1], close))
         issues = []
-        for item in error.errors():
+        for item in errors:
             loc = tuple(item["loc"])
-            problem, fix = _describe(dict(item), model)
+            if item["type"] == "missing" and loc in suggested:
+                continue
+            if item["type"] == "missing" and loc and isinstance(loc[-1], int):
+                loc = loc[:-1]  # a short fixed-length list: one issue at the list, not one per absent item
+            problem, fix = _describe(item, model)
             issues.append(located.issue(loc, problem, fix))
-        raise SpecError(_dedupe(issues)) from None
+        mirrors = located.mirrors if isinstance(located, LoadedRobot) else {}
+        raise SpecError(one_per_mistake(issues, mirrors)) from None
 
 
-def _dedupe(issues: list[Issue]) -> list[Issue]:
-    seen: set[str] = set()
+def one_per_mistake(issues: list[Issue], mirrors: Mapping[str, tuple[str, set[str]]]) -> list[Issue]:
+    """Each written mistake once, though every leg that uses the value fails on it.
+
+    A template's line fails in each leg built from the template, and a leg's values fail again in the
+    legs that mirror it. Keep the first issue per file, line, field below the leg and problem, and drop
+    a mirrored leg's issue when its source leg has one at the same field.
+    """
+
+    def split(field_path: str) -> tuple[str | None, str]:
+        parts = field_path.split(".", 2)
+        if len(parts) >= 2 and parts[0] == "legs":
+            return parts[1], parts[2] if len(parts) == 3 else ""
+        return None, field_path
+
+    flagged = {split(issue.field) for issue in issues}
+    seen: set[tuple[Path | None, int | None, str, str]] = set()
     out = []
     for issue in issues:
-        if str(issue) not in seen:
-            seen.add(str(issue))
+        leg, below = split(issue.field)
+        if leg is not None and leg in mirrors and (mirrors[leg][0], below) in flagged:
+            continue
+        key = (issue.file, issue.line, below, issue.problem)
+        if key not in seen:
+            seen.add(key)
             out.append(issue)
     return out
 
@@ -427,4 +499,5 @@ def _partial(leg_schema: dict[str, Any], defs: dict[str, Any], names: tuple[str,
     return out
 
 
-__all__ = ["DH", "Joint", "LoadedGait", "LoadedRobot", "bundled", "load_gait", "load_robot", "resolve"]
+__all__ = ["DH", "Joint", "LoadedGait", "LoadedRobot", "bundled", "load_gait", "load_robot", "one_per_mistake",
+           "resolve"]

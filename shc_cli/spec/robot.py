@@ -10,16 +10,24 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 MAX_JOINTS = 6
 MIN_JOINTS = 1
 
 
 class Strict(BaseModel):
-    """Base of every spec model: unknown keys are errors, numbers stay numbers."""
+    """Base of every spec model: unknown keys are errors, numbers stay numbers.
 
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=False, validate_default=True)
+    Strict: a quoted ``"0.25"`` is not a number, ``"true"`` or ``1`` is not a boolean and ``true`` is not
+    a number (an integer is still a valid float). Every float must be finite. Fixed-length lists are
+    declared ``tuple[...]`` with ``strict=False`` on the field, since TOML arrays arrive as lists; their
+    items stay strict.
+    """
+
+    model_config = ConfigDict(
+        extra="forbid", frozen=True, strict=True, allow_inf_nan=False, validate_default=True
+    )
 
 
 Metres = Annotated[float, Field(allow_inf_nan=False)]
@@ -73,13 +81,13 @@ class Leg(Strict):
     stance: StanceXY = Field(description="default tip position in the walk plane [m]")
     foot_radius: NonNegative = Field(0.0, description="radius of the spherical foot at the tip [m] (simulation)")
 
-    @model_validator(mode="after")
-    def _joint_count(self) -> Leg:
-        if not MIN_JOINTS <= len(self.joints) <= MAX_JOINTS:
-            raise ValueError(
-                f"a leg needs {MIN_JOINTS} to {MAX_JOINTS} joints, this one has {len(self.joints)}"
-            )
-        return self
+    @field_validator("joints")
+    @classmethod
+    def _joint_count(cls, joints: dict[str, Joint]) -> dict[str, Joint]:
+        """On the field, so the error points at the joints table (often a template's) and not the leg."""
+        if not MIN_JOINTS <= len(joints) <= MAX_JOINTS:
+            raise ValueError(f"a leg needs {MIN_JOINTS} to {MAX_JOINTS} joints, this one has {len(joints)}")
+        return joints
 
 
 class Adjustable(Strict):
@@ -107,12 +115,16 @@ class Body(Strict):
     """The body (torso) as a box; its origin is base_link."""
 
     size: tuple[Positive, Positive, Positive] = Field(
-        (0.3, 0.2, 0.05), description="box length x, width y, height z [m]"
+        (0.3, 0.2, 0.05), strict=False, description="box length x, width y, height z [m]"
     )
     mass: Positive = Field(1.0, description="body mass without legs [kg]")
-    com: tuple[Metres, Metres, Metres] = Field((0.0, 0.0, 0.0), description="centre of mass in base_link [m]")
+    com: tuple[Metres, Metres, Metres] = Field(
+        (0.0, 0.0, 0.0), strict=False, description="centre of mass in base_link [m]"
+    )
     inertia: tuple[NonNegative, NonNegative, NonNegative] | None = Field(
-        None, description="principal moments ixx, iyy, izz about the COM [kg·m²]; derived from the box if absent"
+        None,
+        strict=False,
+        description="principal moments ixx, iyy, izz about the COM [kg·m²]; derived from the box if absent",
     )
 
 
@@ -140,12 +152,20 @@ class Walker(Strict):
     gravity_aligned_tips: bool = Field(False, description=">3-DOF legs: keep the tip x axis along gravity")
     rough_terrain_mode: bool = Field(False, description="volumetric workspace and adaptive footholds")
 
+    @field_validator("step_frequency")
+    @classmethod
+    def _frequency_positive(cls, frequency: Adjustable) -> Adjustable:
+        """A step cycle lasts 1 / frequency: every reachable frequency must be above 0 Hz."""
+        if frequency.min <= 0:
+            raise ValueError(f"min ({frequency.min:g}) must be above 0 Hz; e.g. min = 0.001")
+        return frequency
+
 
 class Cruise(Strict):
     """Cruise control (study §6)."""
 
     force_velocity: bool = Field(True, description="use the velocities below, else latch the current input")
-    linear: tuple[float, float] = Field((1.0, 0.0), description="cruise x, y (throttle or m/s)")
+    linear: tuple[float, float] = Field((1.0, 0.0), strict=False, description="cruise x, y (throttle or m/s)")
     angular: float = Field(0.0, description="cruise yaw rate (throttle or rad/s)")
     time_limit: NonNegative = Field(0.0, description="cruise duration, 0 = unlimited [s]")
 

@@ -112,7 +112,8 @@ def key_lines(text: str) -> dict[KeyPath, int]:
                 table = (*keys, index)
             else:
                 table = keys
-            out.setdefault(table, number)
+            for depth in range(1, len(table) + 1):  # [legs.AR] also writes legs, if nothing did before
+                out.setdefault(table[:depth], number)
             continue
         assign = _ASSIGN.match(line)
         if assign and not line.lstrip().startswith(("]", "}", ",")):
