@@ -57,13 +57,13 @@ def run_validate(files: list[str], *, show: bool) -> None:
         raise SpecError(issues)
     for loaded in robots:
         assert loaded.robot is not None
-        if show:
-            typer.echo(f"# {loaded.path} (expanded)")
+        if show:  # the TOML alone on stdout, so `--show > expanded.toml` gives a valid robot file
+            typer.echo(f"# {loaded.path}, expanded by shc validate --show")
             typer.echo(dump_toml(loaded.robot.model_dump(mode="json")))
-        typer.echo(summary(loaded.robot, [g for g in gaits if g.gait]))
+        typer.echo(summary(loaded.robot, [g for g in gaits if g.gait], _own_gait(loaded)), err=show)
     for gait in gaits:
         assert gait.gait is not None
-        typer.echo(f"{gait.path}: gait '{gait.gait.name}' ok (duty factor {gait.gait.duty_factor:.3f})")
+        typer.echo(f"{gait.path}: gait '{gait.gait.name}' ok (duty factor {gait.gait.duty_factor:.3f})", err=show)
 
 
 def _check_gait_against(gait: LoadedGait, robots: list[Robot]) -> list[Issue]:
@@ -99,7 +99,16 @@ def _check_own_gait(loaded: LoadedRobot) -> list[Issue]:
     return [loaded.issue(("walker", "gait"), issue.problem, issue.fix) for issue in check_gait(gait, loaded.robot)]
 
 
-def summary(robot: Robot, extra_gaits: list[LoadedGait]) -> str:
+def _own_gait(loaded: LoadedRobot) -> LoadedGait | None:
+    """The robot's walker.gait, loaded as the validator found it (None if it cannot be loaded)."""
+    assert loaded.robot is not None
+    try:
+        return load_gait(loaded.robot.walker.gait, relative_to=loaded.where(("walker", "gait"))[0].parent)
+    except ShcError:
+        return None
+
+
+def summary(robot: Robot, extra_gaits: list[LoadedGait], own: LoadedGait | None = None) -> str:
     """A short table: legs, DOF, mass, stance and the duty factor and period of each fitting gait."""
     from shc_cli.control.gait import step_cycle
 
@@ -120,7 +129,7 @@ def summary(robot: Robot, extra_gaits: list[LoadedGait]) -> str:
             continue
         if gait is not None and set(gait.offset_multiplier) == set(robot.legs):
             gaits[gait.name] = gait
-    for loaded in extra_gaits:
+    for loaded in [*extra_gaits, *([own] if own else [])]:
         if loaded.gait is not None and set(loaded.gait.offset_multiplier) == set(robot.legs):
             gaits[loaded.gait.name] = loaded.gait
     frequency = robot.walker.step_frequency.default
@@ -130,7 +139,7 @@ def summary(robot: Robot, extra_gaits: list[LoadedGait]) -> str:
             cycle = step_cycle(gait, frequency, robot.time_delta)
         except ZeroDivisionError:  # no whole cycle at this frequency and control period: not usable
             continue
-        default = " (default)" if name == robot.walker.gait else ""
+        default = " (default)" if own is not None and own.gait is gait else ""
         lines.append(f"  {name:<18}{cycle.duty_factor:>6.3f}{cycle.period:>6} cyc"
                      f"{cycle.period * robot.time_delta:>8.2f} s{default}")
     return "\n".join(lines)

@@ -166,6 +166,22 @@ def _mirror_rules(data: dict[str, Any], leg: dict[str, Any]) -> tuple[set[tuple[
     return dh_rules, {str(j) for j in rules.get("negate_joints", [])}
 
 
+def _unknown_mirror_names(data: dict[str, Any], leg: dict[str, Any]) -> tuple[str, str, str] | None:
+    """(rule key, offending entry, valid names) for the first [mirror] entry naming nothing in ``leg``."""
+    joints = list(leg.get("joints", {})) if isinstance(leg.get("joints"), dict) else []
+    rules = unwrap(data.get("mirror", {}))
+    if not isinstance(rules, dict):
+        return None
+    for item in rules.get("negate_dh", []) if isinstance(rules.get("negate_dh"), list) else []:
+        link = str(item).partition(".")[0]
+        if link != "base" and link not in joints:
+            return "negate_dh", str(item), ", ".join(["base", *joints])
+    for item in rules.get("negate_joints", []) if isinstance(rules.get("negate_joints"), list) else []:
+        if str(item) not in joints:
+            return "negate_joints", str(item), ", ".join(joints)
+    return None
+
+
 def _reflect(data: dict[str, Any], leg: dict[str, Any]) -> dict[str, Any]:
     """The leg reflected through the x–z plane of the body (left ↔ right)."""
     dh_rules, joint_rules = _mirror_rules(data, leg)
@@ -262,6 +278,15 @@ def _expand_legs(
                 return None
             source = expand(name, (*stack, leg_id))
             if source is None:
+                return None
+            unknown = _unknown_mirror_names(data, source)
+            if unknown:
+                path, item, known = unknown
+                origin = data["mirror"][path].origin
+                issue = Issue(origin.file, where(origin), f"mirror.{path}",
+                              f"'{item}' names no link or joint of the legs it mirrors", f"use one of: {known}")
+                if issue not in issues:
+                    issues.append(issue)
                 return None
             base = _reflect(data, source)
             mirrors[leg_id] = (name, _mirror_rules(data, source)[1])
@@ -478,9 +503,17 @@ def robot_file_schema() -> dict[str, Any]:
             "negate_joints": {"type": "array", "items": {"type": "string"}, "description": "joint names"},
         },
     }
-    schema.pop("required", None)
     schema["title"] = "shc robot file"
-    return schema
+    return _without_required(schema)  # a file that extends another may set any subset of fields
+
+
+def _without_required(node: Any) -> Any:
+    """A copy of a JSON Schema with every ``required`` list removed."""
+    if isinstance(node, dict):
+        return {k: _without_required(v) for k, v in node.items() if k != "required"}
+    if isinstance(node, list):
+        return [_without_required(v) for v in node]
+    return node
 
 
 def _partial(leg_schema: dict[str, Any], defs: dict[str, Any], names: tuple[str, ...]) -> dict[str, Any]:
