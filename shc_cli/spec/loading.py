@@ -504,7 +504,8 @@ def robot_file_schema() -> dict[str, Any]:
         },
     }
     schema["title"] = "shc robot file"
-    return _without_required(schema)  # a file that extends another may set any subset of fields
+    relaxed: dict[str, Any] = _without_required(schema)  # a file that extends another may set any subset
+    return relaxed
 
 
 def _without_required(node: Any) -> Any:
