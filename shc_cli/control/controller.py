@@ -1,0 +1,292 @@
+"""The one controller: robot state machine, walking, posing and IK, advanced only by :meth:`Controller.step`.
+
+Pure computation (no I/O, no clock, no globals). ``plan``, ``simulate`` and ``run-hw`` feed it a
+:class:`Command` each control cycle (and, later, sensor readings) and send its joint targets to their
+backend. The order inside one cycle is OpenSHC's main loop (study §10.1): pose update, state
+transition, then in RUNNING the walk update, the tip pose generator and one IK step per leg.
+Commands given at cycle ``c`` are what OpenSHC's callbacks would have received before loop ``c``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import IntEnum
+
+import numpy as np
+
+from shc_cli.control.bezier import cubic
+from shc_cli.control.gait import step_cycle
+from shc_cli.control.limits import generate_limits
+from shc_cli.control.pose import PoseController, PoseReset
+from shc_cli.control.startup import iterations, plan_direct_startup
+from shc_cli.control.walk import WalkController, WalkState
+from shc_cli.model.chains import Chains, FloatArray
+from shc_cli.model.ik import ik_step
+from shc_cli.model.workspace import Workplane, search_workspaces, walkspace
+from shc_cli.spec.gait import Gait
+from shc_cli.spec.robot import Robot
+
+UNDEFINED = float(2147483647)
+"""OpenSHC's 'undefined position' value, published before a tip has been posed."""
+
+
+class RobotState(IntEnum):
+    """OpenSHC ``RobotState``."""
+
+    UNKNOWN = -1
+    PACKED = 0
+    READY = 1
+    RUNNING = 2
+
+
+@dataclass
+class Command:
+    """Inputs of one control cycle (what OpenSHC receives on its remote topics).
+
+    Attributes:
+        velocity: body velocity input (x, y, yaw) in the robot's input mode (throttle −1..1, or m/s, rad/s).
+        state_request: desired robot state; each request moves the robot one state towards it.
+        pose_velocity: manual posing input (x, y, z, roll, pitch, yaw), each −1..1.
+        pose_reset: manual pose reset mode.
+    """
+
+    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    state_request: RobotState | None = None
+    pose_velocity: tuple[float, float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    pose_reset: PoseReset = PoseReset.NO_RESET
+
+
+@dataclass
+class CycleOutput:
+    """Everything one cycle produces; arrays are over legs in id order.
+
+    Attributes:
+        joints: desired joint positions ``(L, n)`` [rad].
+        joint_velocities: desired joint velocities ``(L, n)`` [rad/s].
+        walker_tips: walker tips in the walk-plane frame ``(L, 3)`` [m].
+        poser_tips: IK targets in base_link ``(L, 3)`` [m] (:data:`UNDEFINED` before the first posing).
+        model_tips: tips after IK (FK of ``joints``) in base_link ``(L, 3)`` [m].
+        stance_progress: 0..1 in stance, −1 otherwise ``(L,)``.
+        swing_progress: 0..1 in swing, −1 otherwise ``(L,)``.
+        velocity: desired body velocity (x [m/s], y [m/s], yaw rate [rad/s]).
+        pose: body pose (x, y, z [m], roll, pitch, yaw [rad]) in the walk plane.
+        robot_state: robot state after the cycle.
+        walk_state: walk state after the cycle.
+        ik_deviations: legs whose tip missed its target by more than 5 mm this cycle.
+        ik_clamped: legs with a joint clamped to a limit this cycle.
+    """
+
+    joints: FloatArray
+    joint_velocities: FloatArray
+    walker_tips: FloatArray
+    poser_tips: FloatArray
+    model_tips: FloatArray
+    stance_progress: FloatArray
+    swing_progress: FloatArray
+    velocity: tuple[float, float, float]
+    pose: tuple[float, float, float, float, float, float]
+    robot_state: RobotState
+    walk_state: WalkState
+    ik_deviations: int = 0
+    ik_clamped: int = 0
+
+
+@dataclass
+class _Transition:
+    """A joint-space transition in progress (cubic Bézier from ``origin`` to ``target``)."""
+
+    origin: FloatArray
+    target: FloatArray
+    count: int = 0
+    steps: int = 1
+
+
+@dataclass
+class Model:
+    """The robot model the controller drives: desired joints and the tips they put the legs at."""
+
+    chains: Chains
+    joints: FloatArray
+    joint_velocities: FloatArray
+    tips: FloatArray = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.tips = self.chains.tips(self.joints)
+
+
+class Controller:
+    """OpenSHC's high-level controller for one robot.
+
+    Args:
+        robot: the robot description.
+        gait: the gait to walk with.
+        joints: initial joint positions ``(L, n)`` [rad]; default ``clamp(0, min, max)`` (OpenSHC without feedback).
+    """
+
+    def __init__(self, robot: Robot, gait: Gait, joints: FloatArray | None = None) -> None:
+        self.robot = robot
+        self.gait = gait
+        self.dt = robot.time_delta
+        chains = Chains.from_robot(robot)
+        start = chains.default_joints() if joints is None else np.array(joints, dtype=float)
+        self.model = Model(chains, start.copy(), np.zeros_like(start))
+        self.default_joints = chains.default_joints()
+        self.state = RobotState.UNKNOWN
+        self.requested = RobotState.UNKNOWN
+        self.transition_pending = False
+        self._transition: _Transition | None = None
+        self.cycle = step_cycle(gait, robot.walker.step_frequency.default, self.dt)
+        self.stance = {leg: (spec.stance.x, spec.stance.y) for leg, spec in robot.legs.items()}
+        self.planes: dict[str, Workplane] = {}
+        self.walkspace: Workplane = {}
+        self.walker: WalkController | None = None
+        walker_spec, pose_spec = robot.walker, robot.pose
+        self.poser = PoseController(
+            walker_spec.body_clearance,
+            np.array([pose_spec.max_translation.x, pose_spec.max_translation.y, pose_spec.max_translation.z]),
+            np.array([pose_spec.max_rotation.roll, pose_spec.max_rotation.pitch, pose_spec.max_rotation.yaw]),
+            pose_spec.max_translation_velocity, pose_spec.max_rotation_velocity, self.dt, pose_spec.manual,
+        )
+        self.poser_tips = np.full((len(robot.legs), 3), UNDEFINED)
+        self.identity_walker_tips = np.array([[x, y, 0.0] for x, y in self.stance.values()])
+        self.velocity_input = np.zeros(2)
+        self.angular_input = 0.0
+        self.pose_input = np.zeros(6)
+        self.pose_reset = PoseReset.NO_RESET
+        self._posed_once = False
+
+    # -- inputs ------------------------------------------------------------------------------------------------
+
+    def _receive(self, command: Command) -> None:
+        """Take a command as OpenSHC's topic callbacks would (before this cycle's loop)."""
+        scaler = self.robot.walker.body_velocity_scaler
+        linear = np.array(command.velocity[:2], dtype=float) * scaler
+        if self.robot.walker.velocity_input_mode == "throttle" and np.linalg.norm(linear) > 1.0:
+            linear = linear / np.linalg.norm(linear)
+        if self.state == RobotState.RUNNING:
+            self.velocity_input = linear
+            self.angular_input = float(command.velocity[2]) * scaler
+            self.pose_input = np.array(command.pose_velocity, dtype=float)
+            self.pose_reset = command.pose_reset
+        if command.state_request is not None and not self.transition_pending:
+            self.requested = command.state_request
+            if self.state == RobotState.UNKNOWN or command.state_request != self.state:
+                self.transition_pending = True
+
+    # -- the cycle ---------------------------------------------------------------------------------------------
+
+    def step(self, command: Command | None = None) -> CycleOutput:
+        """Advance one control period and return this cycle's outputs."""
+        self._receive(command or Command())
+        if self.state != RobotState.UNKNOWN:
+            self._update_pose()
+        deviations = clamped = 0
+        if self.transition_pending:
+            self._transition_state()
+        if self.state == RobotState.RUNNING:
+            deviations, clamped = self._running()
+        return self._output(deviations, clamped)
+
+    def _update_pose(self) -> None:
+        legs = self.walker.legs.values() if self.walker else []
+        progress = [s.swing_progress for s in legs]
+        planes = [s.walk_plane for s in legs]
+        normals = [s.walk_plane_normal for s in legs]
+        if self.state == RobotState.RUNNING:
+            self.poser.update_manual(self.pose_input, self.pose_reset)
+        self.poser.update_current_pose(progress, self.gait.swing_phase, self.gait.phase_offset, planes, normals)
+
+    def _transition_state(self) -> None:
+        """Move one state towards the request (OpenSHC direct start-up mode, study §9.2)."""
+        if self.state == RobotState.UNKNOWN:
+            self.state = RobotState.PACKED  # no joint feedback: "undefined → PACKED", as OpenSHC
+            self.transition_pending = False
+            return
+        target = self.state + (1 if self.requested > self.state else -1)
+        if self.state == RobotState.PACKED and target == RobotState.READY:
+            if self._direct_startup():
+                self.state = RobotState.READY
+                self.default_joints = self.model.joints.copy()
+                self._generate_limits()
+                self.transition_pending = False
+        elif self.state == RobotState.READY and target == RobotState.RUNNING:
+            self.state = RobotState.RUNNING
+            self.transition_pending = False
+        else:
+            self.transition_pending = False  # other transitions need the start-up sequence (not yet supported)
+
+    def _direct_startup(self) -> bool:
+        """Plan the stance by IK on the first cycle, then move in joint space; True when done."""
+        if self._transition is None:
+            target = plan_direct_startup(self.robot, self.model.chains, self.default_joints)
+            steps = iterations(self.robot.start_up.time_to_start, self.dt)
+            self._transition = _Transition(self.model.joints.copy(), target, 0, steps)
+        move = self._transition
+        move.count += 1
+        nodes = np.stack([move.origin, move.origin, move.target, move.target])
+        self.model.joints = cubic(nodes, move.count * (1.0 / move.steps))
+        self.model.tips = self.model.chains.tips(self.model.joints)
+        if move.count >= move.steps:
+            self._transition = None
+            return True
+        return False
+
+    def _generate_limits(self) -> None:
+        """Workspaces, walkspace and limits from the default configuration; (re)create the walker."""
+        clearance = self.robot.walker.body_clearance
+        identity = np.array([[x, y, -clearance] for x, y in self.stance.values()])
+        self.planes = search_workspaces(self.model.chains, self.default_joints, identity, self.dt).planes
+        self.walkspace = walkspace(self.planes, self.stance, self.robot.walker.overlapping_walkspaces)
+        first = next(iter(self.stance.values()))
+        limits = generate_limits(self.walkspace, self.cycle, self.dt, math.hypot(*first))
+        walker_spec = self.robot.walker
+        if self.walker is None:
+            self.walker = WalkController(self.stance, self.cycle, limits, self.dt, walker_spec.swing_height.default,
+                                         walker_spec.swing_width.default, walker_spec.velocity_input_mode)
+        else:
+            self.walker.set_cycle(self.cycle, limits)
+
+    def _running(self) -> tuple[int, int]:
+        """One RUNNING cycle: walk, pose the tips, one IK step per leg."""
+        assert self.walker is not None
+        self.walker.update(self.velocity_input, self.angular_input, self.poser.walk_plane_pose.position)
+        walker_tips = np.array([s.current_tip for s in self.walker.legs.values()])
+        self.poser_tips = self.poser.posed_tips(walker_tips)
+        ik = self.robot.ik
+        result = ik_step(self.model.chains, self.model.joints, self.model.joint_velocities, self.model.tips,
+                         self.poser_tips, self.dt, clamp_positions=ik.clamp_joint_positions,
+                         clamp_velocities=ik.clamp_joint_velocities)
+        self.model.joints, self.model.joint_velocities, self.model.tips = result.q, result.qd, result.tip
+        return int((~result.ok).sum()), int((result.position_clamped | result.velocity_clamped).sum())
+
+    def _output(self, deviations: int, clamped: int) -> CycleOutput:
+        if self.walker is not None:
+            legs = list(self.walker.legs.values())
+            walker_tips = np.array([s.current_tip for s in legs])
+            stance = np.array([s.stance_progress for s in legs])
+            swing = np.array([s.swing_progress for s in legs])
+            velocity = (float(self.walker.desired_linear[0]), float(self.walker.desired_linear[1]),
+                        float(self.walker.desired_angular))
+            walk_state = self.walker.state
+        else:
+            walker_tips = self.identity_walker_tips.copy()
+            stance = swing = np.full(len(self.stance), -1.0)
+            velocity, walk_state = (0.0, 0.0, 0.0), WalkState.STOPPED
+        pose = self.poser.current
+        roll, pitch, yaw = pose.euler()
+        return CycleOutput(
+            joints=self.model.joints.copy(),
+            joint_velocities=self.model.joint_velocities.copy(),
+            walker_tips=walker_tips,
+            poser_tips=self.poser_tips.copy(),
+            model_tips=self.model.tips.copy(),
+            stance_progress=stance,
+            swing_progress=swing,
+            velocity=velocity,
+            pose=(float(pose.position[0]), float(pose.position[1]), float(pose.position[2]), roll, pitch, yaw),
+            robot_state=self.state,
+            walk_state=walk_state,
+            ik_deviations=deviations,
+            ik_clamped=clamped,
+        )
