@@ -43,7 +43,7 @@ class Table:
 def read_table(path: Path) -> Table:
     """Read a (possibly gzipped) CSV of numbers."""
     opener = gzip.open if path.suffix == ".gz" else open
-    with opener(path, "rt") as handle:  # type: ignore[operator]
+    with opener(path, "rt") as handle:
         reader = csv.reader(handle)
         columns = next(reader)
         rows = np.array([[float(v) for v in row] for row in reader])
@@ -109,7 +109,7 @@ def replay(recording: Recording, robot: Robot, gait: Gait) -> Comparison:
     for cycle in range(recording.cycles):
         source = cycle - INPUT_LATENCY_CYCLES
         velocity = tuple(commands[source]) if source >= 0 else (0.0, 0.0, 0.0)
-        out = controller.step(Command(velocity=velocity, state_request=requests.get(cycle)))  # type: ignore[arg-type]
+        out = controller.step(Command(velocity=velocity, state_request=requests.get(cycle)))
         _compare(comparison, cycle, out, recorded_joints[cycle], {k: v[cycle] for k, v in recorded_tips.items()},
                  stance[cycle], swing[cycle], velocities[cycle])
     return comparison
