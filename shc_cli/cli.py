@@ -77,6 +77,26 @@ def workspace(
 
 
 @app.command()
+def plan(
+    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
+    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    velocity: Annotated[
+        str, typer.Option(help="Constant velocity input VX,VY,WZ in the robot's input mode.")
+    ] = "1,0,0",
+    duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 10).")] = None,
+    commands: Annotated[
+        Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
+    ] = None,
+    out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-plan).")] = None,
+    plots: Annotated[bool, typer.Option(help="Write gait.png, tips.png and joints.png.")] = True,
+) -> None:
+    """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
+    from shc_cli.commands.plan import run_plan
+
+    run_plan(robot, gait, velocity, duration, commands, out, plots)
+
+
+@app.command()
 def schema(
     kind: Annotated[str, typer.Argument(help="'robot' or 'gait'.")],
 ) -> None:

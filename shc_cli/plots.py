@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from shc_cli.analysis.workspace import WorkspaceReport
+    from shc_cli.control.controller import CycleOutput
+    from shc_cli.spec.robot import Robot
 
 
 def _polygon(centre: tuple[float, float], plane: dict[int, float]) -> tuple[list[float], list[float]]:
@@ -50,4 +52,63 @@ def plot_workspace(report: WorkspaceReport, path: Path) -> None:
     axes.legend(loc="upper center", bbox_to_anchor=(0.5, -0.09), fontsize=7, ncols=4, frameon=False)
     figure.tight_layout()
     figure.savefig(path, format="png")
+    plt.close(figure)
+
+
+def plot_plan(robot: Robot, outputs: list[CycleOutput], folder: Path) -> None:
+    """gait.png (paper Fig. 5), tips.png (Fig. 7: side and top view) and joints.png in ``folder``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    dt = robot.time_delta
+    legs = list(robot.legs)
+    t = np.arange(len(outputs)) * dt
+    swing = np.array([o.swing_progress for o in outputs])
+
+    figure, axes = plt.subplots(figsize=(9, 0.45 * len(legs) + 1.2), dpi=110)
+    for row in range(len(legs)):
+        in_swing = swing[:, row] >= 0.0
+        starts = np.flatnonzero(np.diff(np.concatenate([[0], in_swing.astype(int)])) == 1)
+        ends = np.flatnonzero(np.diff(np.concatenate([in_swing.astype(int), [0]])) == -1)
+        axes.broken_barh([(t[a], (b - a + 1) * dt) for a, b in zip(starts, ends, strict=True)],
+                         (row - 0.4, 0.8), facecolors="0.2")
+    axes.set_yticks(range(len(legs)), legs)
+    axes.invert_yaxis()
+    axes.set_xlabel("time [s] (black: swing, white: stance)")
+    axes.set_title(f"{robot.name}: gait diagram")
+    figure.tight_layout()
+    figure.savefig(folder / "gait.png")
+    plt.close(figure)
+
+    walker = np.array([o.walker_tips for o in outputs])
+    figure, (side, top) = plt.subplots(1, 2, figsize=(11, 4.5), dpi=110)
+    for row, leg in enumerate(legs):
+        side.plot(walker[:, row, 0], walker[:, row, 2], lw=0.8, label=leg)
+        top.plot(walker[:, row, 0], walker[:, row, 1], lw=0.8, label=leg)
+    side.set_xlabel("x [m]")
+    side.set_ylabel("z [m]")
+    side.set_title("tip trajectories, side view (walk plane)")
+    top.set_xlabel("x [m]")
+    top.set_ylabel("y [m]")
+    top.set_aspect("equal", adjustable="datalim")
+    top.set_title("top view")
+    top.legend(fontsize=7, ncols=2)
+    figure.tight_layout()
+    figure.savefig(folder / "tips.png")
+    plt.close(figure)
+
+    joints = np.array([o.joints for o in outputs])
+    figure, axes_grid = plt.subplots(len(legs), 1, figsize=(9, 1.6 * len(legs)), dpi=110, sharex=True)
+    for row, (leg, spec) in enumerate(robot.legs.items()):
+        axis = axes_grid[row] if len(legs) > 1 else axes_grid
+        for k, name in enumerate(spec.joints):
+            axis.plot(t, joints[:, row, k], lw=0.8, label=name)
+        axis.set_ylabel(f"{leg} [rad]")
+        axis.legend(fontsize=6, loc="upper right", ncols=len(spec.joints))
+    (axes_grid[-1] if len(legs) > 1 else axes_grid).set_xlabel("time [s]")
+    figure.tight_layout()
+    figure.savefig(folder / "joints.png")
     plt.close(figure)

@@ -1,0 +1,98 @@
+"""The one run-log format: a run directory of CSV tables written row by row, plus ``summary.json``.
+
+While a run is going its directory is ``<name>.partial``; every completed control cycle is already on
+disk (rows are flushed as they are written), so an interrupted run keeps what it did and is clearly
+marked. :meth:`RunWriter.finish` writes the summary and renames the directory to its final name.
+
+Tables (one row per control cycle, ``cycle`` and time ``t`` [s] first):
+* ``joints.csv`` — desired joint positions [rad], one column ``<LEG>_<joint>`` per joint;
+* ``tips.csv`` — per leg the OpenSHC LegState stages: ``<LEG>_walker_{x,y,z}`` (walk-plane frame),
+  ``<LEG>_poser_{x,y,z}`` and ``<LEG>_model_{x,y,z}`` (base_link) [m], ``<LEG>_stance_progress``,
+  ``<LEG>_swing_progress`` (−1 when not in that phase) — the format of the OpenSHC recordings;
+* ``body.csv`` — ``cmd_{vx,vy,wz}`` (input), ``vel_{x,y,wz}`` (desired velocity after limits) [m/s, rad/s],
+  ``pose_{x,y,z,roll,pitch,yaw}`` (body pose in the walk plane) [m, rad], ``robot_state``, ``walk_state``.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+from pathlib import Path
+from typing import IO, Any
+
+from shc_cli.control.controller import CycleOutput
+from shc_cli.errors import OutputError
+from shc_cli.spec.robot import Robot
+
+PARTIAL_SUFFIX = ".partial"
+
+
+def _fmt(value: float) -> str:
+    return f"{value:.9g}"
+
+
+class RunWriter:
+    """Streams controller outputs into a run directory.
+
+    Args:
+        directory: final run directory (must not exist yet).
+        robot: the robot (for column names).
+    """
+
+    def __init__(self, directory: Path, robot: Robot) -> None:
+        if directory.exists():
+            raise OutputError(f"{directory}: already exists (choose another --out or remove it)")
+        self.directory = directory
+        self.partial = directory.with_name(directory.name + PARTIAL_SUFFIX)
+        try:
+            self.partial.mkdir(parents=True, exist_ok=True)
+        except OSError as error:
+            raise OutputError(f"{self.partial}: cannot create run directory: {error.strerror} "
+                              "(choose another --out)") from None
+        legs = list(robot.legs)
+        joints = [f"{leg}_{joint}" for leg, spec in robot.legs.items() for joint in spec.joints]
+        tips = [f"{leg}_{stage}_{axis}" for leg in legs for stage in ("walker", "poser", "model") for axis in "xyz"]
+        tips = [c for leg in legs for c in (*[t for t in tips if t.startswith(f"{leg}_")],
+                                            f"{leg}_stance_progress", f"{leg}_swing_progress")]
+        body = ["cmd_vx", "cmd_vy", "cmd_wz", "vel_x", "vel_y", "vel_wz", "pose_x", "pose_y", "pose_z",
+                "pose_roll", "pose_pitch", "pose_yaw", "robot_state", "walk_state"]
+        self._handles: list[IO[str]] = []
+        self._joints = self._open("joints.csv", joints)
+        self._tips = self._open("tips.csv", tips)
+        self._body = self._open("body.csv", body)
+
+    def _open(self, name: str, columns: list[str]) -> Any:
+        handle = (self.partial / name).open("w", newline="", encoding="utf-8")
+        self._handles.append(handle)
+        writer = csv.writer(handle, lineterminator="\n")
+        writer.writerow(["cycle", "t", *columns])
+        return writer
+
+    def write(self, cycle: int, time: float, command: tuple[float, float, float], out: CycleOutput) -> None:
+        """Append one control cycle to every table."""
+        head = [str(cycle), f"{time:.4f}"]
+        self._joints.writerow(head + [_fmt(v) for v in out.joints.ravel()])
+        tips: list[str] = []
+        for leg in range(len(out.walker_tips)):
+            for stage in (out.walker_tips, out.poser_tips, out.model_tips):
+                tips += [_fmt(v) for v in stage[leg]]
+            tips += [_fmt(out.stance_progress[leg]), _fmt(out.swing_progress[leg])]
+        self._tips.writerow(head + tips)
+        self._body.writerow(head + [_fmt(v) for v in (*command, *out.velocity, *out.pose)]
+                            + [out.robot_state.name, out.walk_state.name])
+
+    def flush(self) -> None:
+        for handle in self._handles:
+            handle.flush()
+
+    def close(self) -> None:
+        for handle in self._handles:
+            handle.close()
+
+    def finish(self, summary: dict[str, Any]) -> Path:
+        """Write ``summary.json``, close the tables and give the directory its final name."""
+        self.close()
+        (self.partial / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+        os.replace(self.partial, self.directory)
+        return self.directory

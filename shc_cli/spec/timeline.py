@@ -1,0 +1,162 @@
+"""Command timelines for ``shc plan``: a CSV of velocities or a TOML plan script.
+
+Both count time from the first RUNNING cycle (after the robot's start-up), and every entry holds until
+the next one changes it.
+
+CSV (``cycle,vx,vy,wz``; inputs in the robot's velocity input mode)::
+
+    cycle,vx,vy,wz
+    0,0.5,0,0
+    1000,1.0,0,0
+    2000,0,0,0.5
+
+TOML plan script (``[[step]]`` tables in time order; ``at`` [s] or ``cycle``)::
+
+    [[step]]
+    at = 0.0
+    velocity = [1.0, 0.0, 0.0]        # x, y, yaw input
+    [[step]]
+    at = 4.0
+    pose_velocity = [0, 0, 0.5, 0, 0, 0]   # manual body posing input x, y, z, roll, pitch, yaw (−1..1)
+    [[step]]
+    at = 6.0
+    pose_velocity = [0, 0, 0, 0, 0, 0]
+    pose_reset = "all"                # no_reset, z_and_yaw, x_and_y, pitch_and_roll, all, immediate_all
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+from pydantic import Field, ValidationError, model_validator
+
+from shc_cli.control.controller import Command
+from shc_cli.control.pose import PoseReset
+from shc_cli.errors import Issue, SpecError
+from shc_cli.spec.loading import Located, _describe
+from shc_cli.spec.robot import Strict
+from shc_cli.spec.source import Document, origins, unwrap
+
+ResetName = Literal["no_reset", "z_and_yaw", "x_and_y", "pitch_and_roll", "all", "immediate_all"]
+
+
+class Step(Strict):
+    """One change of the command inputs."""
+
+    at: float | None = Field(None, ge=0, description="time after the robot starts running [s]")
+    cycle: int | None = Field(None, ge=0, description="control cycle after the robot starts running")
+    velocity: tuple[float, float, float] | None = Field(None, strict=False, description="x, y, yaw input")
+    pose_velocity: tuple[float, float, float, float, float, float] | None = Field(
+        None, strict=False, description="manual posing input x, y, z, roll, pitch, yaw (−1..1)")
+    pose_reset: ResetName | None = Field(None, description="manual pose reset mode")
+
+    @model_validator(mode="after")
+    def _one_time(self) -> Step:
+        if (self.at is None) == (self.cycle is None):
+            raise ValueError("give exactly one of 'at' (seconds) or 'cycle'; e.g. at = 2.0")
+        return self
+
+
+class PlanScript(Strict):
+    """A TOML plan script: ``[[step]]`` entries."""
+
+    step: list[Step] = Field(description="command changes in time order")
+
+
+@dataclass
+class Timeline:
+    """Command changes by RUNNING-relative cycle; :meth:`command` gives the inputs of any cycle."""
+
+    changes: list[tuple[int, dict[str, object]]]
+
+    @property
+    def last_cycle(self) -> int:
+        return self.changes[-1][0] if self.changes else 0
+
+    def commands(self, cycles: int) -> list[Command]:
+        """The command of every cycle ``0 … cycles − 1``."""
+        current: dict[str, object] = {}
+        out = []
+        changes = iter(sorted(self.changes, key=lambda c: c[0]))
+        pending = next(changes, None)
+        for cycle in range(cycles):
+            while pending is not None and pending[0] <= cycle:
+                current.update(pending[1])
+                pending = next(changes, None)
+            out.append(Command(**current))  # type: ignore[arg-type]
+        return out
+
+
+def constant(velocity: tuple[float, float, float]) -> Timeline:
+    """One velocity for the whole run."""
+    return Timeline([(0, {"velocity": velocity})])
+
+
+def load_timeline(path: Path, time_delta: float) -> Timeline:
+    """Read a CSV timeline or a TOML plan script (by extension)."""
+    if path.suffix == ".toml":
+        return _load_script(path, time_delta)
+    return _load_csv(path)
+
+
+def _load_csv(path: Path) -> Timeline:
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as error:
+        raise SpecError([Issue(path, None, "", f"cannot read commands: {error.strerror}", "check the path")]) from None
+    rows = list(csv.reader(text.splitlines()))
+    if not rows or [c.strip() for c in rows[0]] != ["cycle", "vx", "vy", "wz"]:
+        raise SpecError([Issue(path, 1, "header", "expected the header 'cycle,vx,vy,wz'",
+                               "start the file with that line")])
+    changes: list[tuple[int, dict[str, object]]] = []
+    previous = -1
+    for number, row in enumerate(rows[1:], start=2):
+        if not row or not "".join(row).strip():
+            continue
+        if len(row) != 4:
+            raise SpecError([Issue(path, number, "", f"expected 4 values, got {len(row)}", "write cycle,vx,vy,wz")])
+        try:
+            cycle = int(row[0])
+            values = tuple(float(v) for v in row[1:])
+        except ValueError:
+            raise SpecError([Issue(path, number, "", f"not numbers: {','.join(row)}",
+                                   "cycle is a whole number, vx, vy, wz are numbers")]) from None
+        if cycle <= previous:
+            raise SpecError([Issue(path, number, "cycle", f"cycle {cycle} is not after the previous row's {previous}",
+                                   "sort the rows by cycle")])
+        if any(v != v or v in (float("inf"), float("-inf")) for v in values):
+            raise SpecError([Issue(path, number, "", "nan or inf in the velocities", "use finite numbers")])
+        previous = cycle
+        changes.append((cycle, {"velocity": values}))
+    if not changes:
+        raise SpecError([Issue(path, None, "", "no command rows", "add at least one row after the header")])
+    return Timeline(changes)
+
+
+def _load_script(path: Path, time_delta: float) -> Timeline:
+    document = Document(path)
+    data = document.sourced()
+    located = Located(path=path, origin_map=origins(data), documents={path: document})
+    try:
+        script = PlanScript.model_validate(unwrap(data))
+    except ValidationError as error:
+        issues = []
+        for item in error.errors():
+            problem, fix = _describe(dict(item), PlanScript)
+            issues.append(located.issue(tuple(item["loc"]), problem, fix))
+        raise SpecError(issues[:1]) from None
+    changes: list[tuple[int, dict[str, object]]] = []
+    for step in script.step:
+        cycle = step.cycle if step.cycle is not None else round((step.at or 0.0) / time_delta)
+        change: dict[str, object] = {}
+        if step.velocity is not None:
+            change["velocity"] = step.velocity
+        if step.pose_velocity is not None:
+            change["pose_velocity"] = step.pose_velocity
+        if step.pose_reset is not None:
+            change["pose_reset"] = PoseReset[step.pose_reset.upper()]
+        changes.append((cycle, change))
+    return Timeline(changes)
