@@ -305,6 +305,8 @@ def _model_at(model: type[BaseModel], loc: KeyPath) -> type[BaseModel] | None:
     """The pydantic model class that owns the last element of ``loc`` (for did-you-mean)."""
     current: Any = model
     for part in loc[:-1]:
+        if isinstance(part, int):  # a list index: list[Model] was already reduced to Model
+            continue
         if isinstance(current, type) and issubclass(current, BaseModel):
             info = current.model_fields.get(str(part))
             current = info.annotation if info else None
