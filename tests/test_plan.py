@@ -135,7 +135,10 @@ def test_joint_targets_stay_finite_and_within_limits(name: str, plan: list, runn
             assert np.all(np.isfinite(out.joints))
             assert np.all(out.joints >= chains.lower) and np.all(out.joints <= chains.upper)
             assert np.all(np.isfinite(out.walker_tips))
-            assert abs(out.velocity[2]) <= max(lim.angular_speed for lim in controller.walker.limits.bearings.values()) + 1e-12  # type: ignore[union-attr]
+            walker = controller.walker
+            assert walker is not None
+            fastest = max(limit.angular_speed for limit in walker.limits.bearings.values())
+            assert abs(out.velocity[2]) <= fastest + 1e-12
 
 
 def test_robot_stops_at_its_default_stance(running_controllers) -> None:  # type: ignore[no-untyped-def]
