@@ -42,6 +42,8 @@ def euler_from_matrix(rotation: np.ndarray) -> tuple[float, float, float]:
 
 def rotation_between(a: Vector, b: Vector) -> np.ndarray:
     """Smallest rotation taking direction ``a`` to direction ``b`` (Eigen ``FromTwoVectors``)."""
+    if a[0] == b[0] and a[1] == b[1] and a[2] == b[2]:
+        return np.eye(3)
     a = a / np.linalg.norm(a)
     b = b / np.linalg.norm(b)
     axis = np.cross(a, b)

@@ -140,12 +140,13 @@ class LegStepper:
         """Stride vector: body displacement during one stance at the desired velocity (study §5.1)."""
         self.walk_plane = inputs.walk_plane
         self.walk_plane_normal = inputs.walk_plane_normal
-        linear = np.array([inputs.linear_velocity[0], inputs.linear_velocity[1], 0.0])
-        radius = rejection(self.current_tip, np.array([0.0, 0.0, 1.0]))
-        angular = np.cross(np.array([0.0, 0.0, inputs.angular_velocity]), radius)
+        # linear + ω ẑ × (tip with z removed); written out, as np.cross costs more than the rest of the cycle.
+        omega, (x, y, _) = inputs.angular_velocity, self.current_tip
+        vx, vy = inputs.linear_velocity
         cycle = inputs.cycle
-        on_ground_ratio = cycle.stance_period / cycle.period
-        self.stride = (linear + angular) * (on_ground_ratio / cycle.frequency)
+        scale = (cycle.stance_period / cycle.period) / cycle.frequency
+        self.stride = np.array([(vx + (0.0 * 0.0 - omega * y)) * scale, (vy + (omega * x - 0.0 * 0.0)) * scale,
+                                (0.0 + (0.0 * y - 0.0 * x)) * scale])
         normal = inputs.walk_plane_normal
         self.swing_clearance = inputs.swing_height * (normal / np.linalg.norm(normal))
 

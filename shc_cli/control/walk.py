@@ -64,6 +64,7 @@ class WalkController:
     ) -> None:
         self.cycle = cycle
         self.limits = limits
+        self._keys = sorted(limits.bearings)
         self.time_delta = time_delta
         self.swing_height = swing_height
         self.swing_width = swing_width
@@ -85,29 +86,32 @@ class WalkController:
 
     # -- limits -----------------------------------------------------------------------------------------------
 
-    def limit(self, linear_input: Vector, angular_input: float, field: str) -> float:
-        """Smallest limit over legs for the stride direction at each leg's tip (OpenSHC ``getLimit``).
-
-        The table is read at the bearing sector *below* the stride bearing (OpenSHC's integer division).
-        """
-        table = self.limits.bearings
-        keys = sorted(table)
+    def sectors(self, linear_input: Vector, angular_input: float) -> list[tuple[int, int, int]]:
+        """Per leg, the limit-table keys (lower, upper) and the integer weight of ``upper`` for the stride
+        direction at the leg's current walker tip (OpenSHC ``getLimit``: the weight is an integer
+        division, so the table is read at the sector *below* the stride bearing)."""
+        keys = self._keys
         step = keys[1] - keys[0]
-        smallest = float("inf")
+        out = []
         for stepper in self.legs.values():
             tip = stepper.current_tip
-            direction = linear_input + angular_input * np.array([-tip[1], tip[0]])
-            bearing = round_half_away((math.atan2(direction[1], direction[0]) / (2.0 * math.pi)) * 360.0) % 360
+            dx = linear_input[0] + angular_input * -tip[1]
+            dy = linear_input[1] + angular_input * tip[0]
+            bearing = round_half_away((math.atan2(dy, dx) / (2.0 * math.pi)) * 360.0) % 360
             upper = next(k for k in keys if k >= bearing)
             lower = (upper - step) % 360
             if bearing < lower:
                 bearing += 360
             if upper < lower:
                 upper += 360
-            share = (bearing - lower) // (upper - lower)
-            value = (1.0 - share) * _field(table[lower], field) + share * _field(table[upper % 360], field)
-            smallest = min(smallest, value)
-        return smallest
+            out.append((lower, upper % 360, (bearing - lower) // (upper - lower)))
+        return out
+
+    def limit(self, sectors: list[tuple[int, int, int]], field: str) -> float:
+        """Smallest limit ``field`` over the legs' sectors."""
+        table = self.limits.bearings
+        return min((1.0 - share) * _field(table[lower], field) + share * _field(table[upper], field)
+                   for lower, upper, share in sectors)
 
     # -- the cycle ---------------------------------------------------------------------------------------------
 
@@ -122,10 +126,11 @@ class WalkController:
             legs_walking: False while any leg is manually manipulated (walking is then suspended).
         """
         linear_input = np.asarray(linear_input, dtype=float)
-        max_speed = self.limit(linear_input, angular_input, "linear_speed")
-        max_angular = self.limit(linear_input, angular_input, "angular_speed")
-        max_acceleration = self.limit(linear_input, angular_input, "linear_acceleration")
-        max_angular_acceleration = self.limit(linear_input, angular_input, "angular_acceleration")
+        sectors = self.sectors(linear_input, angular_input)
+        max_speed = self.limit(sectors, "linear_speed")
+        max_angular = self.limit(sectors, "angular_speed")
+        max_acceleration = self.limit(sectors, "linear_acceleration")
+        max_angular_acceleration = self.limit(sectors, "angular_acceleration")
         new_linear, new_angular = np.zeros(2), 0.0
         if self.state != WalkState.STOPPING:
             if self.velocity_input_mode == "throttle":
@@ -247,6 +252,7 @@ class WalkController:
         """Install a new step cycle and limits; offsets are reassigned (OpenSHC ``generateLimits``)."""
         self.cycle = cycle
         self.limits = limits
+        self._keys = sorted(limits.bearings)
         for leg, stepper in self.legs.items():
             stepper.offset = cycle.offsets[leg]
 
