@@ -15,6 +15,7 @@ from enum import IntEnum
 
 import numpy as np
 
+from shc_cli.control import stepping
 from shc_cli.control.bezier import cubic
 from shc_cli.control.gait import step_cycle
 from shc_cli.control.limits import generate_limits
@@ -189,10 +190,12 @@ class Controller:
         return self._output(deviations, clamped)
 
     def _update_pose(self) -> None:
-        legs = self.walker.legs.values() if self.walker else []
-        progress = [s.swing_progress for s in legs]
-        planes = [s.walk_plane for s in legs]
-        normals = [s.walk_plane_normal for s in legs]
+        if self.walker is None:
+            progress, planes, normals = np.empty(0), np.empty((0, 3)), np.empty((0, 3))
+        else:
+            legs = self.walker.legs
+            progress = legs.floats[:, stepping.SWING_PROGRESS]
+            planes, normals = legs.vectors[:, stepping.PLANE], legs.vectors[:, stepping.NORMAL]
         if self.state == RobotState.RUNNING:
             self.poser.update_manual(self.pose_input, self.pose_reset)
         self.poser.update_current_pose(progress, self.gait.swing_phase, self.gait.phase_offset, planes, normals)
@@ -251,7 +254,7 @@ class Controller:
         """One RUNNING cycle: walk, pose the tips, one IK step per leg."""
         assert self.walker is not None
         self.walker.update(self.velocity_input, self.angular_input, self.poser.walk_plane_pose.position)
-        walker_tips = np.array([s.current_tip for s in self.walker.legs.values()])
+        walker_tips = self.walker.legs.tips()
         self.poser_tips = self.poser.posed_tips(walker_tips)
         ik = self.robot.ik
         result = ik_step(self.model.chains, self.model.joints, self.model.joint_velocities, self.model.tips,
@@ -262,10 +265,10 @@ class Controller:
 
     def _output(self, deviations: int, clamped: int) -> CycleOutput:
         if self.walker is not None:
-            legs = list(self.walker.legs.values())
-            walker_tips = np.array([s.current_tip for s in legs])
-            stance = np.array([s.stance_progress for s in legs])
-            swing = np.array([s.swing_progress for s in legs])
+            legs = self.walker.legs
+            walker_tips = legs.tips()
+            stance = legs.floats[:, stepping.STANCE_PROGRESS].copy()
+            swing = legs.floats[:, stepping.SWING_PROGRESS].copy()
             velocity = (float(self.walker.desired_linear[0]), float(self.walker.desired_linear[1]),
                         float(self.walker.desired_angular))
             walk_state = self.walker.state

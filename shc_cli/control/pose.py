@@ -40,17 +40,22 @@ def euler_from_matrix(rotation: np.ndarray) -> tuple[float, float, float]:
     return roll, pitch, yaw
 
 
+IDENTITY = np.eye(3)
+IDENTITY.flags.writeable = False
+"""The identity rotation; poses share this object so composition can skip exact no-op products."""
+
+
 def rotation_between(a: Vector, b: Vector) -> np.ndarray:
     """Smallest rotation taking direction ``a`` to direction ``b`` (Eigen ``FromTwoVectors``)."""
     if a[0] == b[0] and a[1] == b[1] and a[2] == b[2]:
-        return np.eye(3)
+        return IDENTITY
     a = a / np.linalg.norm(a)
     b = b / np.linalg.norm(b)
     axis = np.cross(a, b)
     sine = float(np.linalg.norm(axis))
     cosine = float(np.dot(a, b))
     if sine < 1e-12:
-        return np.eye(3) if cosine > 0 else np.diag([1.0, -1.0, -1.0])
+        return IDENTITY if cosine > 0 else np.diag([1.0, -1.0, -1.0])
     k = axis / sine
     skew = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
     return np.asarray(np.eye(3) + sine * skew + (1.0 - cosine) * (skew @ skew))
@@ -61,24 +66,33 @@ class Pose:
     """A rigid transform: ``x ↦ position + rotation·x``."""
 
     position: Vector = field(default_factory=lambda: np.zeros(3))
-    rotation: np.ndarray = field(default_factory=lambda: np.eye(3))
+    rotation: np.ndarray = field(default_factory=lambda: IDENTITY)
 
     def add(self, other: Pose) -> Pose:
-        """``self ∘ other`` (OpenSHC ``addPose``)."""
-        return Pose(self.position + self.rotation @ other.position, self.rotation @ other.rotation)
+        """``self ∘ other`` (OpenSHC ``addPose``); products with the identity rotation are skipped (exact)."""
+        if self.rotation is IDENTITY:
+            return Pose(self.position + other.position, other.rotation)
+        rotation = self.rotation if other.rotation is IDENTITY else self.rotation @ other.rotation
+        return Pose(self.position + self.rotation @ other.position, rotation)
 
     def remove(self, other: Pose) -> Pose:
         """OpenSHC ``removePose``: ``(p + R·(−p_o), R·R_o⁻¹)``."""
         return Pose(self.position + self.rotation @ (-other.position), self.rotation @ other.rotation.T)
 
-    def inverse_transform(self, vector: Vector) -> Vector:
-        """``R⁻¹(v − p)`` evaluated as OpenSHC does: ``R⁻¹(−p) + R⁻¹v``."""
+    def inverse_transform(self, vectors: np.ndarray) -> np.ndarray:
+        """``R⁻¹(v − p)`` for vectors ``(..., 3)``, evaluated as OpenSHC does: ``R⁻¹(−p) + R⁻¹v``."""
+        if self.rotation is IDENTITY:
+            return np.asarray((-self.position) + vectors)
         inverse = self.rotation.T
-        return np.asarray(inverse @ (-self.position) + inverse @ vector)
+        return np.asarray(inverse @ (-self.position) + vectors @ self.rotation)
 
     def interpolate(self, share: float, target: Pose) -> Pose:
         """Positions blended linearly, rotations along the geodesic (slerp)."""
+        if share == 0.0:
+            return Pose(self.position, self.rotation)  # = 0·p_target + 1·p exactly
         position = share * target.position + (1.0 - share) * self.position
+        if self.rotation is IDENTITY and target.rotation is IDENTITY:
+            return Pose(position, IDENTITY)
         relative = self.rotation.T @ target.rotation
         angle = float(np.arccos(np.clip((np.trace(relative) - 1.0) / 2.0, -1.0, 1.0)))
         if angle < 1e-12:
@@ -142,17 +156,21 @@ class PoseController:
         self.time_delta = time_delta
         self.manual_enabled = manual
         self.manual = np.zeros(6)  # x, y, z [m], roll, pitch, yaw [rad] (intrinsic order)
-        self.walk_plane_origin = Pose(np.array([0.0, 0.0, body_clearance]))
-        self.walk_plane_pose = Pose(np.array([0.0, 0.0, body_clearance]))
+        self.walk_plane_origin = Pose(np.array([0.0, 0.0, body_clearance]), IDENTITY)
+        self.walk_plane_pose = Pose(np.array([0.0, 0.0, body_clearance]), IDENTITY)
         self.current = Pose()
 
     def manual_pose(self) -> Pose:
         """The manual posing term: translation and intrinsic roll–pitch–yaw rotation."""
         x, y, z, roll, pitch, yaw = self.manual
+        if roll == 0.0 and pitch == 0.0 and yaw == 0.0:
+            return Pose(np.array([x, y, z]), IDENTITY)
         return Pose(np.array([x, y, z]), rot_x(roll) @ rot_y(pitch) @ rot_z(yaw))
 
     def update_manual(self, velocity_input: Vector, reset: PoseReset) -> None:
         """Integrate manual posing inputs (−1..1 per axis), stopping exactly on the limits (study §7.2)."""
+        if reset == PoseReset.NO_RESET and not np.any(velocity_input):
+            return
         inputs = np.clip(np.asarray(velocity_input, dtype=float), -1.0, 1.0)
         if reset == PoseReset.IMMEDIATE_ALL:
             self.manual = np.zeros(6)
@@ -167,13 +185,13 @@ class PoseController:
                 value = 0.0  # a reset stops exactly on the default pose
             self.manual[axis] = min(max(value, -limit), limit)
 
-    def update_walk_plane_pose(self, swing_progress: list[float], swing_phase: int, phase_offset: int,
-                               planes: list[Vector], normals: list[Vector]) -> None:
+    def update_walk_plane_pose(self, swing_progress: np.ndarray, swing_phase: int, phase_offset: int,
+                               planes: np.ndarray, normals: np.ndarray) -> None:
         """Align the body with the walk plane during swings (study §7.6); flat ground keeps it at rest."""
         share, plane, normal = 0.0, np.zeros(3), np.array([0.0, 0.0, 1.0])
         scaler = max(1.0, swing_phase / phase_offset) if phase_offset else 1.0
         for progress, leg_plane, leg_normal in zip(swing_progress, planes, normals, strict=True):
-            scaled = progress * scaler
+            scaled = float(progress) * scaler
             if 0.0 <= scaled <= 1.0:
                 share, plane, normal = smooth_step(scaled), leg_plane, leg_normal
         rotation = rotation_between(np.array([0.0, 0.0, 1.0]), normal)
@@ -183,8 +201,8 @@ class PoseController:
         if share == 1.0:
             self.walk_plane_origin = self.walk_plane_pose
 
-    def update_current_pose(self, swing_progress: list[float], swing_phase: int, phase_offset: int,
-                            planes: list[Vector], normals: list[Vector]) -> Pose:
+    def update_current_pose(self, swing_progress: np.ndarray, swing_phase: int, phase_offset: int,
+                            planes: np.ndarray, normals: np.ndarray) -> Pose:
         """Compose this cycle's body pose (study §7.1)."""
         self.update_walk_plane_pose(swing_progress, swing_phase, phase_offset, planes, normals)
         pose = Pose().add(self.walk_plane_pose)
@@ -195,4 +213,4 @@ class PoseController:
 
     def posed_tips(self, walker_tips: np.ndarray) -> np.ndarray:
         """Walker tips (walk-plane frame) in base_link under the current body pose (OpenSHC ``updateStance``)."""
-        return np.array([self.current.inverse_transform(tip) for tip in walker_tips])
+        return self.current.inverse_transform(walker_tips)

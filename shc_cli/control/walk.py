@@ -2,7 +2,7 @@
 
 Each cycle :meth:`WalkController.update` fits the velocity input into the walkspace-derived limits,
 ramps the desired velocity under the acceleration limits, runs the walk state machine, moves every
-walking leg's tip (:class:`~shc_cli.control.stepper.LegStepper`) and integrates ideal odometry.
+walking leg's tip (compiled in :mod:`shc_cli.control.stepping`) and integrates ideal odometry.
 """
 
 from __future__ import annotations
@@ -12,9 +12,10 @@ from enum import IntEnum
 
 import numpy as np
 
+from shc_cli.control import stepping
 from shc_cli.control.gait import StepCycle
-from shc_cli.control.limits import BearingLimit, Limits
-from shc_cli.control.stepper import LegStepper, StepState, WalkInputs
+from shc_cli.control.limits import Limits
+from shc_cli.control.stepping import LegArrays
 
 Vector = np.ndarray
 
@@ -26,11 +27,6 @@ class WalkState(IntEnum):
     MOVING = 1
     STOPPING = 2
     STOPPED = 3
-
-
-def round_half_away(value: float) -> int:
-    """OpenSHC ``roundToInt``: halves round away from zero."""
-    return int(value + 0.5) if value >= 0 else -int(0.5 - value)
 
 
 def clamped_norm(vector: Vector, limit: float) -> Vector:
@@ -63,55 +59,42 @@ class WalkController:
         velocity_input_mode: str = "throttle",
     ) -> None:
         self.cycle = cycle
-        self.limits = limits
-        self._keys = sorted(limits.bearings)
+        self._install_limits(limits)
         self.time_delta = time_delta
         self.swing_height = swing_height
         self.swing_width = swing_width
         self.velocity_input_mode = velocity_input_mode
-        self.legs = {
-            leg: LegStepper(np.array([x, y, 0.0]), cycle.offsets[leg], swing_height)
-            for leg, (x, y) in stance_positions.items()
-        }
+        self.leg_ids = list(stance_positions)
+        identity = np.array([[x, y, 0.0] for x, y in stance_positions.values()])
+        self.legs = LegArrays(identity, [cycle.offsets[leg] for leg in self.leg_ids], swing_height)
+        self.counters = np.zeros(3, dtype=np.int64)
         self.state = WalkState.STOPPED
         self.desired_linear = np.zeros(2)
         self.desired_angular = 0.0
-        self.legs_at_correct_phase = 0
-        self.legs_completed_first_step = 0
-        self.return_to_default_attempted = False
         self.walk_plane = np.zeros(3)
         self.walk_plane_normal = np.array([0.0, 0.0, 1.0])
+        self._plane_tips: np.ndarray | None = None
         self.odometry_position = np.zeros(3)
         self.odometry_yaw = 0.0
 
     # -- limits -----------------------------------------------------------------------------------------------
 
-    def sectors(self, linear_input: Vector, angular_input: float) -> list[tuple[int, int, int]]:
-        """Per leg, the limit-table keys (lower, upper) and the integer weight of ``upper`` for the stride
-        direction at the leg's current walker tip (OpenSHC ``getLimit``: the weight is an integer
-        division, so the table is read at the sector *below* the stride bearing)."""
-        keys = self._keys
-        step = keys[1] - keys[0]
-        out = []
-        for stepper in self.legs.values():
-            tip = stepper.current_tip
-            dx = linear_input[0] + angular_input * -tip[1]
-            dy = linear_input[1] + angular_input * tip[0]
-            bearing = round_half_away((math.atan2(dy, dx) / (2.0 * math.pi)) * 360.0) % 360
-            upper = next(k for k in keys if k >= bearing)
-            lower = (upper - step) % 360
-            if bearing < lower:
-                bearing += 360
-            if upper < lower:
-                upper += 360
-            out.append((lower, upper % 360, (bearing - lower) // (upper - lower)))
-        return out
+    def limits_for(self, linear_input: Vector, angular_input: float) -> tuple[float, float, float, float]:
+        """(speed, yaw rate, acceleration, yaw acceleration) limits for this input at the current tips."""
+        stepping.walk_limits(self.legs.vectors[:, stepping.CURRENT], float(linear_input[0]), float(linear_input[1]),
+                             float(angular_input), self._table, self._bearing_step, self._limit_out)
+        speed, angular, acceleration, angular_acceleration = self._limit_out
+        return float(speed), float(angular), float(acceleration), float(angular_acceleration)
 
-    def limit(self, sectors: list[tuple[int, int, int]], field: str) -> float:
-        """Smallest limit ``field`` over the legs' sectors."""
-        table = self.limits.bearings
-        return min((1.0 - share) * _field(table[lower], field) + share * _field(table[upper], field)
-                   for lower, upper, share in sectors)
+    def _install_limits(self, limits: Limits) -> None:
+        """Limits as a table ``(bearings, 4)`` for the compiled lookup."""
+        self.limits = limits
+        keys = sorted(limits.bearings)
+        self._bearing_step = keys[1] - keys[0]
+        self._table = np.array([[limits.bearings[k].linear_speed, limits.bearings[k].angular_speed,
+                                 limits.bearings[k].linear_acceleration, limits.bearings[k].angular_acceleration]
+                                for k in keys])
+        self._limit_out = np.empty(4)
 
     # -- the cycle ---------------------------------------------------------------------------------------------
 
@@ -126,11 +109,8 @@ class WalkController:
             legs_walking: False while any leg is manually manipulated (walking is then suspended).
         """
         linear_input = np.asarray(linear_input, dtype=float)
-        sectors = self.sectors(linear_input, angular_input)
-        max_speed = self.limit(sectors, "linear_speed")
-        max_angular = self.limit(sectors, "angular_speed")
-        max_acceleration = self.limit(sectors, "linear_acceleration")
-        max_angular_acceleration = self.limit(sectors, "angular_acceleration")
+        max_speed, max_angular, max_acceleration, max_angular_acceleration = self.limits_for(
+            linear_input, angular_input)
         new_linear, new_angular = np.zeros(2), 0.0
         if self.state != WalkState.STOPPING:
             if self.velocity_input_mode == "throttle":
@@ -147,13 +127,15 @@ class WalkController:
         self._ramp(new_linear, new_angular, max_acceleration, max_angular_acceleration)
         if self._transition(has_command):
             return
-        inputs = WalkInputs(self.desired_linear, self.desired_angular, self.cycle, self.time_delta,
-                            self.swing_height, self.swing_width, self.walk_plane, self.walk_plane_normal)
-        count = len(self.legs)
-        for stepper in self.legs.values():
-            self._leg_state(stepper, count, default_body_position)
-            stepper.update_tip_position(inputs)
-            stepper.iterate_phase(self.cycle)
+        cycle = self.cycle
+        stepping.walk_legs(
+            self.legs.vectors, self.legs.nodes, self.legs.floats, self.legs.integers, self.counters, int(self.state),
+            cycle.period, cycle.swing_start, cycle.swing_end, cycle.stance_start, cycle.stance_end,
+            cycle.swing_period, cycle.stance_period, cycle.frequency, self.time_delta,
+            float(self.desired_linear[0]), float(self.desired_linear[1]), float(self.desired_angular),
+            self.swing_height, self.swing_width, self.walk_plane, self.walk_plane_normal,
+            np.asarray(default_body_position, dtype=float),
+        )
         self._update_walk_plane()
         self._integrate_odometry()
 
@@ -176,64 +158,39 @@ class WalkController:
 
     def _transition(self, has_command: bool) -> bool:
         """Walk state transitions; True when the cycle ends here (the STARTING cycle moves no tip)."""
-        count = len(self.legs)
+        count = len(self.leg_ids)
+        counters = self.counters
+        at_phase, first_step = stepping.LEGS_AT_CORRECT_PHASE, stepping.LEGS_COMPLETED_FIRST_STEP
         if self.state == WalkState.STOPPED and has_command:
             self.state = WalkState.STARTING
-            for stepper in self.legs.values():
-                stepper.at_correct_phase = False
-                stepper.completed_first_step = False
-                stepper.step_state = StepState.STANCE
-                stepper.phase = stepper.offset
-                stepper.update_step_state(self.cycle)
+            integers, cycle = self.legs.integers, self.cycle
+            integers[:, stepping.AT_CORRECT_PHASE] = 0
+            integers[:, stepping.COMPLETED_FIRST_STEP] = 0
+            integers[:, stepping.STATE] = stepping.STANCE
+            integers[:, stepping.PHASE] = integers[:, stepping.OFFSET]
+            for leg in range(count):
+                stepping.update_step_state(integers, leg, cycle.swing_start, cycle.swing_end, cycle.stance_start,
+                                           cycle.stance_end)
             return True
-        if (self.state == WalkState.STARTING and self.legs_at_correct_phase == count
-                and self.legs_completed_first_step == count):
-            self.legs_at_correct_phase = 0
-            self.legs_completed_first_step = 0
+        if self.state == WalkState.STARTING and counters[at_phase] == count and counters[first_step] == count:
+            counters[at_phase] = 0
+            counters[first_step] = 0
             self.state = WalkState.MOVING
         elif self.state == WalkState.MOVING and not has_command:
             self.state = WalkState.STOPPING
-        elif self.state == WalkState.STOPPING and self.legs_at_correct_phase == count:
-            self.legs_at_correct_phase = 0
+        elif self.state == WalkState.STOPPING and counters[at_phase] == count:
+            counters[at_phase] = 0
             self.state = WalkState.STOPPED
         return False
 
-    def _leg_state(self, stepper: LegStepper, count: int, default_body_position: Vector) -> None:
-        """Per-leg part of the walk state machine (counters change during the leg loop, as in OpenSHC)."""
-        cycle = self.cycle
-        if self.state == WalkState.STARTING:
-            if (self.legs_at_correct_phase == count and stepper.phase == cycle.swing_end
-                    and not stepper.completed_first_step):
-                stepper.completed_first_step = True
-                self.legs_completed_first_step += 1
-            if not stepper.at_correct_phase:
-                if cycle.swing_start < stepper.offset < cycle.swing_end and stepper.phase != cycle.swing_end:
-                    stepper.step_state = StepState.FORCE_STANCE
-                else:
-                    self.legs_at_correct_phase += 1
-                    stepper.at_correct_phase = True
-        elif self.state == WalkState.MOVING:
-            stepper.at_correct_phase = False
-        elif self.state == WalkState.STOPPING:
-            zero_stride = not np.any(stepper.stride)
-            if zero_stride and not stepper.at_correct_phase and stepper.phase == cycle.swing_end:
-                if stepper.at_target() or self.return_to_default_attempted:
-                    self.return_to_default_attempted = False
-                    stepper.update_default_tip(default_body_position)
-                    stepper.step_state = StepState.FORCE_STOP
-                    stepper.at_correct_phase = True
-                    self.legs_at_correct_phase += 1
-                else:
-                    self.return_to_default_attempted = True
-        elif self.state == WalkState.STOPPED:
-            stepper.step_state = StepState.FORCE_STOP
-            stepper.phase = 0
-
     def _update_walk_plane(self) -> None:
         """Least-squares plane through the legs' default tips (study §7.6)."""
-        if len(self.legs) < 3:
+        if len(self.leg_ids) < 3:
             return
-        tips = np.array([s.default_tip for s in self.legs.values()])
+        tips = self.legs.vectors[:, stepping.DEFAULT]
+        if self._plane_tips is not None and np.array_equal(tips, self._plane_tips):
+            return  # same defaults, same plane (they only change when legs stop or in rough terrain)
+        self._plane_tips = tips.copy()
         design = np.column_stack([tips[:, 0], tips[:, 1], np.ones(len(tips))])
         self.walk_plane = np.linalg.inv(design.T @ design) @ design.T @ tips[:, 2]
         normal = np.array([-self.walk_plane[0], -self.walk_plane[1], 1.0])
@@ -251,11 +208,5 @@ class WalkController:
     def set_cycle(self, cycle: StepCycle, limits: Limits) -> None:
         """Install a new step cycle and limits; offsets are reassigned (OpenSHC ``generateLimits``)."""
         self.cycle = cycle
-        self.limits = limits
-        self._keys = sorted(limits.bearings)
-        for leg, stepper in self.legs.items():
-            stepper.offset = cycle.offsets[leg]
-
-
-def _field(limit: BearingLimit, field: str) -> float:
-    return float(getattr(limit, field))
+        self._install_limits(limits)
+        self.legs.integers[:, stepping.OFFSET] = [cycle.offsets[leg] for leg in self.leg_ids]
