@@ -15,21 +15,18 @@ Tables (one row per control cycle, ``cycle`` and time ``t`` [s] first):
 
 from __future__ import annotations
 
-import csv
 import json
 import os
 from pathlib import Path
 from typing import IO, Any
+
+import numpy as np
 
 from shc_cli.control.controller import CycleOutput
 from shc_cli.errors import OutputError
 from shc_cli.spec.robot import Robot
 
 PARTIAL_SUFFIX = ".partial"
-
-
-def _fmt(value: float) -> str:
-    return f"{value:.9g}"
 
 
 class RunWriter:
@@ -58,29 +55,28 @@ class RunWriter:
         body = ["cmd_vx", "cmd_vy", "cmd_wz", "vel_x", "vel_y", "vel_wz", "pose_x", "pose_y", "pose_z",
                 "pose_roll", "pose_pitch", "pose_yaw", "robot_state", "walk_state"]
         self._handles: list[IO[str]] = []
-        self._joints = self._open("joints.csv", joints)
-        self._tips = self._open("tips.csv", tips)
-        self._body = self._open("body.csv", body)
+        self._joints = self._open("joints.csv", joints, ["%.9g"] * len(joints))
+        self._tips = self._open("tips.csv", tips, ["%.9g"] * len(tips))
+        self._body = self._open("body.csv", body, ["%.9g"] * 12 + ["%s", "%s"])
 
-    def _open(self, name: str, columns: list[str]) -> Any:
-        handle = (self.partial / name).open("w", newline="", encoding="utf-8")
+    def _open(self, name: str, columns: list[str], formats: list[str]) -> tuple[IO[str], str]:
+        """The table's file (header written) and its row format (one % operation per row is fast)."""
+        handle = (self.partial / name).open("w", encoding="utf-8")
         self._handles.append(handle)
-        writer = csv.writer(handle, lineterminator="\n")
-        writer.writerow(["cycle", "t", *columns])
-        return writer
+        handle.write(",".join(["cycle", "t", *columns]) + "\n")
+        return handle, ",".join(["%d", "%.4f", *formats]) + "\n"
 
     def write(self, cycle: int, time: float, command: tuple[float, float, float], out: CycleOutput) -> None:
         """Append one control cycle to every table."""
-        head = [str(cycle), f"{time:.4f}"]
-        self._joints.writerow(head + [_fmt(v) for v in out.joints.ravel()])
-        tips: list[str] = []
-        for leg in range(len(out.walker_tips)):
-            for stage in (out.walker_tips, out.poser_tips, out.model_tips):
-                tips += [_fmt(v) for v in stage[leg]]
-            tips += [_fmt(out.stance_progress[leg]), _fmt(out.swing_progress[leg])]
-        self._tips.writerow(head + tips)
-        self._body.writerow(head + [_fmt(v) for v in (*command, *out.velocity, *out.pose)]
-                            + [out.robot_state.name, out.walk_state.name])
+        handle, row = self._joints
+        handle.write(row % (cycle, time, *out.joints.ravel().tolist()))
+        stages = np.concatenate([out.walker_tips, out.poser_tips, out.model_tips, out.stance_progress[:, None],
+                                 out.swing_progress[:, None]], axis=1)
+        handle, row = self._tips
+        handle.write(row % (cycle, time, *stages.ravel().tolist()))
+        handle, row = self._body
+        handle.write(row % (cycle, time, *command, *out.velocity, *out.pose, out.robot_state.name,
+                            out.walk_state.name))
 
     def flush(self) -> None:
         for handle in self._handles:

@@ -22,8 +22,8 @@ from shc_cli.control.limits import generate_limits
 from shc_cli.control.pose import PoseController, PoseReset
 from shc_cli.control.startup import iterations, plan_direct_startup
 from shc_cli.control.walk import WalkController, WalkState
+from shc_cli.model import kernels
 from shc_cli.model.chains import Chains, FloatArray
-from shc_cli.model.ik import ik_step
 from shc_cli.model.workspace import Workplane, search_workspaces, walkspace
 from shc_cli.spec.gait import Gait
 from shc_cli.spec.robot import Robot
@@ -114,6 +114,23 @@ class Model:
 
     def __post_init__(self) -> None:
         self.tips = self.chains.tips(self.joints)
+        self._flags = np.zeros(self.chains.size, dtype=np.int64)
+        self._proximity = np.zeros(self.chains.size)
+
+    def step_ik(self, targets: FloatArray, dt: float, clamp_positions: bool, clamp_velocities: bool) -> tuple[int, int]:
+        """One OpenSHC IK step of every leg towards ``targets`` (base_link) [m], in place.
+
+        The same compiled step as :func:`shc_cli.model.ik.ik_step`, writing into the model's arrays to keep
+        the control cycle free of allocations. Returns (legs off target by > 5 mm, legs with a clamped joint).
+        """
+        c = self.chains
+        joints, velocities, tips = np.empty_like(self.joints), np.empty_like(self.joints), np.empty_like(self.tips)
+        kernels.ik_step_kernel(c.base, c.d, c.theta, c.r, c.alpha, c.lower, c.upper, c.max_vel, self.joints,
+                               self.joint_velocities, self.tips, targets, dt, clamp_positions, clamp_velocities,
+                               joints, velocities, tips, self._flags, self._proximity, 1.0)
+        self.joints, self.joint_velocities, self.tips = joints, velocities, tips
+        flags = self._flags
+        return int(((flags & 1) == 0).sum()), int(((flags & 6) != 0).sum())
 
 
 class Controller:
@@ -163,8 +180,9 @@ class Controller:
         """Take a command as OpenSHC's topic callbacks would (before this cycle's loop)."""
         scaler = self.robot.walker.body_velocity_scaler
         linear = np.array(command.velocity[:2], dtype=float) * scaler
-        if self.robot.walker.velocity_input_mode == "throttle" and np.linalg.norm(linear) > 1.0:
-            linear = linear / np.linalg.norm(linear)
+        size = math.hypot(linear[0], linear[1])
+        if self.robot.walker.velocity_input_mode == "throttle" and size > 1.0:
+            linear = linear / size
         if self.state == RobotState.RUNNING:
             self.velocity_input = linear
             self.angular_input = float(command.velocity[2]) * scaler
@@ -257,11 +275,7 @@ class Controller:
         walker_tips = self.walker.legs.tips()
         self.poser_tips = self.poser.posed_tips(walker_tips)
         ik = self.robot.ik
-        result = ik_step(self.model.chains, self.model.joints, self.model.joint_velocities, self.model.tips,
-                         self.poser_tips, self.dt, clamp_positions=ik.clamp_joint_positions,
-                         clamp_velocities=ik.clamp_joint_velocities)
-        self.model.joints, self.model.joint_velocities, self.model.tips = result.q, result.qd, result.tip
-        return int((~result.ok).sum()), int((result.position_clamped | result.velocity_clamped).sum())
+        return self.model.step_ik(self.poser_tips, self.dt, ik.clamp_joint_positions, ik.clamp_joint_velocities)
 
     def _output(self, deviations: int, clamped: int) -> CycleOutput:
         if self.walker is not None:

@@ -104,7 +104,8 @@ class Pose:
         return Pose(position, rotation)
 
     def euler(self) -> tuple[float, float, float]:
-        return euler_from_matrix(self.rotation)
+        """(roll, pitch, yaw) [rad] of the extrinsic ``Rz·Ry·Rx`` decomposition."""
+        return (0.0, 0.0, 0.0) if self.rotation is IDENTITY else euler_from_matrix(self.rotation)
 
 
 def rotation_between_axis(axis: Vector, angle: float) -> np.ndarray:
@@ -188,15 +189,31 @@ class PoseController:
     def update_walk_plane_pose(self, swing_progress: np.ndarray, swing_phase: int, phase_offset: int,
                                planes: np.ndarray, normals: np.ndarray) -> None:
         """Align the body with the walk plane during swings (study §7.6); flat ground keeps it at rest."""
-        share, plane, normal = 0.0, np.zeros(3), np.array([0.0, 0.0, 1.0])
         scaler = max(1.0, swing_phase / phase_offset) if phase_offset else 1.0
-        for progress, leg_plane, leg_normal in zip(swing_progress, planes, normals, strict=True):
-            scaled = float(progress) * scaler
-            if 0.0 <= scaled <= 1.0:
-                share, plane, normal = smooth_step(scaled), leg_plane, leg_normal
+        last, share = -1, 0.0
+        for leg, progress in enumerate(np.asarray(swing_progress).tolist()):
+            scaled = progress * scaler
+            if 0.0 <= scaled <= 1.0:  # the last swinging leg in id order wins, as in OpenSHC
+                last, share = leg, smooth_step(scaled)
+        if last < 0:  # no leg swinging: share 0 keeps the origin exactly
+            self.walk_plane_pose = self.walk_plane_origin.interpolate(0.0, self.walk_plane_origin)
+            return
+        plane, normal = planes[last], normals[last]
+        origin = self.walk_plane_origin
+        if normal[0] == 0.0 and normal[1] == 0.0 and normal[2] == 1.0 and origin.rotation is IDENTITY:
+            # Level plane: the same arithmetic as the general case, on floats (the common, hot case).
+            target_z = (0.0 + self.body_clearance) + float(plane[2])
+            ox, oy, oz = origin.position.tolist()
+            rest = 1.0 - share
+            position = np.array([share * 0.0 + rest * ox, share * 0.0 + rest * oy, share * target_z + rest * oz])
+            self.walk_plane_pose = Pose(position, IDENTITY)
+            if share == 1.0:
+                self.walk_plane_origin = self.walk_plane_pose
+            return
         rotation = rotation_between(np.array([0.0, 0.0, 1.0]), normal)
-        target = Pose(rotation @ np.array([0.0, 0.0, self.body_clearance]) + np.array([0.0, 0.0, plane[2]]),
-                      rotation)
+        height = np.array([0.0, 0.0, self.body_clearance])
+        lift = rotation @ height if rotation is not IDENTITY else height
+        target = Pose(lift + np.array([0.0, 0.0, plane[2]]), rotation)
         self.walk_plane_pose = self.walk_plane_origin.interpolate(share, target)
         if share == 1.0:
             self.walk_plane_origin = self.walk_plane_pose
@@ -205,8 +222,8 @@ class PoseController:
                             planes: np.ndarray, normals: np.ndarray) -> Pose:
         """Compose this cycle's body pose (study §7.1)."""
         self.update_walk_plane_pose(swing_progress, swing_phase, phase_offset, planes, normals)
-        pose = Pose().add(self.walk_plane_pose)
-        if self.manual_enabled:
+        pose = self.walk_plane_pose  # = Identity ∘ walk-plane pose, exactly
+        if self.manual_enabled and self.manual.any():  # adding a zero manual pose changes nothing
             pose = pose.add(self.manual_pose())
         self.current = pose
         return pose

@@ -263,8 +263,13 @@ def walk_legs(  # type: ignore[no-untyped-def]
     stance_end, swing_period, stance_period, frequency, dt, vx, vy, omega, swing_height, swing_width, plane,
     normal, body_position,
 ):
-    """OpenSHC's per-leg block of ``updateWalk`` for every leg in id order (counters change during the loop)."""
+    """OpenSHC's per-leg block of ``updateWalk`` for every leg in id order (counters change during the loop).
+
+    Returns the number of legs whose default tip was updated (they stopped), so the caller knows when the
+    walk plane needs re-estimating.
+    """
     legs = vectors.shape[0]
+    moved = 0
     for leg in range(legs):
         phase = integers[leg, PHASE]
         if walk_state == STARTING:
@@ -288,6 +293,7 @@ def walk_legs(  # type: ignore[no-untyped-def]
                 if _at_target(vectors, leg) or counters[RETURN_TO_DEFAULT_ATTEMPTED] != 0:
                     counters[RETURN_TO_DEFAULT_ATTEMPTED] = 0
                     update_default_tip(vectors, leg, body_position)
+                    moved += 1
                     integers[leg, STATE] = FORCE_STOP
                     integers[leg, AT_CORRECT_PHASE] = 1
                     counters[LEGS_AT_CORRECT_PHASE] += 1
@@ -300,6 +306,7 @@ def walk_legs(  # type: ignore[no-untyped-def]
                             stance_end, swing_period, stance_period, frequency, dt, vx, vy, omega, swing_height,
                             swing_width, plane, normal)
         iterate_phase(integers, floats, leg, period, swing_start, swing_end, stance_start, stance_end)
+    return moved
 
 
 @njit(cache=True)

@@ -30,8 +30,8 @@ class WalkState(IntEnum):
 
 
 def clamped_norm(vector: Vector, limit: float) -> Vector:
-    """``vector`` scaled down to norm ``limit`` if it is longer."""
-    norm = float(np.linalg.norm(vector))
+    """2-D ``vector`` scaled down to norm ``limit`` if it is longer."""
+    norm = math.hypot(vector[0], vector[1])
     return vector * (limit / norm) if norm > limit else vector
 
 
@@ -121,14 +121,14 @@ class WalkController:
                 new_angular = min(max(angular_input, -max_angular), max_angular)
                 new_linear = clamped_norm(linear_input, max_speed)
                 new_linear = new_linear * (1.0 - abs(new_angular / max_angular) if max_angular != 0.0 else 0.0)
-        has_command = bool(np.linalg.norm(linear_input) != 0.0 or angular_input != 0.0)
+        has_command = bool(linear_input[0] != 0.0 or linear_input[1] != 0.0 or angular_input != 0.0)
         if not legs_walking:
             return
         self._ramp(new_linear, new_angular, max_acceleration, max_angular_acceleration)
         if self._transition(has_command):
             return
         cycle = self.cycle
-        stepping.walk_legs(
+        defaults_moved = stepping.walk_legs(
             self.legs.vectors, self.legs.nodes, self.legs.floats, self.legs.integers, self.counters, int(self.state),
             cycle.period, cycle.swing_start, cycle.swing_end, cycle.stance_start, cycle.stance_end,
             cycle.swing_period, cycle.stance_period, cycle.frequency, self.time_delta,
@@ -136,7 +136,9 @@ class WalkController:
             self.swing_height, self.swing_width, self.walk_plane, self.walk_plane_normal,
             np.asarray(default_body_position, dtype=float),
         )
-        self._update_walk_plane()
+        if defaults_moved or self._plane_tips is None:  # the plane only depends on the default tips
+            self._plane_tips = self.legs.vectors[:, stepping.DEFAULT].copy()
+            self._update_walk_plane()
         self._integrate_odometry()
 
     def _ramp(self, new_linear: Vector, new_angular: float, max_acceleration: float,
@@ -144,7 +146,7 @@ class WalkController:
         """Acceleration-limited approach of the desired velocity to the new target (study §6)."""
         dt = self.time_delta
         change = new_linear - self.desired_linear
-        size = float(np.linalg.norm(change))
+        size = math.hypot(change[0], change[1])
         if size < max_acceleration * dt:
             self.desired_linear = self.desired_linear + change
         else:
@@ -188,9 +190,6 @@ class WalkController:
         if len(self.leg_ids) < 3:
             return
         tips = self.legs.vectors[:, stepping.DEFAULT]
-        if self._plane_tips is not None and np.array_equal(tips, self._plane_tips):
-            return  # same defaults, same plane (they only change when legs stop or in rough terrain)
-        self._plane_tips = tips.copy()
         design = np.column_stack([tips[:, 0], tips[:, 1], np.ones(len(tips))])
         self.walk_plane = np.linalg.inv(design.T @ design) @ design.T @ tips[:, 2]
         normal = np.array([-self.walk_plane[0], -self.walk_plane[1], 1.0])

@@ -51,12 +51,17 @@ def chain_frames(base, d, theta, r, alpha, q, out):  # type: ignore[no-untyped-d
         link[3, 1] = 0.0
         link[3, 2] = 0.0
         link[3, 3] = 1.0
-        for i in range(4):
-            for j in range(4):
-                acc = 0.0
-                for m in range(4):
-                    acc += out[k, i, m] * link[m, j]
-                out[k + 1, i, j] = acc
+        # Homogeneous product; the bottom rows are (0, 0, 0, 1), so only the top 3 rows are computed and the
+        # summation stops where the remaining factors are exact zeros (same values as the full product).
+        for i in range(3):
+            for j in range(3):
+                out[k + 1, i, j] = out[k, i, 0] * link[0, j] + out[k, i, 1] * link[1, j] + out[k, i, 2] * link[2, j]
+            out[k + 1, i, 3] = (out[k, i, 0] * link[0, 3] + out[k, i, 1] * link[1, 3] + out[k, i, 2] * link[2, 3]
+                                + out[k, i, 3])
+        out[k + 1, 3, 0] = 0.0
+        out[k + 1, 3, 1] = 0.0
+        out[k + 1, 3, 2] = 0.0
+        out[k + 1, 3, 3] = 1.0
     return out
 
 
