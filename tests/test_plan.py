@@ -151,3 +151,28 @@ def test_robot_stops_at_its_default_stance(running_controllers) -> None:  # type
     assert out is not None and out.walk_state == WalkState.STOPPED
     identity = np.array([[leg.stance.x, leg.stance.y] for leg in controller.robot.legs.values()])
     assert np.abs(out.walker_tips[:, :2] - identity).max() < 0.01  # OpenSHC's TIP_TOLERANCE
+
+
+def test_plan_script_switches_gait_and_parameters(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    script = tmp_path / "plan.toml"
+    script.write_text('[[step]]\nat = 0.0\nvelocity = [1, 0, 0]\n'
+                      '[[step]]\nat = 3.0\ngait = "wave"\nparameters = { swing_height = 0.03 }\n')
+    out = tmp_path / "run"
+    code, _, err = run(["plan", "openshc_default", "--commands", str(script), "--duration", "12", "--out", str(out),
+                        "--no-plots"], capsys, monkeypatch)
+    assert (code, err) == (0, "")
+    body = _rows(out / "body.csv")
+    states = [r["walk_state"] for r in body if float(r["t"]) > 6.0 + 3.0]
+    assert "STOPPED" in states and states[-1] in ("STARTING", "MOVING")
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["gait"] == "wave"
+
+
+def test_plan_script_rejects_unknown_parameters_and_gaits(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    script = tmp_path / "plan.toml"
+    script.write_text('[[step]]\nat = 0.0\nparameters = { body_height = 0.2 }\n')
+    code, _, err = run(["plan", "openshc_default", "--commands", str(script)], capsys, monkeypatch)
+    assert code == 2 and "'body_height' is not a run-time parameter" in err and len(err.strip().splitlines()) == 1
+    script.write_text('[[step]]\nat = 0.0\ngait = "trot"\n')
+    code, _, err = run(["plan", "openshc_default", "--commands", str(script)], capsys, monkeypatch)
+    assert code == 2 and "gait 'trot' does not fit robot 'openshc_default'" in err

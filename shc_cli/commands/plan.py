@@ -16,6 +16,7 @@ from shc_cli.control.controller import Command, Controller, CycleOutput, RobotSt
 from shc_cli.control.walk import WalkState
 from shc_cli.errors import Issue, ShcError, SpecError
 from shc_cli.runlog import RunWriter
+from shc_cli.spec.gait import Gait
 from shc_cli.spec.loading import load_gait, load_robot
 from shc_cli.spec.robot import Robot
 from shc_cli.spec.timeline import Timeline, constant, load_timeline
@@ -58,6 +59,11 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
         raise SpecError([Issue(None, None, "--duration", f"{duration:g} must be a positive number of seconds",
                                "e.g. --duration 20")])
     timeline = load_timeline(commands, robot.time_delta) if commands else constant(parse_velocity(velocity))
+    for _, change in timeline.changes:
+        new_gait = change.get("gait")
+        if isinstance(new_gait, Gait) and set(new_gait.offset_multiplier) != set(robot.legs):
+            raise SpecError([Issue(commands, None, "gait", f"gait '{new_gait.name}' does not fit robot '{robot.name}'",
+                                   f"give one multiplier for each of {', '.join(robot.legs)}")])
     walk_cycles = _walk_cycles(timeline, duration, robot.time_delta, commands is not None)
     directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-plan"
     controller = Controller(robot, gait_loaded.gait)

@@ -17,8 +17,8 @@ import numpy as np
 
 from shc_cli.control import stepping
 from shc_cli.control.bezier import cubic
-from shc_cli.control.gait import step_cycle
-from shc_cli.control.limits import generate_limits
+from shc_cli.control.gait import StepCycle, step_cycle
+from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.pose import PoseController, PoseReset
 from shc_cli.control.startup import iterations, plan_direct_startup
 from shc_cli.control.walk import WalkController, WalkState
@@ -50,12 +50,24 @@ class Command:
         state_request: desired robot state; each request moves the robot one state towards it.
         pose_velocity: manual posing input (x, y, z, roll, pitch, yaw), each −1..1.
         pose_reset: manual pose reset mode.
+        gait: a gait to switch to; the robot stops, changes gait and walks on when inputs ask for it.
+        cruise: switch cruise control on (True) or off (False); None leaves it as it is.
+        parameters: run-time parameter changes ``{name: value}`` (clamped to the parameter's range); one is
+            applied per cycle, in the given order, as OpenSHC does. Names: see :data:`ADJUSTABLE`.
     """
 
     velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
     state_request: RobotState | None = None
     pose_velocity: tuple[float, float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     pose_reset: PoseReset = PoseReset.NO_RESET
+    gait: Gait | None = None
+    cruise: bool | None = None
+    parameters: dict[str, float] = field(default_factory=dict)
+
+
+ADJUSTABLE = ("step_frequency", "swing_height", "swing_width", "step_depth", "stance_span_modifier",
+              "virtual_mass", "virtual_stiffness", "virtual_damping_ratio", "force_gain")
+"""Parameters that can change while running (OpenSHC's dynamic parameters, study §9.6)."""
 
 
 @dataclass
@@ -172,7 +184,15 @@ class Controller:
         self.angular_input = 0.0
         self.pose_input = np.zeros(6)
         self.pose_reset = PoseReset.NO_RESET
-        self._posed_once = False
+        self.cycles = 0
+        self.pending_gait: Gait | None = None
+        self.pending_parameters: list[tuple[str, float]] = []
+        self.cruise_on = False
+        self.cruise_velocity = (np.zeros(2), 0.0)
+        self.cruise_end = math.inf
+        walker_spec, admittance = robot.walker, robot.admittance
+        self.parameters = {name: getattr(walker_spec, name).default for name in ADJUSTABLE[:5]}
+        self.parameters.update({name: getattr(admittance, name).default for name in ADJUSTABLE[5:]})
 
     # -- inputs ------------------------------------------------------------------------------------------------
 
@@ -188,6 +208,14 @@ class Controller:
             self.angular_input = float(command.velocity[2]) * scaler
             self.pose_input = np.array(command.pose_velocity, dtype=float)
             self.pose_reset = command.pose_reset
+            if command.gait is not None and self.pending_gait is None:
+                self.pending_gait = command.gait
+            for name, value in command.parameters.items():
+                if name not in ADJUSTABLE:
+                    raise ValueError(f"unknown adjustable parameter '{name}' (one of {', '.join(ADJUSTABLE)})")
+                self.pending_parameters.append((name, float(value)))
+            if command.cruise is not None:
+                self._set_cruise(command.cruise)
         if command.state_request is not None and not self.transition_pending:
             self.requested = command.state_request
             if self.state == RobotState.UNKNOWN or command.state_request != self.state:
@@ -195,8 +223,21 @@ class Controller:
 
     # -- the cycle ---------------------------------------------------------------------------------------------
 
+    def _set_cruise(self, on: bool) -> None:
+        """Cruise control (study §6): hold the configured (or the current) velocity, optionally for a time."""
+        if on and not self.cruise_on:
+            cruise, scaler = self.robot.cruise, self.robot.walker.body_velocity_scaler
+            if cruise.force_velocity:
+                self.cruise_velocity = (np.array(cruise.linear, dtype=float) * scaler, cruise.angular * scaler)
+            else:
+                self.cruise_velocity = (self.velocity_input.copy(), self.angular_input)
+            limit = cruise.time_limit
+            self.cruise_end = self.cycles * self.dt + limit if limit > 0.0 else math.inf
+        self.cruise_on = on
+
     def step(self, command: Command | None = None) -> CycleOutput:
         """Advance one control period and return this cycle's outputs."""
+        self.cycles += 1
         self._receive(command or Command())
         if self.state != RobotState.UNKNOWN:
             self._update_pose()
@@ -259,8 +300,7 @@ class Controller:
         identity = np.array([[x, y, -clearance] for x, y in self.stance.values()])
         self.planes = search_workspaces(self.model.chains, self.default_joints, identity, self.dt).planes
         self.walkspace = walkspace(self.planes, self.stance, self.robot.walker.overlapping_walkspaces)
-        first = next(iter(self.stance.values()))
-        limits = generate_limits(self.walkspace, self.cycle, self.dt, math.hypot(*first))
+        limits = self._limits_for(self.cycle)
         walker_spec = self.robot.walker
         if self.walker is None:
             self.walker = WalkController(self.stance, self.cycle, limits, self.dt, walker_spec.swing_height.default,
@@ -269,13 +309,77 @@ class Controller:
             self.walker.set_cycle(self.cycle, limits)
 
     def _running(self) -> tuple[int, int]:
-        """One RUNNING cycle: walk, pose the tips, one IK step per leg."""
+        """One RUNNING cycle (study §9.4): gait change, cruise control, parameter changes, then walk, pose
+        the tips and one IK step per leg — unless the cycle was spent on a change while stopped."""
         assert self.walker is not None
+        update = True
+        if self.pending_gait is not None:
+            self._change_gait()
+            update = False
+        elif self.cruise_on and self.cycles * self.dt < self.cruise_end:
+            self.velocity_input, self.angular_input = self.cruise_velocity[0].copy(), self.cruise_velocity[1]
+        if self.pending_parameters:
+            self._adjust_parameter()
+        if not (update or self.walker.state != WalkState.STOPPED):
+            return 0, 0
+        self.walker.swing_height = self.parameters["swing_height"]
+        self.walker.swing_width = self.parameters["swing_width"]
         self.walker.update(self.velocity_input, self.angular_input, self.poser.walk_plane_pose.position)
-        walker_tips = self.walker.legs.tips()
-        self.poser_tips = self.poser.posed_tips(walker_tips)
+        self.poser_tips = self.poser.posed_tips(self.walker.legs.tips())
         ik = self.robot.ik
         return self.model.step_ik(self.poser_tips, self.dt, ik.clamp_joint_positions, ik.clamp_joint_velocities)
+
+    def _stop_walking(self) -> None:
+        """OpenSHC forces a stop before gait, leg-state and plan changes by zeroing the velocity inputs."""
+        self.velocity_input = np.zeros(2)
+        self.angular_input = 0.0
+
+    def _change_gait(self) -> None:
+        """Switch gait once stopped: new step cycle, limits and offsets (study §4.3); bipod included."""
+        assert self.walker is not None and self.pending_gait is not None
+        if self.walker.state != WalkState.STOPPED:
+            self._stop_walking()
+            return
+        self.gait = self.pending_gait
+        self.pending_gait = None
+        self.cycle = step_cycle(self.gait, self.parameters["step_frequency"], self.dt)
+        self.walker.set_cycle(self.cycle, self._limits_for(self.cycle))
+
+    def _limits_for(self, cycle: StepCycle) -> Limits:
+        """Limits for ``cycle``; the angular lever arm is leg 0's current default tip, re-read every time."""
+        first = self.walker.legs.vectors[0, stepping.DEFAULT] if self.walker else self.identity_walker_tips[0]
+        return generate_limits(self.walkspace, cycle, self.dt, math.hypot(first[0], first[1]))
+
+    def _adjust_parameter(self) -> None:
+        """Apply the first pending parameter change (study §9.6). A new step frequency waits until the
+        walker has slowed to within the new speed limits, then re-phases the legs."""
+        assert self.walker is not None
+        name, value = self.pending_parameters[0]
+        spec = getattr(self.robot.walker, name, None) or getattr(self.robot.admittance, name)
+        value = min(max(value, spec.min), spec.max)
+        if name == "step_frequency":
+            cycle = step_cycle(self.gait, value, self.dt)
+            limits = self._limits_for(cycle)
+            self.walker.install_speed_limits(limits)
+            if not self.walker.within_limits_for(limits, self.velocity_input, self.angular_input):
+                return  # slow down to a safe speed first
+            self.cycle = cycle
+            self.walker.set_cycle(cycle, limits, rephase=True)
+        elif name == "stance_span_modifier":
+            self._set_stance_span(value)
+        self.parameters[name] = value
+        self.pending_parameters.pop(0)
+
+    def _set_stance_span(self, modifier: float) -> None:
+        """Widen (+) or narrow (−) the stance by a share of each leg's lateral workspace radius (study §5.5);
+        it takes effect when the legs next return to their defaults (a stop)."""
+        assert self.walker is not None
+        span = []
+        for leg, (_, y) in self.stance.items():
+            left = y > 0.0
+            radius = self.planes[leg][90 if left else 270]
+            span.append(radius * modifier * (1.0 if left else -1.0))
+        self.walker.legs.floats[:, stepping.SPAN_CHANGE] = span
 
     def _output(self, deviations: int, clamped: int) -> CycleOutput:
         if self.walker is not None:

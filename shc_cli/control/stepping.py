@@ -27,8 +27,8 @@ VECTORS = 12
 # Node sets, (L, 3, 5, 3).
 PRIMARY, SECONDARY, STANCE_NODES = range(3)
 # Float slots, (L, F).
-SWING_PROGRESS, STANCE_PROGRESS, STEP_PROGRESS, SWING_DELTA_T, STANCE_DELTA_T = range(5)
-FLOATS = 5
+SWING_PROGRESS, STANCE_PROGRESS, STEP_PROGRESS, SWING_DELTA_T, STANCE_DELTA_T, SPAN_CHANGE = range(6)
+FLOATS = 6
 # Integer slots, (L, I).
 PHASE, OFFSET, STATE, AT_CORRECT_PHASE, COMPLETED_FIRST_STEP, IS_LEFT = range(6)
 INTEGERS = 6
@@ -244,11 +244,13 @@ def _at_target(vectors, leg):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
-def update_default_tip(vectors, leg, body_position):  # type: ignore[no-untyped-def]
-    """New default after a stop: identity x, y; height through the last stance origin (study §5.5)."""
+def update_default_tip(vectors, floats, leg, body_position):  # type: ignore[no-untyped-def]
+    """New default after a stop: identity x, y plus the stance-span change (y); height through the last
+    stance origin (study §5.5)."""
     point = np.empty(3)
+    span = (0.0, floats[leg, SPAN_CHANGE], 0.0)
     for i in range(3):
-        point[i] = body_position[i] + (vectors[leg, IDENTITY, i] + 0.0)
+        point[i] = body_position[i] + (vectors[leg, IDENTITY, i] + span[i])
     px, py, pz = _projection(vectors[leg, STANCE_ORIGIN, 0] - point[0], vectors[leg, STANCE_ORIGIN, 1] - point[1],
                              vectors[leg, STANCE_ORIGIN, 2] - point[2], vectors[leg, NORMAL, 0],
                              vectors[leg, NORMAL, 1], vectors[leg, NORMAL, 2])
@@ -292,7 +294,7 @@ def walk_legs(  # type: ignore[no-untyped-def]
             if zero_stride and integers[leg, AT_CORRECT_PHASE] == 0 and phase == swing_end:
                 if _at_target(vectors, leg) or counters[RETURN_TO_DEFAULT_ATTEMPTED] != 0:
                     counters[RETURN_TO_DEFAULT_ATTEMPTED] = 0
-                    update_default_tip(vectors, leg, body_position)
+                    update_default_tip(vectors, floats, leg, body_position)
                     moved += 1
                     integers[leg, STATE] = FORCE_STOP
                     integers[leg, AT_CORRECT_PHASE] = 1

@@ -204,8 +204,38 @@ class WalkController:
                                                                     s * step[0] + c * step[1], 0.0])
         self.odometry_yaw += self.desired_angular * dt
 
-    def set_cycle(self, cycle: StepCycle, limits: Limits) -> None:
-        """Install a new step cycle and limits; offsets are reassigned (OpenSHC ``generateLimits``)."""
+    def set_cycle(self, cycle: StepCycle, limits: Limits, rephase: bool = False) -> None:
+        """Install a new step cycle and limits; offsets are reassigned (OpenSHC ``generateLimits``).
+
+        With ``rephase`` (a step-frequency change) walking legs keep their place in the step:
+        ``phase = int(step_progress·P_new)`` (OpenSHC ``updatePhase``).
+        """
         self.cycle = cycle
         self._install_limits(limits)
         self.legs.integers[:, stepping.OFFSET] = [cycle.offsets[leg] for leg in self.leg_ids]
+        if rephase and self.state != WalkState.STOPPED:
+            integers, floats = self.legs.integers, self.legs.floats
+            for leg in range(len(self.leg_ids)):
+                integers[leg, stepping.PHASE] = int(floats[leg, stepping.STEP_PROGRESS] * cycle.period)
+                stepping.update_step_state(integers, leg, cycle.swing_start, cycle.swing_end, cycle.stance_start,
+                                           cycle.stance_end)
+
+    def install_speed_limits(self, limits: Limits) -> None:
+        """Use only the new speed limits (accelerations unchanged), as OpenSHC does while a new step
+        frequency waits for the robot to slow down."""
+        keys = sorted(limits.bearings)
+        self._table[:, 0] = [limits.bearings[k].linear_speed for k in keys]
+        self._table[:, 1] = [limits.bearings[k].angular_speed for k in keys]
+
+    def within_limits_for(self, limits: Limits, linear_input: Vector, angular_input: float) -> bool:
+        """Whether the desired velocity is already within the targets the new limits allow (OpenSHC's
+        component-wise test, kept as it is: ``v_x ≤ target_x``, ``v_y ≤ target_y``, ``|ω| ≤ |target_ω|``)."""
+        max_speed, max_angular, _, _ = self.limits_for(linear_input, angular_input)
+        if self.velocity_input_mode == "throttle":
+            target = clamped_norm(linear_input, 1.0) * max_speed * (1.0 - abs(angular_input))
+            target_angular = min(max(angular_input, -1.0), 1.0) * max_angular
+        else:
+            target = clamped_norm(linear_input, max_speed)
+            target_angular = min(max(angular_input, -max_angular), max_angular)
+        return bool(self.desired_linear[0] <= target[0] and self.desired_linear[1] <= target[1]
+                    and abs(self.desired_angular) <= abs(target_angular))

@@ -22,6 +22,14 @@ TOML plan script (``[[step]]`` tables in time order; ``at`` [s] or ``cycle``)::
     at = 6.0
     pose_velocity = [0, 0, 0, 0, 0, 0]
     pose_reset = "all"                # no_reset, z_and_yaw, x_and_y, pitch_and_roll, all, immediate_all
+    [[step]]
+    at = 10.0
+    gait = "wave"                     # stop, switch gait, walk on (a bundled name or a gait file)
+    parameters = { step_frequency = 1.5, swing_height = 0.06 }
+    cruise = true                     # hold the robot's cruise velocity
+
+``velocity``, ``pose_velocity`` and ``pose_reset`` hold until changed; ``gait``, ``parameters`` and
+``cruise`` are requests made once, at their step.
 """
 
 from __future__ import annotations
@@ -33,10 +41,11 @@ from typing import Literal
 
 from pydantic import Field, ValidationError, model_validator
 
-from shc_cli.control.controller import Command
+from shc_cli.control.controller import ADJUSTABLE, Command
 from shc_cli.control.pose import PoseReset
-from shc_cli.errors import Issue, SpecError
-from shc_cli.spec.loading import Located, _describe
+from shc_cli.errors import Issue, NotFoundError, SpecError
+from shc_cli.spec.gait import Gait
+from shc_cli.spec.loading import Located, _describe, load_gait
 from shc_cli.spec.robot import Strict
 from shc_cli.spec.source import Document, origins, unwrap
 
@@ -52,6 +61,10 @@ class Step(Strict):
     pose_velocity: tuple[float, float, float, float, float, float] | None = Field(
         None, strict=False, description="manual posing input x, y, z, roll, pitch, yaw (−1..1)")
     pose_reset: ResetName | None = Field(None, description="manual pose reset mode")
+    gait: str | None = Field(None, description="switch to this gait (bundled name or file); the robot stops first")
+    parameters: dict[str, float] = Field(default_factory=dict,
+                                         description="run-time parameter changes, e.g. { step_frequency = 1.5 }")
+    cruise: bool | None = Field(None, description="cruise control on or off")
 
     @model_validator(mode="after")
     def _one_time(self) -> Step:
@@ -66,9 +79,13 @@ class PlanScript(Strict):
     step: list[Step] = Field(description="command changes in time order")
 
 
+EVENTS = ("gait", "parameters", "cruise")
+"""Timeline keys that are one-off requests; every other key holds until changed."""
+
+
 @dataclass
 class Timeline:
-    """Command changes by RUNNING-relative cycle; :meth:`command` gives the inputs of any cycle."""
+    """Command changes by RUNNING-relative cycle; :meth:`commands` gives the inputs of every cycle."""
 
     changes: list[tuple[int, dict[str, object]]]
 
@@ -83,10 +100,12 @@ class Timeline:
         changes = iter(sorted(self.changes, key=lambda c: c[0]))
         pending = next(changes, None)
         for cycle in range(cycles):
+            events: dict[str, object] = {}
             while pending is not None and pending[0] <= cycle:
-                current.update(pending[1])
+                current.update({k: v for k, v in pending[1].items() if k not in EVENTS})
+                events.update({k: v for k, v in pending[1].items() if k in EVENTS})
                 pending = next(changes, None)
-            out.append(Command(**current))  # type: ignore[arg-type]
+            out.append(Command(**current, **events))  # type: ignore[arg-type]
         return out
 
 
@@ -136,6 +155,17 @@ def _load_csv(path: Path) -> Timeline:
     return Timeline(changes)
 
 
+def _gait(name: str, path: Path, located: Located, index: int) -> Gait:
+    """A gait named in a plan script (relative paths from the script's folder)."""
+    try:
+        loaded = load_gait(name, relative_to=path.parent)
+    except NotFoundError as error:
+        raise SpecError([located.issue(("step", index, "gait"), str(error),
+                                       "name a bundled gait or a gait file")]) from None
+    assert loaded.gait is not None
+    return loaded.gait
+
+
 def _load_script(path: Path, time_delta: float) -> Timeline:
     document = Document(path)
     data = document.sourced()
@@ -149,7 +179,7 @@ def _load_script(path: Path, time_delta: float) -> Timeline:
             issues.append(located.issue(tuple(item["loc"]), problem, fix))
         raise SpecError(issues[:1]) from None
     changes: list[tuple[int, dict[str, object]]] = []
-    for step in script.step:
+    for index, step in enumerate(script.step):
         cycle = step.cycle if step.cycle is not None else round((step.at or 0.0) / time_delta)
         change: dict[str, object] = {}
         if step.velocity is not None:
@@ -158,5 +188,16 @@ def _load_script(path: Path, time_delta: float) -> Timeline:
             change["pose_velocity"] = step.pose_velocity
         if step.pose_reset is not None:
             change["pose_reset"] = PoseReset[step.pose_reset.upper()]
+        if step.gait is not None:
+            change["gait"] = _gait(step.gait, path, located, index)
+        if step.parameters:
+            unknown = [name for name in step.parameters if name not in ADJUSTABLE]
+            if unknown:
+                raise SpecError([located.issue(("step", index, "parameters", unknown[0]),
+                                               f"'{unknown[0]}' is not a run-time parameter",
+                                               f"use one of: {', '.join(ADJUSTABLE)}")])
+            change["parameters"] = dict(step.parameters)
+        if step.cruise is not None:
+            change["cruise"] = step.cruise
         changes.append((cycle, change))
     return Timeline(changes)
