@@ -143,14 +143,17 @@ class WalkController:
 
     def _ramp(self, new_linear: Vector, new_angular: float, max_acceleration: float,
               max_angular_acceleration: float) -> None:
-        """Acceleration-limited approach of the desired velocity to the new target (study §6)."""
+        """Acceleration-limited approach of the desired velocity to the new target (study §6); on floats,
+        with Eigen's ``norm`` (``sqrt(x² + y²)``) and ``normalized`` (division by it)."""
         dt = self.time_delta
-        change = new_linear - self.desired_linear
-        size = math.hypot(change[0], change[1])
+        vx, vy = float(self.desired_linear[0]), float(self.desired_linear[1])
+        cx, cy = float(new_linear[0]) - vx, float(new_linear[1]) - vy
+        size = math.sqrt(cx * cx + cy * cy)
         if size < max_acceleration * dt:
-            self.desired_linear = self.desired_linear + change
+            self.desired_linear = np.array([vx + cx, vy + cy])
         else:
-            self.desired_linear = self.desired_linear + ((change / size) * max_acceleration) * dt
+            self.desired_linear = np.array([vx + ((cx / size) * max_acceleration) * dt,
+                                            vy + ((cy / size) * max_acceleration) * dt])
         angular_change = new_angular - self.desired_angular
         if abs(angular_change) < max_angular_acceleration * dt:
             self.desired_angular += angular_change
@@ -198,10 +201,10 @@ class WalkController:
     def _integrate_odometry(self) -> None:
         """Ideal odometry: compose this cycle's commanded motion (study §4.4)."""
         dt = self.time_delta
-        step = np.array([self.desired_linear[0] * dt, self.desired_linear[1] * dt, 0.0])
+        sx, sy = float(self.desired_linear[0]) * dt, float(self.desired_linear[1]) * dt
         c, s = math.cos(self.odometry_yaw), math.sin(self.odometry_yaw)
-        self.odometry_position = self.odometry_position + np.array([c * step[0] - s * step[1],
-                                                                    s * step[0] + c * step[1], 0.0])
+        x, y, z = self.odometry_position.tolist()
+        self.odometry_position = np.array([x + (c * sx - s * sy), y + (s * sx + c * sy), z])
         self.odometry_yaw += self.desired_angular * dt
 
     def set_cycle(self, cycle: StepCycle, limits: Limits, rephase: bool = False) -> None:
