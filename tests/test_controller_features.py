@@ -144,3 +144,30 @@ def test_stance_span_modifier_widens_the_stance_after_a_stop(running: Controller
     lateral = [controller.planes[leg][90 if leg.endswith("L") else 270] for leg in controller.robot.legs]
     np.testing.assert_allclose(widened, 0.5 * np.array(lateral), atol=1e-9)
     np.testing.assert_allclose(defaults[:, 0], identity[:, 0], atol=1e-12)
+
+
+def test_auto_posing_moves_the_body_with_the_gait_and_lets_it_stop(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """Bullet's tripod set lifts the body 0.01 m and rolls it ±0.05 rad each half cycle (poses/tripod.toml)."""
+    from shc_cli.spec.autopose import load_auto_pose_set
+
+    robot_file = tmp_path / "posing.toml"
+    robot_file.write_text('extends = "bullet"\nname = "bullet_posing"\n[pose]\nauto = true\n')
+    robot = load_robot(robot_file).robot
+    gait = _gait("tripod")
+    assert robot is not None
+    pose_set = load_auto_pose_set("auto", gait).pose_set
+    assert pose_set is not None
+    controller = Controller(robot, gait, pose_sets={"tripod": pose_set})
+    while controller.state != RobotState.RUNNING:
+        controller.step(Command(state_request=RobotState.RUNNING))
+    heights, rolls = [], []
+    for _ in range(800):
+        out = controller.step(Command(velocity=(1.0, 0.0, 0.0)))
+        heights.append(out.pose[2])
+        rolls.append(out.pose[3])
+    assert max(heights) == pytest.approx(0.25 + 0.01, abs=1e-9)
+    assert max(abs(r) for r in rolls) == pytest.approx(0.05, abs=1e-9)
+    for _ in range(800):
+        out = controller.step(Command())
+    assert out.walk_state == WalkState.STOPPED
+    assert out.pose[2] == pytest.approx(0.25, abs=1e-12)

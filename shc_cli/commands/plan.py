@@ -16,6 +16,7 @@ from shc_cli.control.controller import Command, Controller, CycleOutput, RobotSt
 from shc_cli.control.walk import WalkState
 from shc_cli.errors import Issue, ShcError, SpecError
 from shc_cli.runlog import RunWriter
+from shc_cli.spec.autopose import AutoPoseSet, compatibility_issues, load_auto_pose_set
 from shc_cli.spec.gait import Gait
 from shc_cli.spec.loading import load_gait, load_robot
 from shc_cli.spec.robot import Robot
@@ -65,8 +66,11 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
             raise SpecError([Issue(commands, None, "gait", f"gait '{new_gait.name}' does not fit robot '{robot.name}'",
                                    f"give one multiplier for each of {', '.join(robot.legs)}")])
     walk_cycles = _walk_cycles(timeline, duration, robot.time_delta, commands is not None)
+    gaits = [gait_loaded.gait]
+    gaits += [change for _, c in timeline.changes if isinstance(change := c.get("gait"), Gait)]
+    pose_sets = _pose_sets(robot, gaits, gait_file.parent) if robot.pose.auto else {}
     directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-plan"
-    controller = Controller(robot, gait_loaded.gait)
+    controller = Controller(robot, gait_loaded.gait, pose_sets=pose_sets)
     writer = RunWriter(directory, robot)
     started = time.perf_counter()
     try:
@@ -85,6 +89,19 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
                f"(eq. 16: {summary['eq16_speed_mps']:.4f}), IK deviations {summary['ik_deviation_count']}, "
                f"clamped {summary['ik_clamp_count']} → {path}")
     return path
+
+
+def _pose_sets(robot: Robot, gaits: list[Gait], folder: Path) -> dict[str, AutoPoseSet]:
+    """The auto-pose set of every gait the run uses (``pose.auto_pose_type``; 'auto' = named after the gait)."""
+    sets: dict[str, AutoPoseSet] = {}
+    for gait in gaits:
+        loaded = load_auto_pose_set(robot.pose.auto_pose_type, gait, relative_to=folder)
+        problems = compatibility_issues(loaded, gait, list(robot.legs))
+        if problems:
+            raise SpecError(problems)
+        assert loaded.pose_set is not None
+        sets[gait.name] = loaded.pose_set
+    return sets
 
 
 def _walk_cycles(timeline: Timeline, duration: float | None, dt: float, from_file: bool) -> int:

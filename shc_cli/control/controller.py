@@ -15,7 +15,8 @@ from enum import IntEnum
 
 import numpy as np
 
-from shc_cli.control import stepping
+from shc_cli.control import sequence, stepping
+from shc_cli.control.autopose import AutoPoser
 from shc_cli.control.bezier import cubic
 from shc_cli.control.gait import StepCycle, step_cycle
 from shc_cli.control.limits import Limits, generate_limits
@@ -25,6 +26,7 @@ from shc_cli.control.walk import WalkController, WalkState
 from shc_cli.model import kernels
 from shc_cli.model.chains import Chains, FloatArray
 from shc_cli.model.workspace import Workplane, search_workspaces, walkspace
+from shc_cli.spec.autopose import AutoPoseSet
 from shc_cli.spec.gait import Gait
 from shc_cli.spec.robot import Robot
 
@@ -128,20 +130,28 @@ class Model:
         self.tips = self.chains.tips(self.joints)
         self._flags = np.zeros(self.chains.size, dtype=np.int64)
         self._proximity = np.zeros(self.chains.size)
+        self.proximity = np.ones(self.chains.size)
 
-    def step_ik(self, targets: FloatArray, dt: float, clamp_positions: bool, clamp_velocities: bool) -> tuple[int, int]:
-        """One OpenSHC IK step of every leg towards ``targets`` (base_link) [m], in place.
+    def step_ik(self, targets: FloatArray, dt: float, clamp_positions: bool, clamp_velocities: bool,
+                active: np.ndarray | None = None) -> tuple[int, int]:
+        """One OpenSHC IK step of every leg (or of the ``active`` legs) towards ``targets`` (base_link) [m].
 
-        The same compiled step as :func:`shc_cli.model.ik.ik_step`, writing into the model's arrays to keep
-        the control cycle free of allocations. Returns (legs off target by > 5 mm, legs with a clamped joint).
+        The same compiled step as :func:`shc_cli.model.ik.ik_step`, on the model's own arrays. Legs not active
+        keep their joints, velocities and tips. Returns (legs off target by > 5 mm, legs with a clamped joint);
+        :attr:`proximity` then holds OpenSHC's ``applyIK`` result per leg.
         """
         c = self.chains
         joints, velocities, tips = np.empty_like(self.joints), np.empty_like(self.joints), np.empty_like(self.tips)
         kernels.ik_step_kernel(c.base, c.d, c.theta, c.r, c.alpha, c.lower, c.upper, c.max_vel, self.joints,
                                self.joint_velocities, self.tips, targets, dt, clamp_positions, clamp_velocities,
                                joints, velocities, tips, self._flags, self._proximity, 1.0)
-        self.joints, self.joint_velocities, self.tips = joints, velocities, tips
         flags = self._flags
+        self.proximity = np.where((flags & 1) != 0, self._proximity, 0.0)
+        if active is not None:
+            keep = ~np.asarray(active, dtype=bool)
+            joints[keep], velocities[keep], tips[keep] = self.joints[keep], self.joint_velocities[keep], self.tips[keep]
+            flags = np.where(keep, 1, flags)
+        self.joints, self.joint_velocities, self.tips = joints, velocities, tips
         return int(((flags & 1) == 0).sum()), int(((flags & 6) != 0).sum())
 
 
@@ -152,10 +162,19 @@ class Controller:
         robot: the robot description.
         gait: the gait to walk with.
         joints: initial joint positions ``(L, n)`` [rad]; default ``clamp(0, min, max)`` (OpenSHC without feedback).
+        openshc_double_shutdown: run the shut-down sequence at OpenSHC's doubled speed (its quirk, see
+            docs/deviations.md); by default each sequence iteration takes one control cycle.
+        pose_sets: auto-pose sets by gait name (used when ``robot.pose.auto``); the caller loads them
+            (``shc_cli.spec.autopose``), so the controller stays free of I/O.
     """
 
-    def __init__(self, robot: Robot, gait: Gait, joints: FloatArray | None = None) -> None:
+    def __init__(self, robot: Robot, gait: Gait, joints: FloatArray | None = None,
+                 openshc_double_shutdown: bool = False, pose_sets: dict[str, AutoPoseSet] | None = None) -> None:
         self.robot = robot
+        self.pose_sets = pose_sets or {}
+        self.openshc_double_shutdown = openshc_double_shutdown
+        self._packer: sequence.PackTransition | None = None
+        self._sequence: sequence.Sequence | None = None
         self.gait = gait
         self.dt = robot.time_delta
         chains = Chains.from_robot(robot)
@@ -179,6 +198,9 @@ class Controller:
             pose_spec.max_translation_velocity, pose_spec.max_rotation_velocity, self.dt, pose_spec.manual,
         )
         self.poser_tips = np.full((len(robot.legs), 3), UNDEFINED)
+        self.autoposer: AutoPoser | None = None
+        if robot.pose.auto and gait.name in self.pose_sets:
+            self.autoposer = AutoPoser(self.pose_sets[gait.name], gait, self.cycle, list(robot.legs), self.dt)
         self.identity_walker_tips = np.array([[x, y, 0.0] for x, y in self.stance.values()])
         self.velocity_input = np.zeros(2)
         self.angular_input = 0.0
@@ -242,13 +264,14 @@ class Controller:
         if self.state != RobotState.UNKNOWN:
             self._update_pose()
         deviations = clamped = 0
-        if self.transition_pending:
-            self._transition_state()
+        if self.transition_pending and self.state != RobotState.RUNNING:
+            self._transition_state()  # in RUNNING the running cycle handles it first (study §9.4)
         if self.state == RobotState.RUNNING:
             deviations, clamped = self._running()
         return self._output(deviations, clamped)
 
     def _update_pose(self) -> None:
+        """The body pose of this cycle, from the previous cycle's leg states (OpenSHC ``updateCurrentPose``)."""
         if self.walker is None:
             progress, planes, normals = np.empty(0), np.empty((0, 3)), np.empty((0, 3))
         else:
@@ -257,26 +280,99 @@ class Controller:
             planes, normals = legs.vectors[:, stepping.PLANE], legs.vectors[:, stepping.NORMAL]
         if self.state == RobotState.RUNNING:
             self.poser.update_manual(self.pose_input, self.pose_reset)
-        self.poser.update_current_pose(progress, self.gait.swing_phase, self.gait.phase_offset, planes, normals)
+        auto = None
+        if self.autoposer is not None:
+            self._update_auto_pose(self.autoposer)
+            auto = self.autoposer.body_pose
+        self.poser.update_current_pose(progress, self.gait.swing_phase, self.gait.phase_offset, planes, normals,
+                                       auto)
+
+    def _update_auto_pose(self, autoposer: AutoPoser) -> None:
+        legs = len(self.stance)
+        if self.walker is None:
+            autoposer.update(int(WalkState.STOPPED), True, np.zeros(legs, dtype=np.int64),
+                             np.full(legs, stepping.FORCE_STOP))
+            return
+        arrays = self.walker.legs
+        stride = arrays.vectors[autoposer.reference_leg, stepping.STRIDE]
+        autoposer.update(int(self.walker.state), not np.any(stride), arrays.integers[:, stepping.PHASE],
+                         arrays.integers[:, stepping.STATE])
 
     def _transition_state(self) -> None:
-        """Move one state towards the request (OpenSHC direct start-up mode, study §9.2)."""
+        """Move one state towards the request (study §9.2): direct start-up, or OpenSHC's sequence mode
+        (pack/unpack in joint space, stepped start-up and shut-down, :mod:`shc_cli.control.sequence`)."""
         if self.state == RobotState.UNKNOWN:
-            self.state = RobotState.PACKED  # no joint feedback: "undefined → PACKED", as OpenSHC
+            packed, unpacked = self._configurations
+            last = packed[-1] if len(packed) else unpacked
+            estimate = sequence.estimate_state(self.model.joints, last, unpacked, self.robot.start_up.sequence)
+            self.state = RobotState.READY if estimate.ready else RobotState.PACKED
             self.transition_pending = False
             return
         target = self.state + (1 if self.requested > self.state else -1)
+        done = False
         if self.state == RobotState.PACKED and target == RobotState.READY:
-            if self._direct_startup():
-                self.state = RobotState.READY
+            if not self.robot.start_up.sequence:
+                if self._direct_startup():
+                    self.default_joints = self.model.joints.copy()
+                    self._generate_limits()
+                    done = True
+            else:
+                done = self._pack(sequence.PackDirection.UNPACK)
+        elif self.state == RobotState.READY and target == RobotState.PACKED and self.robot.start_up.sequence:
+            done = self._pack(sequence.PackDirection.PACK)
+        elif self.state == RobotState.READY and target == RobotState.RUNNING:
+            done = not self.robot.start_up.sequence or self._run_sequence(sequence.SequenceKind.START_UP)
+            if done and self.robot.start_up.sequence:
+                self.walker = None  # leg steppers re-created at the identity tips, as OpenSHC's walker init
                 self.default_joints = self.model.joints.copy()
                 self._generate_limits()
-                self.transition_pending = False
-        elif self.state == RobotState.READY and target == RobotState.RUNNING:
-            self.state = RobotState.RUNNING
-            self.transition_pending = False
+        elif self.state == RobotState.RUNNING and target == RobotState.READY and self.robot.start_up.sequence:
+            if self.walker is not None and self.walker.state != WalkState.STOPPED:
+                self._stop_walking()
+            else:
+                done = self._run_sequence(sequence.SequenceKind.SHUT_DOWN)
         else:
-            self.transition_pending = False  # other transitions need the start-up sequence (not yet supported)
+            self.transition_pending = False  # refused: direct mode only goes PACKED → READY → RUNNING
+            return
+        if done:
+            self.state = RobotState(target)
+            if self.state == self.requested:
+                self.transition_pending = False
+
+    @property
+    def _configurations(self) -> tuple[FloatArray, FloatArray]:
+        return sequence.joint_configurations(self.robot, self.model.chains.joints)
+
+    def _pack(self, direction: sequence.PackDirection) -> bool:
+        """One cycle of packing or unpacking in joint space; True when the last configuration is reached."""
+        if self._packer is None:
+            self._packer = sequence.PackTransition(*self._configurations, self.dt)
+        step = self._packer.step(direction, self.model.joints, self.parameters["step_frequency"])
+        self.model.joints = step.joints
+        self.model.tips = self.model.chains.tips(self.model.joints)
+        return step.progress == sequence.PROGRESS_COMPLETE
+
+    def _run_sequence(self, kind: sequence.SequenceKind) -> bool:
+        """Iterations of the start-up or shut-down sequence for this cycle; True when complete.
+
+        OpenSHC advances the shut-down two iterations per cycle (study §14 quirk 8: the transition handler runs
+        twice in RUNNING); shc runs one, unless ``openshc_double_shutdown`` asks for OpenSHC's behaviour.
+        """
+        if self._sequence is None:
+            self._sequence = sequence.Sequence(len(self.stance), self.dt)
+        repeats = 2 if kind is sequence.SequenceKind.SHUT_DOWN and self.openshc_double_shutdown else 1
+        for _ in range(repeats):
+            defaults = (self.walker.legs.vectors[:, stepping.DEFAULT] if self.walker is not None
+                        else self.identity_walker_tips)
+            plan = self._sequence.begin(kind, self.model.tips, self.poser.current.inverse_transform(defaults),
+                                        self.parameters["step_frequency"], self.parameters["swing_height"])
+            ik = self.robot.ik
+            self.model.step_ik(plan.targets, self.dt, ik.clamp_joint_positions, ik.clamp_joint_velocities,
+                               active=plan.active)
+            self.poser_tips = np.where(plan.active[:, None], plan.targets, self.poser_tips)
+            if self._sequence.finish(self.model.proximity) == sequence.PROGRESS_COMPLETE:
+                return True
+        return False
 
     def _direct_startup(self) -> bool:
         """Plan the stance by IK on the first cycle, then move in joint space; True when done."""
@@ -313,7 +409,12 @@ class Controller:
         the tips and one IK step per leg — unless the cycle was spent on a change while stopped."""
         assert self.walker is not None
         update = True
-        if self.pending_gait is not None:
+        if self.transition_pending:
+            self._transition_state()
+            if self.state != RobotState.RUNNING or self.walker is None:
+                return 0, 0
+            update = False
+        elif self.pending_gait is not None:
             self._change_gait()
             update = False
         elif self.cruise_on and self.cycles * self.dt < self.cruise_end:
@@ -324,8 +425,13 @@ class Controller:
             return 0, 0
         self.walker.swing_height = self.parameters["swing_height"]
         self.walker.swing_width = self.parameters["swing_width"]
-        self.walker.update(self.velocity_input, self.angular_input, self.poser.walk_plane_pose.position)
-        self.poser_tips = self.poser.posed_tips(self.walker.legs.tips())
+        auto = self.autoposer
+        self.walker.update(self.velocity_input, self.angular_input, self.poser.walk_plane_pose.position,
+                           posing_complete=auto is None or auto.posing_complete)
+        if auto is None:
+            self.poser_tips = self.poser.posed_tips(self.walker.legs.tips())
+        else:
+            self.poser_tips = self.poser.posed_tips(self.walker.legs.tips(), auto.body_pose, auto.leg_poses)
         ik = self.robot.ik
         return self.model.step_ik(self.poser_tips, self.dt, ik.clamp_joint_positions, ik.clamp_joint_velocities)
 
@@ -344,6 +450,18 @@ class Controller:
         self.pending_gait = None
         self.cycle = step_cycle(self.gait, self.parameters["step_frequency"], self.dt)
         self.walker.set_cycle(self.cycle, self._limits_for(self.cycle))
+        self._reset_auto_pose()
+
+    def _reset_auto_pose(self) -> None:
+        """New step cycle or gait: re-synchronise auto posing (OpenSHC does this on gait changes only; doing
+        it on step-frequency changes too fixes study §14 quirk 18)."""
+        if not self.robot.pose.auto:
+            return
+        pose_set = self.pose_sets.get(self.gait.name)
+        if self.autoposer is not None:
+            self.autoposer.reset(self.cycle, self.gait, pose_set)
+        elif pose_set is not None:
+            self.autoposer = AutoPoser(pose_set, self.gait, self.cycle, list(self.robot.legs), self.dt)
 
     def _limits_for(self, cycle: StepCycle) -> Limits:
         """Limits for ``cycle``; the angular lever arm is leg 0's current default tip, re-read every time."""
@@ -365,6 +483,7 @@ class Controller:
                 return  # slow down to a safe speed first
             self.cycle = cycle
             self.walker.set_cycle(cycle, limits, rephase=True)
+            self._reset_auto_pose()
         elif name == "stance_span_modifier":
             self._set_stance_span(value)
         self.parameters[name] = value

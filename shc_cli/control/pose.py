@@ -219,15 +219,24 @@ class PoseController:
             self.walk_plane_origin = self.walk_plane_pose
 
     def update_current_pose(self, swing_progress: np.ndarray, swing_phase: int, phase_offset: int,
-                            planes: np.ndarray, normals: np.ndarray) -> Pose:
-        """Compose this cycle's body pose (study §7.1)."""
+                            planes: np.ndarray, normals: np.ndarray, auto: Pose | None = None) -> Pose:
+        """Compose this cycle's body pose: walk plane ∘ manual ∘ auto (study §7.1)."""
         self.update_walk_plane_pose(swing_progress, swing_phase, phase_offset, planes, normals)
         pose = self.walk_plane_pose  # = Identity ∘ walk-plane pose, exactly
         if self.manual_enabled and self.manual.any():  # adding a zero manual pose changes nothing
             pose = pose.add(self.manual_pose())
+        if auto is not None:
+            pose = pose.add(auto)
         self.current = pose
         return pose
 
-    def posed_tips(self, walker_tips: np.ndarray) -> np.ndarray:
-        """Walker tips (walk-plane frame) in base_link under the current body pose (OpenSHC ``updateStance``)."""
-        return self.current.inverse_transform(walker_tips)
+    def posed_tips(self, walker_tips: np.ndarray, auto: Pose | None = None,
+                   leg_autos: list[Pose] | None = None) -> np.ndarray:
+        """Walker tips (walk-plane frame) in base_link under the current body pose (OpenSHC ``updateStance``).
+
+        With auto posing, each leg sees ``body.remove(auto).add(leg_auto)`` so a negated leg ignores it.
+        """
+        if auto is None or leg_autos is None:
+            return self.current.inverse_transform(walker_tips)
+        body = self.current.remove(auto)
+        return np.array([body.add(leg).inverse_transform(tip) for tip, leg in zip(walker_tips, leg_autos, strict=True)])

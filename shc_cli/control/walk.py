@@ -99,7 +99,7 @@ class WalkController:
     # -- the cycle ---------------------------------------------------------------------------------------------
 
     def update(self, linear_input: Vector, angular_input: float, default_body_position: Vector,
-               legs_walking: bool = True) -> None:
+               legs_walking: bool = True, posing_complete: bool = True) -> None:
         """One control cycle of walking (OpenSHC ``updateWalk``).
 
         Args:
@@ -107,6 +107,7 @@ class WalkController:
             angular_input: yaw-rate input, throttle or rad/s.
             default_body_position: position of the walk-plane body pose (for default-tip updates) [m].
             legs_walking: False while any leg is manually manipulated (walking is then suspended).
+            posing_complete: the auto poser has finished its cycles (STOPPING → STOPPED waits for it).
         """
         linear_input = np.asarray(linear_input, dtype=float)
         max_speed, max_angular, max_acceleration, max_angular_acceleration = self.limits_for(
@@ -125,7 +126,7 @@ class WalkController:
         if not legs_walking:
             return
         self._ramp(new_linear, new_angular, max_acceleration, max_angular_acceleration)
-        if self._transition(has_command):
+        if self._transition(has_command, posing_complete):
             return
         cycle = self.cycle
         defaults_moved = stepping.walk_legs(
@@ -161,7 +162,7 @@ class WalkController:
             sign = 1.0 if angular_change > 0.0 else -1.0  # OpenSHC: sign(0) = −1
             self.desired_angular += (sign * max_angular_acceleration) * dt
 
-    def _transition(self, has_command: bool) -> bool:
+    def _transition(self, has_command: bool, posing_complete: bool = True) -> bool:
         """Walk state transitions; True when the cycle ends here (the STARTING cycle moves no tip)."""
         count = len(self.leg_ids)
         counters = self.counters
@@ -183,7 +184,7 @@ class WalkController:
             self.state = WalkState.MOVING
         elif self.state == WalkState.MOVING and not has_command:
             self.state = WalkState.STOPPING
-        elif self.state == WalkState.STOPPING and counters[at_phase] == count:
+        elif self.state == WalkState.STOPPING and counters[at_phase] == count and posing_complete:
             counters[at_phase] = 0
             self.state = WalkState.STOPPED
         return False
