@@ -67,7 +67,7 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
                                    f"give one multiplier for each of {', '.join(robot.legs)}")])
     walk_cycles = _walk_cycles(timeline, duration, robot.time_delta, commands is not None)
     gaits = [gait_loaded.gait]
-    gaits += [change for _, c in timeline.changes if isinstance(change := c.get("gait"), Gait)]
+    gaits += [switch for _, c in timeline.changes if isinstance(switch := c.get("gait"), Gait)]
     pose_sets = _pose_sets(robot, gaits, gait_file.parent) if robot.pose.auto else {}
     directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-plan"
     controller = Controller(robot, gait_loaded.gait, pose_sets=pose_sets)
