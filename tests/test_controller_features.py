@@ -171,3 +171,51 @@ def test_auto_posing_moves_the_body_with_the_gait_and_lets_it_stop(tmp_path) -> 
         out = controller.step(Command())
     assert out.walk_state == WalkState.STOPPED
     assert out.pose[2] == pytest.approx(0.25, abs=1e-12)
+
+
+def test_a_leg_is_lifted_for_manipulation_moved_and_returned(running: Controller) -> None:
+    """Toggle AR to manual: all legs step (1/f_p s each), AR rises to swing height above the body-origin
+    plane; tip velocity moves it at max_translation_velocity; toggling back puts it on its default tip."""
+    from shc_cli.control.controller import LegMode
+
+    controller = copy.deepcopy(running)
+    robot = controller.robot
+    controller.step(Command(leg_toggle="AR"))
+    for _ in range(400):
+        controller.step(Command())
+        if controller.leg_modes[0] == LegMode.MANUAL:
+            break
+    assert controller.leg_modes[0] == LegMode.MANUAL
+    stance = robot.legs["AR"].stance
+    np.testing.assert_allclose(controller.model.tips[0], [stance.x, stance.y, 0.09], atol=1e-3)
+    start = controller.model.tips[0].copy()
+    for _ in range(100):  # 1 s at input (0, 0, 1): +0.05 m in z
+        controller.step(Command(tip_velocity={"AR": (0.0, 0.0, 1.0)}))
+    assert controller.model.tips[0][2] - start[2] == pytest.approx(0.05, abs=2e-3)
+    out = controller.step(Command(velocity=(1.0, 0.0, 0.0)))
+    assert out.walk_state == WalkState.STOPPED  # no walking while a leg is manual
+    controller.step(Command(leg_toggle="AR"))
+    for _ in range(400):
+        controller.step(Command())
+        if controller.leg_modes[0] == LegMode.WALKING:
+            break
+    assert controller.leg_modes[0] == LegMode.WALKING
+    np.testing.assert_allclose(controller.model.tips[0], [stance.x, stance.y, -0.25], atol=1e-3)
+    for _ in range(300):
+        out = controller.step(Command(velocity=(1.0, 0.0, 0.0)))
+    assert out.walk_state == WalkState.MOVING
+
+
+def test_at_most_two_legs_can_be_manual(running: Controller) -> None:
+    from shc_cli.control.controller import LegMode
+
+    controller = copy.deepcopy(running)
+    for leg in ("AR", "AL", "BR"):
+        controller.step(Command(leg_toggle=leg))
+        for _ in range(400):
+            controller.step(Command())
+            if controller.pending_toggle is None:
+                break
+    modes = [LegMode(m) for m in controller.leg_modes]
+    assert modes.count(LegMode.MANUAL) == 2
+    assert modes[list(controller.robot.legs).index("BR")] == LegMode.WALKING

@@ -20,11 +20,12 @@ from shc_cli.control.autopose import AutoPoser
 from shc_cli.control.bezier import cubic
 from shc_cli.control.gait import StepCycle, step_cycle
 from shc_cli.control.limits import Limits, generate_limits
-from shc_cli.control.pose import PoseController, PoseReset
+from shc_cli.control.pose import Pose, PoseController, PoseReset
 from shc_cli.control.startup import iterations, plan_direct_startup
 from shc_cli.control.walk import WalkController, WalkState
 from shc_cli.model import kernels
 from shc_cli.model.chains import Chains, FloatArray
+from shc_cli.model.ik import IK_TOLERANCE
 from shc_cli.model.workspace import Workplane, search_workspaces, walkspace
 from shc_cli.spec.autopose import AutoPoseSet
 from shc_cli.spec.gait import Gait
@@ -56,6 +57,12 @@ class Command:
         cruise: switch cruise control on (True) or off (False); None leaves it as it is.
         parameters: run-time parameter changes ``{name: value}`` (clamped to the parameter's range); one is
             applied per cycle, in the given order, as OpenSHC does. Names: see :data:`ADJUSTABLE`.
+        leg_toggle: a leg id to switch between walking and manual manipulation (at most two manual legs);
+            the robot stops first, then every leg steps so the chosen one is lifted (study §9.5).
+        tip_velocity: per manual leg, a velocity input (x, y, z) each −1..1: in ``tip_control`` the tip moves at
+            input × ``max_translation_velocity`` in base_link axes; in ``joint_control`` (3-DOF legs) y drives
+            the coxa and x the tibia at input × ``max_rotation_velocity``.
+        tip_position: per manual leg, an absolute tip position in base_link [m] (``tip_control``).
     """
 
     velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -65,6 +72,22 @@ class Command:
     gait: Gait | None = None
     cruise: bool | None = None
     parameters: dict[str, float] = field(default_factory=dict)
+    leg_toggle: str | None = None
+    tip_velocity: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    tip_position: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+
+
+class LegMode(IntEnum):
+    """OpenSHC ``LegState``: who drives a leg."""
+
+    WALKING = 0
+    MANUAL = 1
+    WALKING_TO_MANUAL = 2
+    MANUAL_TO_WALKING = 3
+
+
+MAX_MANUAL_LEGS = 2
+"""At most this many legs can be manipulated at once (OpenSHC)."""
 
 
 ADJUSTABLE = ("step_frequency", "swing_height", "swing_width", "step_depth", "stance_span_modifier",
@@ -198,6 +221,12 @@ class Controller:
             pose_spec.max_translation_velocity, pose_spec.max_rotation_velocity, self.dt, pose_spec.manual,
         )
         self.poser_tips = np.full((len(robot.legs), 3), UNDEFINED)
+        self.leg_modes = np.full(len(robot.legs), int(LegMode.WALKING))
+        self.pending_toggle: int | None = None
+        self.tip_velocities: dict[int, np.ndarray] = {}
+        self.tip_positions: dict[int, np.ndarray] = {}
+        self._manipulator = sequence.StepToPosition(len(robot.legs), self.dt)
+        self._forced_pose_reset = False
         self.autoposer: AutoPoser | None = None
         if robot.pose.auto and gait.name in self.pose_sets:
             self.autoposer = AutoPoser(self.pose_sets[gait.name], gait, self.cycle, list(robot.legs), self.dt)
@@ -238,6 +267,13 @@ class Controller:
                 self.pending_parameters.append((name, float(value)))
             if command.cruise is not None:
                 self._set_cruise(command.cruise)
+            legs = list(self.stance)
+            if command.leg_toggle is not None and self.pending_toggle is None:
+                if command.leg_toggle not in legs:
+                    raise ValueError(f"no leg '{command.leg_toggle}' to toggle (legs: {', '.join(legs)})")
+                self.pending_toggle = legs.index(command.leg_toggle)
+            self.tip_velocities = {legs.index(k): np.array(v, dtype=float) for k, v in command.tip_velocity.items()}
+            self.tip_positions = {legs.index(k): np.array(v, dtype=float) for k, v in command.tip_position.items()}
         if command.state_request is not None and not self.transition_pending:
             self.requested = command.state_request
             if self.state == RobotState.UNKNOWN or command.state_request != self.state:
@@ -279,7 +315,8 @@ class Controller:
             progress = legs.floats[:, stepping.SWING_PROGRESS]
             planes, normals = legs.vectors[:, stepping.PLANE], legs.vectors[:, stepping.NORMAL]
         if self.state == RobotState.RUNNING:
-            self.poser.update_manual(self.pose_input, self.pose_reset)
+            reset = PoseReset.IMMEDIATE_ALL if self._forced_pose_reset else self.pose_reset
+            self.poser.update_manual(self.pose_input, reset)
         auto = None
         if self.autoposer is not None:
             self._update_auto_pose(self.autoposer)
@@ -417,6 +454,9 @@ class Controller:
         elif self.pending_gait is not None:
             self._change_gait()
             update = False
+        elif self.pending_toggle is not None:
+            self._toggle_leg(self.pending_toggle)
+            update = False
         elif self.cruise_on and self.cycles * self.dt < self.cruise_end:
             self.velocity_input, self.angular_input = self.cruise_velocity[0].copy(), self.cruise_velocity[1]
         if self.pending_parameters:
@@ -426,14 +466,99 @@ class Controller:
         self.walker.swing_height = self.parameters["swing_height"]
         self.walker.swing_width = self.parameters["swing_width"]
         auto = self.autoposer
+        walking = bool((self.leg_modes == LegMode.WALKING).all())
         self.walker.update(self.velocity_input, self.angular_input, self.poser.walk_plane_pose.position,
-                           posing_complete=auto is None or auto.posing_complete)
+                           legs_walking=walking, posing_complete=auto is None or auto.posing_complete)
+        if not walking:
+            self._update_manual_legs()
         if auto is None:
             self.poser_tips = self.poser.posed_tips(self.walker.legs.tips())
         else:
             self.poser_tips = self.poser.posed_tips(self.walker.legs.tips(), auto.body_pose, auto.leg_poses)
+        manual = (self.leg_modes == LegMode.MANUAL) | (self.leg_modes == LegMode.WALKING_TO_MANUAL)
+        if manual.any():  # manipulated legs take their walker tip as it is (already in base_link)
+            self.poser_tips[manual] = self.walker.legs.vectors[manual, stepping.CURRENT]
         ik = self.robot.ik
         return self.model.step_ik(self.poser_tips, self.dt, ik.clamp_joint_positions, ik.clamp_joint_velocities)
+
+    def _toggle_leg(self, leg: int) -> None:
+        """Walking ↔ manual for one leg, once stopped (OpenSHC ``legStateToggle``, study §9.5)."""
+        assert self.walker is not None
+        if self.walker.state != WalkState.STOPPED:
+            self._stop_walking()
+            return
+        mode = LegMode(self.leg_modes[leg])
+        if mode == LegMode.WALKING:
+            if int((self.leg_modes == LegMode.MANUAL).sum()) < MAX_MANUAL_LEGS:
+                self.leg_modes[leg] = LegMode.WALKING_TO_MANUAL
+                self.walker.legs.floats[leg, stepping.SWING_PROGRESS] = -1.0
+                self.walker.legs.floats[leg, stepping.STANCE_PROGRESS] = -1.0
+            else:
+                self.pending_toggle = None  # refused: OpenSHC allows two manual legs
+        elif mode == LegMode.MANUAL:
+            self.leg_modes[leg] = LegMode.MANUAL_TO_WALKING
+        else:
+            self._forced_pose_reset = True  # the manual body pose goes back to the default at once
+            if self._pose_for_manipulation() == sequence.PROGRESS_COMPLETE:
+                self.leg_modes[leg] = LegMode.MANUAL if mode == LegMode.WALKING_TO_MANUAL else LegMode.WALKING
+                self.pending_toggle = None
+                self._forced_pose_reset = False
+
+    def _pose_for_manipulation(self) -> int:
+        """Every leg steps to its default tip; a leg going manual is raised to swing height above the body
+        origin's plane, no lift (OpenSHC ``poseForLegManipulation``). Returns the smallest progress."""
+        assert self.walker is not None
+        height = self.parameters["swing_height"]
+        duration = 1.0 / self.parameters["step_frequency"]
+        body = self.poser.current
+        walking_pose = Pose(body.position - self.poser.manual[:3], body.rotation)
+        lifted_pose = Pose(np.array([0.0, 0.0, -height]))
+        vectors = self.walker.legs.vectors
+        rising = self.leg_modes == LegMode.WALKING_TO_MANUAL
+        targets = np.empty((len(self.stance), 3))
+        for leg in range(len(self.stance)):
+            default = vectors[leg, stepping.DEFAULT]
+            targets[leg] = (lifted_pose if rising[leg] else walking_pose).inverse_transform(default)
+            if rising[leg]:
+                vectors[leg, stepping.CURRENT] = targets[leg]
+            elif self.leg_modes[leg] == LegMode.MANUAL_TO_WALKING:
+                vectors[leg, stepping.CURRENT] = default
+        lifted = self._manipulator.step(self.model.tips, targets, 0.0, duration, rising)  # no lift for this one
+        stepping_legs = self._manipulator.step(self.model.tips, targets, height, duration, ~rising)
+        progress = np.where(rising, lifted, stepping_legs)
+        moving = progress != sequence.PROGRESS_COMPLETE
+        if moving.any():
+            ik = self.robot.ik
+            self.poser_tips = np.where(moving[:, None], self._manipulator.current, self.poser_tips)
+            self.model.step_ik(self._manipulator.current, self.dt, ik.clamp_joint_positions,
+                               ik.clamp_joint_velocities, active=moving)
+        return int(progress.min())
+
+    def _update_manual_legs(self) -> None:
+        """Move manual legs by their inputs (OpenSHC ``WalkController::updateManual``, study §9.5)."""
+        assert self.walker is not None
+        vectors = self.walker.legs.vectors
+        spec = self.robot
+        for leg in np.flatnonzero(self.leg_modes == LegMode.MANUAL).tolist():
+            velocity = self.tip_velocities.get(leg)
+            if velocity is not None and np.any(velocity):
+                joints = list(spec.legs.values())[leg].joints
+                if spec.manipulation.mode == "joint_control" and len(joints) == 3:
+                    step = spec.pose.max_rotation_velocity * self.dt
+                    self.model.joints[leg, 0] += velocity[1] * step
+                    self.model.joints[leg, 2] += velocity[0] * step
+                    self.model.tips = self.model.chains.tips(self.model.joints)
+                    vectors[leg, stepping.CURRENT] = self.model.tips[leg]
+                elif spec.manipulation.mode == "tip_control":
+                    error = self.poser_tips[leg] - self.model.tips[leg]
+                    change = velocity * spec.pose.max_translation_velocity * self.dt
+                    size = float(np.linalg.norm(error))
+                    if size >= IK_TOLERANCE:  # at the edge of reach: back off along the error
+                        change = float(np.linalg.norm(change)) * -(error / size)
+                    vectors[leg, stepping.CURRENT] = vectors[leg, stepping.CURRENT] + change
+            position = self.tip_positions.get(leg)
+            if position is not None and np.any(position) and spec.manipulation.mode == "tip_control":
+                vectors[leg, stepping.CURRENT] = position
 
     def _stop_walking(self) -> None:
         """OpenSHC forces a stop before gait, leg-state and plan changes by zeroing the velocity inputs."""
