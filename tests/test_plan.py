@@ -176,3 +176,24 @@ def test_plan_script_rejects_unknown_parameters_and_gaits(tmp_path: Path, capsys
     script.write_text('[[step]]\nat = 0.0\ngait = "trot"\n')
     code, _, err = run(["plan", "openshc_default", "--commands", str(script)], capsys, monkeypatch)
     assert code == 2 and "gait 'trot' does not fit robot 'openshc_default'" in err
+
+
+def test_plan_script_manipulates_a_leg(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    script = tmp_path / "plan.toml"
+    script.write_text('[[step]]\nat = 0.0\nleg_toggle = "AR"\n'
+                      '[[step]]\nat = 3.0\ntip_velocity = { AR = [0, 0, 1] }\n'
+                      '[[step]]\nat = 4.0\ntip_velocity = { AR = [0, 0, 0] }\n')
+    out = tmp_path / "run"
+    code, _, err = run(["plan", "openshc_default", "--commands", str(script), "--duration", "5", "--out", str(out),
+                        "--no-plots"], capsys, monkeypatch)
+    assert (code, err) == (0, "")
+    tips = _rows(out / "tips.csv")
+    z = [float(r["AR_model_z"]) for r in tips]
+    assert max(z) > -0.1 + 0.02 + 0.04  # lifted to swing height above the body, then 1 s up at 0.05 m/s
+
+
+def test_plan_script_rejects_an_unknown_leg(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    script = tmp_path / "plan.toml"
+    script.write_text('[[step]]\nat = 0.0\nleg_toggle = "XX"\n')
+    code, _, err = run(["plan", "openshc_default", "--commands", str(script)], capsys, monkeypatch)
+    assert code == 2 and "no leg 'XX' on robot 'openshc_default'" in err and len(err.strip().splitlines()) == 1

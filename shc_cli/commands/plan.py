@@ -61,6 +61,12 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
                                "e.g. --duration 20")])
     timeline = load_timeline(commands, robot.time_delta) if commands else constant(parse_velocity(velocity))
     for _, change in timeline.changes:
+        tips = {**_mapping(change.get("tip_velocity")), **_mapping(change.get("tip_position"))}
+        named = [change.get("leg_toggle"), *tips]
+        unknown = [leg for leg in named if leg is not None and leg not in robot.legs]
+        if unknown:
+            raise SpecError([Issue(commands, None, "step", f"no leg '{unknown[0]}' on robot '{robot.name}'",
+                                   f"legs: {', '.join(robot.legs)}")])
         new_gait = change.get("gait")
         if isinstance(new_gait, Gait) and set(new_gait.offset_multiplier) != set(robot.legs):
             raise SpecError([Issue(commands, None, "gait", f"gait '{new_gait.name}' does not fit robot '{robot.name}'",
@@ -89,6 +95,10 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
                f"(eq. 16: {summary['eq16_speed_mps']:.4f}), IK deviations {summary['ik_deviation_count']}, "
                f"clamped {summary['ik_clamp_count']} → {path}")
     return path
+
+
+def _mapping(value: object) -> dict[str, object]:
+    return dict(value) if isinstance(value, dict) else {}
 
 
 def _pose_sets(robot: Robot, gaits: list[Gait], folder: Path) -> dict[str, AutoPoseSet]:

@@ -28,8 +28,19 @@ TOML plan script (``[[step]]`` tables in time order; ``at`` [s] or ``cycle``)::
     parameters = { step_frequency = 1.5, swing_height = 0.06 }
     cruise = true                     # hold the robot's cruise velocity
 
-``velocity``, ``pose_velocity`` and ``pose_reset`` hold until changed; ``gait``, ``parameters`` and
-``cruise`` are requests made once, at their step.
+    [[step]]
+    at = 20.0
+    velocity = [0, 0, 0]
+    leg_toggle = "AR"                 # stop, lift AR for manipulation (toggle again to put it back)
+    [[step]]
+    at = 23.0
+    tip_velocity = { AR = [0, 0, 0.5] }   # manual leg: tip velocity input (x, y, z), −1..1
+    [[step]]
+    at = 30.0
+    state = "ready"                   # shut down (sequence mode) — the robot state to reach
+
+``velocity``, ``pose_velocity``, ``pose_reset``, ``state``, ``tip_velocity`` and ``tip_position`` hold until
+changed; ``gait``, ``parameters``, ``cruise`` and ``leg_toggle`` are requests made once, at their step.
 """
 
 from __future__ import annotations
@@ -37,17 +48,20 @@ from __future__ import annotations
 import csv
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field, ValidationError, model_validator
 
-from shc_cli.control.controller import ADJUSTABLE, Command
+from shc_cli.control.controller import ADJUSTABLE, Command, RobotState
 from shc_cli.control.pose import PoseReset
 from shc_cli.errors import Issue, NotFoundError, SpecError
 from shc_cli.spec.gait import Gait
 from shc_cli.spec.loading import Located, _describe, load_gait
 from shc_cli.spec.robot import Strict
 from shc_cli.spec.source import Document, origins, unwrap
+
+Vector3 = Annotated[tuple[float, float, float], Field(strict=False)]
+"""Three numbers, written as a TOML array."""
 
 ResetName = Literal["no_reset", "z_and_yaw", "x_and_y", "pitch_and_roll", "all", "immediate_all"]
 
@@ -65,6 +79,13 @@ class Step(Strict):
     parameters: dict[str, float] = Field(default_factory=dict,
                                          description="run-time parameter changes, e.g. { step_frequency = 1.5 }")
     cruise: bool | None = Field(None, description="cruise control on or off")
+    state: Literal["packed", "ready", "running"] | None = Field(
+        None, description="requested robot state (reached one state at a time; sequences run as configured)")
+    leg_toggle: str | None = Field(None, description="leg id to switch between walking and manual manipulation")
+    tip_velocity: dict[str, Vector3] = Field(
+        default_factory=dict, description="manual legs' tip velocity inputs (x, y, z), −1..1")
+    tip_position: dict[str, Vector3] = Field(
+        default_factory=dict, description="manual legs' absolute tip positions in base_link [m]")
 
     @model_validator(mode="after")
     def _one_time(self) -> Step:
@@ -79,7 +100,7 @@ class PlanScript(Strict):
     step: list[Step] = Field(description="command changes in time order")
 
 
-EVENTS = ("gait", "parameters", "cruise")
+EVENTS = ("gait", "parameters", "cruise", "leg_toggle")
 """Timeline keys that are one-off requests; every other key holds until changed."""
 
 
@@ -199,5 +220,13 @@ def _load_script(path: Path, time_delta: float) -> Timeline:
             change["parameters"] = dict(step.parameters)
         if step.cruise is not None:
             change["cruise"] = step.cruise
+        if step.state is not None:
+            change["state_request"] = RobotState[step.state.upper()]
+        if step.leg_toggle is not None:
+            change["leg_toggle"] = step.leg_toggle
+        if step.tip_velocity:
+            change["tip_velocity"] = dict(step.tip_velocity)
+        if step.tip_position:
+            change["tip_position"] = dict(step.tip_position)
         changes.append((cycle, change))
     return Timeline(changes)
