@@ -89,6 +89,12 @@ class LegMode(IntEnum):
 MAX_MANUAL_LEGS = 2
 """At most this many legs can be manipulated at once (OpenSHC)."""
 
+# Enum members bound once: attribute access on an Enum class is slow, and these are read every cycle.
+_UNKNOWN, _RUNNING = RobotState.UNKNOWN, RobotState.RUNNING
+_STOPPED = WalkState.STOPPED
+_WALKING_LEG = int(LegMode.WALKING)
+_IMMEDIATE_ALL = PoseReset.IMMEDIATE_ALL
+
 
 ADJUSTABLE = ("step_frequency", "swing_height", "swing_width", "step_depth", "stance_span_modifier",
               "virtual_mass", "virtual_stiffness", "virtual_damping_ratio", "force_gain")
@@ -152,8 +158,8 @@ class Model:
     def __post_init__(self) -> None:
         self.tips = self.chains.tips(self.joints)
         self._flags = np.zeros(self.chains.size, dtype=np.int64)
-        self._proximity = np.zeros(self.chains.size)
-        self.proximity = np.ones(self.chains.size)
+        self._proximity = np.ones(self.chains.size)
+        self._flags[:] = 1
 
     def step_ik(self, targets: FloatArray, dt: float, clamp_positions: bool, clamp_velocities: bool,
                 active: np.ndarray | None = None) -> tuple[int, int]:
@@ -168,14 +174,19 @@ class Model:
         kernels.ik_step_kernel(c.base, c.d, c.theta, c.r, c.alpha, c.lower, c.upper, c.max_vel, self.joints,
                                self.joint_velocities, self.tips, targets, dt, clamp_positions, clamp_velocities,
                                joints, velocities, tips, self._flags, self._proximity, 1.0)
-        flags = self._flags
-        self.proximity = np.where((flags & 1) != 0, self._proximity, 0.0)
+        flags = self._flags.tolist()
         if active is not None:
             keep = ~np.asarray(active, dtype=bool)
             joints[keep], velocities[keep], tips[keep] = self.joints[keep], self.joint_velocities[keep], self.tips[keep]
-            flags = np.where(keep, 1, flags)
+            flags = [1 if kept else f for kept, f in zip(keep.tolist(), flags, strict=True)]
         self.joints, self.joint_velocities, self.tips = joints, velocities, tips
-        return int(((flags & 1) == 0).sum()), int(((flags & 6) != 0).sum())
+        return sum(1 for f in flags if not f & 1), sum(1 for f in flags if f & 6)
+
+    @property
+    def proximity(self) -> FloatArray:
+        """OpenSHC's ``applyIK`` result of the last step per leg: limit proximity, or 0 if the tip missed its
+        target by more than 5 mm on an axis."""
+        return np.where((self._flags & 1) != 0, self._proximity, 0.0)
 
 
 class Controller:
@@ -222,6 +233,8 @@ class Controller:
         )
         self.poser_tips = np.full((len(robot.legs), 3), UNDEFINED)
         self.leg_modes = np.full(len(robot.legs), int(LegMode.WALKING))
+        self._manual_legs = 0
+        """Legs not in WALKING mode (kept with :attr:`leg_modes`)."""
         self.pending_toggle: int | None = None
         self.tip_velocities: dict[int, np.ndarray] = {}
         self.tip_positions: dict[int, np.ndarray] = {}
@@ -233,7 +246,8 @@ class Controller:
         self.identity_walker_tips = np.array([[x, y, 0.0] for x, y in self.stance.values()])
         self.velocity_input = np.zeros(2)
         self.angular_input = 0.0
-        self.pose_input = np.zeros(6)
+        self.pose_input: tuple[float, ...] = (0.0,) * 6
+        self._throttle = robot.walker.velocity_input_mode == "throttle"
         self.pose_reset = PoseReset.NO_RESET
         self.cycles = 0
         self.pending_gait: Gait | None = None
@@ -250,14 +264,15 @@ class Controller:
     def _receive(self, command: Command) -> None:
         """Take a command as OpenSHC's topic callbacks would (before this cycle's loop)."""
         scaler = self.robot.walker.body_velocity_scaler
-        linear = np.array(command.velocity[:2], dtype=float) * scaler
-        size = math.hypot(linear[0], linear[1])
-        if self.robot.walker.velocity_input_mode == "throttle" and size > 1.0:
-            linear = linear / size
-        if self.state == RobotState.RUNNING:
-            self.velocity_input = linear
-            self.angular_input = float(command.velocity[2]) * scaler
-            self.pose_input = np.array(command.pose_velocity, dtype=float)
+        vx, vy, wz = command.velocity
+        vx, vy = float(vx) * scaler, float(vy) * scaler
+        size = math.sqrt(vx * vx + vy * vy)
+        if self._throttle and size > 1.0:  # throttle inputs are clipped to norm 1 on arrival
+            vx, vy = vx / size, vy / size
+        if self.state == _RUNNING:
+            self.velocity_input = np.array([vx, vy])
+            self.angular_input = float(wz) * scaler
+            self.pose_input = command.pose_velocity
             self.pose_reset = command.pose_reset
             if command.gait is not None and self.pending_gait is None:
                 self.pending_gait = command.gait
@@ -267,17 +282,22 @@ class Controller:
                 self.pending_parameters.append((name, float(value)))
             if command.cruise is not None:
                 self._set_cruise(command.cruise)
-            legs = list(self.stance)
-            if command.leg_toggle is not None and self.pending_toggle is None:
-                if command.leg_toggle not in legs:
-                    raise ValueError(f"no leg '{command.leg_toggle}' to toggle (legs: {', '.join(legs)})")
-                self.pending_toggle = legs.index(command.leg_toggle)
-            self.tip_velocities = {legs.index(k): np.array(v, dtype=float) for k, v in command.tip_velocity.items()}
-            self.tip_positions = {legs.index(k): np.array(v, dtype=float) for k, v in command.tip_position.items()}
+            if command.leg_toggle is not None or command.tip_velocity or command.tip_position or self.tip_velocities \
+                    or self.tip_positions:
+                self._receive_manipulation(command)
         if command.state_request is not None and not self.transition_pending:
             self.requested = command.state_request
-            if self.state == RobotState.UNKNOWN or command.state_request != self.state:
+            if self.state == _UNKNOWN or command.state_request != self.state:
                 self.transition_pending = True
+
+    def _receive_manipulation(self, command: Command) -> None:
+        legs = list(self.stance)
+        if command.leg_toggle is not None and self.pending_toggle is None:
+            if command.leg_toggle not in legs:
+                raise ValueError(f"no leg '{command.leg_toggle}' to toggle (legs: {', '.join(legs)})")
+            self.pending_toggle = legs.index(command.leg_toggle)
+        self.tip_velocities = {legs.index(k): np.array(v, dtype=float) for k, v in command.tip_velocity.items()}
+        self.tip_positions = {legs.index(k): np.array(v, dtype=float) for k, v in command.tip_position.items()}
 
     # -- the cycle ---------------------------------------------------------------------------------------------
 
@@ -297,12 +317,12 @@ class Controller:
         """Advance one control period and return this cycle's outputs."""
         self.cycles += 1
         self._receive(command or Command())
-        if self.state != RobotState.UNKNOWN:
+        if self.state != _UNKNOWN:
             self._update_pose()
         deviations = clamped = 0
-        if self.transition_pending and self.state != RobotState.RUNNING:
+        if self.transition_pending and self.state != _RUNNING:
             self._transition_state()  # in RUNNING the running cycle handles it first (study §9.4)
-        if self.state == RobotState.RUNNING:
+        if self.state == _RUNNING:
             deviations, clamped = self._running()
         return self._output(deviations, clamped)
 
@@ -314,8 +334,8 @@ class Controller:
             legs = self.walker.legs
             progress = legs.floats[:, stepping.SWING_PROGRESS]
             planes, normals = legs.vectors[:, stepping.PLANE], legs.vectors[:, stepping.NORMAL]
-        if self.state == RobotState.RUNNING:
-            reset = PoseReset.IMMEDIATE_ALL if self._forced_pose_reset else self.pose_reset
+        if self.state == _RUNNING:
+            reset = _IMMEDIATE_ALL if self._forced_pose_reset else self.pose_reset
             self.poser.update_manual(self.pose_input, reset)
         auto = None
         if self.autoposer is not None:
@@ -448,7 +468,7 @@ class Controller:
         update = True
         if self.transition_pending:
             self._transition_state()
-            if self.state != RobotState.RUNNING or self.walker is None:
+            if self.state != _RUNNING or self.walker is None:
                 return 0, 0
             update = False
         elif self.pending_gait is not None:
@@ -461,12 +481,12 @@ class Controller:
             self.velocity_input, self.angular_input = self.cruise_velocity[0].copy(), self.cruise_velocity[1]
         if self.pending_parameters:
             self._adjust_parameter()
-        if not (update or self.walker.state != WalkState.STOPPED):
+        if not (update or self.walker.state != _STOPPED):
             return 0, 0
         self.walker.swing_height = self.parameters["swing_height"]
         self.walker.swing_width = self.parameters["swing_width"]
         auto = self.autoposer
-        walking = bool((self.leg_modes == LegMode.WALKING).all())
+        walking = self._manual_legs == 0
         self.walker.update(self.velocity_input, self.angular_input, self.poser.walk_plane_pose.position,
                            legs_walking=walking, posing_complete=auto is None or auto.posing_complete)
         if not walking:
@@ -475,8 +495,8 @@ class Controller:
             self.poser_tips = self.poser.posed_tips(self.walker.legs.tips())
         else:
             self.poser_tips = self.poser.posed_tips(self.walker.legs.tips(), auto.body_pose, auto.leg_poses)
-        manual = (self.leg_modes == LegMode.MANUAL) | (self.leg_modes == LegMode.WALKING_TO_MANUAL)
-        if manual.any():  # manipulated legs take their walker tip as it is (already in base_link)
+        if not walking:  # manipulated legs take their walker tip as it is (already in base_link)
+            manual = (self.leg_modes == LegMode.MANUAL) | (self.leg_modes == LegMode.WALKING_TO_MANUAL)
             self.poser_tips[manual] = self.walker.legs.vectors[manual, stepping.CURRENT]
         ik = self.robot.ik
         return self.model.step_ik(self.poser_tips, self.dt, ik.clamp_joint_positions, ik.clamp_joint_velocities)
@@ -491,6 +511,7 @@ class Controller:
         if mode == LegMode.WALKING:
             if int((self.leg_modes == LegMode.MANUAL).sum()) < MAX_MANUAL_LEGS:
                 self.leg_modes[leg] = LegMode.WALKING_TO_MANUAL
+                self._manual_legs += 1
                 self.walker.legs.floats[leg, stepping.SWING_PROGRESS] = -1.0
                 self.walker.legs.floats[leg, stepping.STANCE_PROGRESS] = -1.0
             else:
@@ -501,6 +522,7 @@ class Controller:
             self._forced_pose_reset = True  # the manual body pose goes back to the default at once
             if self._pose_for_manipulation() == sequence.PROGRESS_COMPLETE:
                 self.leg_modes[leg] = LegMode.MANUAL if mode == LegMode.WALKING_TO_MANUAL else LegMode.WALKING
+                self._manual_legs -= int(self.leg_modes[leg] == _WALKING_LEG)
                 self.pending_toggle = None
                 self._forced_pose_reset = False
 

@@ -168,9 +168,9 @@ class PoseController:
             return Pose(np.array([x, y, z]), IDENTITY)
         return Pose(np.array([x, y, z]), rot_x(roll) @ rot_y(pitch) @ rot_z(yaw))
 
-    def update_manual(self, velocity_input: Vector, reset: PoseReset) -> None:
+    def update_manual(self, velocity_input: Vector | tuple[float, ...], reset: PoseReset) -> None:
         """Integrate manual posing inputs (−1..1 per axis), stopping exactly on the limits (study §7.2)."""
-        if reset == PoseReset.NO_RESET and not np.any(velocity_input):
+        if reset == 0 and not any(velocity_input):  # 0 = PoseReset.NO_RESET; nothing to integrate
             return
         inputs = np.clip(np.asarray(velocity_input, dtype=float), -1.0, 1.0)
         if reset == PoseReset.IMMEDIATE_ALL:

@@ -29,6 +29,9 @@ class WalkState(IntEnum):
     STOPPED = 3
 
 
+_STARTING, _MOVING, _STOPPING, _STOPPED = WalkState  # bound once: Enum attribute access is slow in the loop
+
+
 def clamped_norm(vector: Vector, limit: float) -> Vector:
     """2-D ``vector`` scaled down to norm ``limit`` if it is longer."""
     norm = math.hypot(vector[0], vector[1])
@@ -113,7 +116,7 @@ class WalkController:
         max_speed, max_angular, max_acceleration, max_angular_acceleration = self.limits_for(
             linear_input, angular_input)
         new_linear, new_angular = np.zeros(2), 0.0
-        if self.state != WalkState.STOPPING:
+        if self.state != _STOPPING:
             if self.velocity_input_mode == "throttle":
                 new_linear = clamped_norm(linear_input, 1.0) * max_speed
                 new_angular = min(max(angular_input, -1.0), 1.0) * max_angular
@@ -167,7 +170,7 @@ class WalkController:
         count = len(self.leg_ids)
         counters = self.counters
         at_phase, first_step = stepping.LEGS_AT_CORRECT_PHASE, stepping.LEGS_COMPLETED_FIRST_STEP
-        if self.state == WalkState.STOPPED and has_command:
+        if self.state == _STOPPED and has_command:
             self.state = WalkState.STARTING
             integers, cycle = self.legs.integers, self.cycle
             integers[:, stepping.AT_CORRECT_PHASE] = 0
@@ -178,13 +181,13 @@ class WalkController:
                 stepping.update_step_state(integers, leg, cycle.swing_start, cycle.swing_end, cycle.stance_start,
                                            cycle.stance_end)
             return True
-        if self.state == WalkState.STARTING and counters[at_phase] == count and counters[first_step] == count:
+        if self.state == _STARTING and counters[at_phase] == count and counters[first_step] == count:
             counters[at_phase] = 0
             counters[first_step] = 0
             self.state = WalkState.MOVING
-        elif self.state == WalkState.MOVING and not has_command:
+        elif self.state == _MOVING and not has_command:
             self.state = WalkState.STOPPING
-        elif self.state == WalkState.STOPPING and counters[at_phase] == count and posing_complete:
+        elif self.state == _STOPPING and counters[at_phase] == count and posing_complete:
             counters[at_phase] = 0
             self.state = WalkState.STOPPED
         return False
