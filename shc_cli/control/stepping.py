@@ -345,3 +345,95 @@ def walk_limits(tips, linear_x, linear_y, angular, table, bearing_step, out):  #
             value = (1.0 - share) * table[low_row, c] + share * table[high_row, c]
             if value < out[c]:
                 out[c] = value
+
+
+# Slots of the walk-level state array (7,): desired velocity and ideal odometry.
+DESIRED_X, DESIRED_Y, DESIRED_YAW_RATE, ODOMETRY_X, ODOMETRY_Y, ODOMETRY_Z, ODOMETRY_YAW = range(7)
+WALK_SLOTS = 7
+
+
+@njit(cache=True)
+def _clamped_norm(x, y, limit):  # type: ignore[no-untyped-def]
+    """2-D vector scaled down to norm ``limit`` if longer (OpenSHC ``clamped(vector, limit)``)."""
+    norm = math.sqrt(x * x + y * y)
+    if norm > limit:
+        scale = limit / norm
+        return x * scale, y * scale
+    return x, y
+
+
+@njit(cache=True)
+def walk_update(  # type: ignore[no-untyped-def]
+    vectors, nodes, floats, integers, counters, walk, walk_state, table, bearing_step, period, swing_start,
+    swing_end, stance_start, stance_end, swing_period, stance_period, frequency, dt, linear_x, linear_y, angular,
+    throttle, swing_height, swing_width, plane, normal, body_position, legs_walking, posing_complete, limits_out,
+):
+    """One cycle of OpenSHC's ``updateWalk`` (study §4.4, §6; exact notes §2): limits for the input at the
+    current tips, new target velocity, acceleration ramp, walk-state transition, the legs, ideal odometry.
+
+    ``walk`` holds the desired velocity and odometry (slots above) and is updated in place. Returns
+    ``(walk_state, legs_whose_default_tip_moved)``.
+    """
+    walk_limits(vectors[:, CURRENT], linear_x, linear_y, angular, table, bearing_step, limits_out)
+    max_speed, max_angular = limits_out[0], limits_out[1]
+    max_acceleration, max_angular_acceleration = limits_out[2], limits_out[3]
+    new_x, new_y, new_angular = 0.0, 0.0, 0.0
+    if walk_state != STOPPING:
+        if throttle:
+            new_x, new_y = _clamped_norm(linear_x, linear_y, 1.0)
+            new_x, new_y = new_x * max_speed, new_y * max_speed
+            new_angular = min(max(angular, -1.0), 1.0) * max_angular
+            scale = 1.0 - abs(angular)
+        else:
+            new_angular = min(max(angular, -max_angular), max_angular)
+            new_x, new_y = _clamped_norm(linear_x, linear_y, max_speed)
+            scale = 1.0 - abs(new_angular / max_angular) if max_angular != 0.0 else 0.0
+        new_x, new_y = new_x * scale, new_y * scale
+    has_command = linear_x != 0.0 or linear_y != 0.0 or angular != 0.0
+    if not legs_walking:
+        return walk_state, 0
+    # Acceleration-limited ramp (Eigen: norm = sqrt(x² + y²), normalized = division by it; sign(0) = −1).
+    vx, vy = walk[DESIRED_X], walk[DESIRED_Y]
+    cx, cy = new_x - vx, new_y - vy
+    size = math.sqrt(cx * cx + cy * cy)
+    if size < max_acceleration * dt:
+        walk[DESIRED_X], walk[DESIRED_Y] = vx + cx, vy + cy
+    else:
+        walk[DESIRED_X] = vx + ((cx / size) * max_acceleration) * dt
+        walk[DESIRED_Y] = vy + ((cy / size) * max_acceleration) * dt
+    change = new_angular - walk[DESIRED_YAW_RATE]
+    if abs(change) < max_angular_acceleration * dt:
+        walk[DESIRED_YAW_RATE] += change
+    else:
+        walk[DESIRED_YAW_RATE] += ((1.0 if change > 0.0 else -1.0) * max_angular_acceleration) * dt
+    # Walk-state transitions.
+    legs = vectors.shape[0]
+    if walk_state == STOPPED and has_command:
+        for leg in range(legs):  # the STARTING cycle moves no tip
+            integers[leg, AT_CORRECT_PHASE] = 0
+            integers[leg, COMPLETED_FIRST_STEP] = 0
+            integers[leg, STATE] = STANCE
+            integers[leg, PHASE] = integers[leg, OFFSET]
+            update_step_state(integers, leg, swing_start, swing_end, stance_start, stance_end)
+        return STARTING, 0
+    if (walk_state == STARTING and counters[LEGS_AT_CORRECT_PHASE] == legs
+            and counters[LEGS_COMPLETED_FIRST_STEP] == legs):
+        counters[LEGS_AT_CORRECT_PHASE] = 0
+        counters[LEGS_COMPLETED_FIRST_STEP] = 0
+        walk_state = MOVING
+    elif walk_state == MOVING and not has_command:
+        walk_state = STOPPING
+    elif walk_state == STOPPING and counters[LEGS_AT_CORRECT_PHASE] == legs and posing_complete:
+        counters[LEGS_AT_CORRECT_PHASE] = 0
+        walk_state = STOPPED
+    moved = walk_legs(vectors, nodes, floats, integers, counters, walk_state, period, swing_start, swing_end,
+                      stance_start, stance_end, swing_period, stance_period, frequency, dt, walk[DESIRED_X],
+                      walk[DESIRED_Y], walk[DESIRED_YAW_RATE], swing_height, swing_width, plane, normal,
+                      body_position)
+    # Ideal odometry: compose this cycle's commanded motion.
+    sx, sy = walk[DESIRED_X] * dt, walk[DESIRED_Y] * dt
+    c, s = math.cos(walk[ODOMETRY_YAW]), math.sin(walk[ODOMETRY_YAW])
+    walk[ODOMETRY_X] = walk[ODOMETRY_X] + (c * sx - s * sy)
+    walk[ODOMETRY_Y] = walk[ODOMETRY_Y] + (s * sx + c * sy)
+    walk[ODOMETRY_YAW] += walk[DESIRED_YAW_RATE] * dt
+    return walk_state, moved

@@ -29,7 +29,6 @@ class WalkState(IntEnum):
     STOPPED = 3
 
 
-_STARTING, _MOVING, _STOPPING, _STOPPED = WalkState  # bound once: Enum attribute access is slow in the loop
 
 
 def clamped_norm(vector: Vector, limit: float) -> Vector:
@@ -72,13 +71,12 @@ class WalkController:
         self.legs = LegArrays(identity, [cycle.offsets[leg] for leg in self.leg_ids], swing_height)
         self.counters = np.zeros(3, dtype=np.int64)
         self.state = WalkState.STOPPED
-        self.desired_linear = np.zeros(2)
-        self.desired_angular = 0.0
+        self._walk = np.zeros(stepping.WALK_SLOTS)
+        """Desired velocity and ideal odometry (slots in :mod:`stepping`), updated by the compiled cycle."""
+        self._throttle = velocity_input_mode == "throttle"
         self.walk_plane = np.zeros(3)
         self.walk_plane_normal = np.array([0.0, 0.0, 1.0])
         self._plane_tips: np.ndarray | None = None
-        self.odometry_position = np.zeros(3)
-        self.odometry_yaw = 0.0
 
     # -- limits -----------------------------------------------------------------------------------------------
 
@@ -103,7 +101,7 @@ class WalkController:
 
     def update(self, linear_input: Vector, angular_input: float, default_body_position: Vector,
                legs_walking: bool = True, posing_complete: bool = True) -> None:
-        """One control cycle of walking (OpenSHC ``updateWalk``).
+        """One control cycle of walking (OpenSHC ``updateWalk``; compiled in :func:`stepping.walk_update`).
 
         Args:
             linear_input: body velocity input (x, y), throttle or m/s.
@@ -112,85 +110,40 @@ class WalkController:
             legs_walking: False while any leg is manually manipulated (walking is then suspended).
             posing_complete: the auto poser has finished its cycles (STOPPING → STOPPED waits for it).
         """
-        linear_input = np.asarray(linear_input, dtype=float)
-        max_speed, max_angular, max_acceleration, max_angular_acceleration = self.limits_for(
-            linear_input, angular_input)
-        new_linear, new_angular = np.zeros(2), 0.0
-        if self.state != _STOPPING:
-            if self.velocity_input_mode == "throttle":
-                new_linear = clamped_norm(linear_input, 1.0) * max_speed
-                new_angular = min(max(angular_input, -1.0), 1.0) * max_angular
-                new_linear = new_linear * (1.0 - abs(angular_input))
-            else:
-                new_angular = min(max(angular_input, -max_angular), max_angular)
-                new_linear = clamped_norm(linear_input, max_speed)
-                new_linear = new_linear * (1.0 - abs(new_angular / max_angular) if max_angular != 0.0 else 0.0)
-        has_command = bool(linear_input[0] != 0.0 or linear_input[1] != 0.0 or angular_input != 0.0)
-        if not legs_walking:
-            return
-        self._ramp(new_linear, new_angular, max_acceleration, max_angular_acceleration)
-        if self._transition(has_command, posing_complete):
-            return
         cycle = self.cycle
-        defaults_moved = stepping.walk_legs(
-            self.legs.vectors, self.legs.nodes, self.legs.floats, self.legs.integers, self.counters, int(self.state),
-            cycle.period, cycle.swing_start, cycle.swing_end, cycle.stance_start, cycle.stance_end,
-            cycle.swing_period, cycle.stance_period, cycle.frequency, self.time_delta,
-            float(self.desired_linear[0]), float(self.desired_linear[1]), float(self.desired_angular),
-            self.swing_height, self.swing_width, self.walk_plane, self.walk_plane_normal,
-            np.asarray(default_body_position, dtype=float),
+        state, moved = stepping.walk_update(
+            self.legs.vectors, self.legs.nodes, self.legs.floats, self.legs.integers, self.counters, self._walk,
+            int(self.state), self._table, self._bearing_step, cycle.period, cycle.swing_start, cycle.swing_end,
+            cycle.stance_start, cycle.stance_end, cycle.swing_period, cycle.stance_period, cycle.frequency,
+            self.time_delta, float(linear_input[0]), float(linear_input[1]), float(angular_input),
+            self._throttle, self.swing_height, self.swing_width, self.walk_plane, self.walk_plane_normal,
+            np.asarray(default_body_position, dtype=float), legs_walking, posing_complete, self._limit_out,
         )
-        if defaults_moved or self._plane_tips is None:  # the plane only depends on the default tips
+        if state != self.state:
+            self.state = WalkState(state)
+        if moved or self._plane_tips is None:  # the plane only depends on the default tips
             self._plane_tips = self.legs.vectors[:, stepping.DEFAULT].copy()
             self._update_walk_plane()
-        self._integrate_odometry()
 
-    def _ramp(self, new_linear: Vector, new_angular: float, max_acceleration: float,
-              max_angular_acceleration: float) -> None:
-        """Acceleration-limited approach of the desired velocity to the new target (study §6); on floats,
-        with Eigen's ``norm`` (``sqrt(x² + y²)``) and ``normalized`` (division by it)."""
-        dt = self.time_delta
-        vx, vy = float(self.desired_linear[0]), float(self.desired_linear[1])
-        cx, cy = float(new_linear[0]) - vx, float(new_linear[1]) - vy
-        size = math.sqrt(cx * cx + cy * cy)
-        if size < max_acceleration * dt:
-            self.desired_linear = np.array([vx + cx, vy + cy])
-        else:
-            self.desired_linear = np.array([vx + ((cx / size) * max_acceleration) * dt,
-                                            vy + ((cy / size) * max_acceleration) * dt])
-        angular_change = new_angular - self.desired_angular
-        if abs(angular_change) < max_angular_acceleration * dt:
-            self.desired_angular += angular_change
-        else:
-            sign = 1.0 if angular_change > 0.0 else -1.0  # OpenSHC: sign(0) = −1
-            self.desired_angular += (sign * max_angular_acceleration) * dt
+    @property
+    def desired_linear(self) -> Vector:
+        """Desired body velocity (x, y) after limits and ramp [m/s]."""
+        return np.array([self._walk[stepping.DESIRED_X], self._walk[stepping.DESIRED_Y]])
 
-    def _transition(self, has_command: bool, posing_complete: bool = True) -> bool:
-        """Walk state transitions; True when the cycle ends here (the STARTING cycle moves no tip)."""
-        count = len(self.leg_ids)
-        counters = self.counters
-        at_phase, first_step = stepping.LEGS_AT_CORRECT_PHASE, stepping.LEGS_COMPLETED_FIRST_STEP
-        if self.state == _STOPPED and has_command:
-            self.state = WalkState.STARTING
-            integers, cycle = self.legs.integers, self.cycle
-            integers[:, stepping.AT_CORRECT_PHASE] = 0
-            integers[:, stepping.COMPLETED_FIRST_STEP] = 0
-            integers[:, stepping.STATE] = stepping.STANCE
-            integers[:, stepping.PHASE] = integers[:, stepping.OFFSET]
-            for leg in range(count):
-                stepping.update_step_state(integers, leg, cycle.swing_start, cycle.swing_end, cycle.stance_start,
-                                           cycle.stance_end)
-            return True
-        if self.state == _STARTING and counters[at_phase] == count and counters[first_step] == count:
-            counters[at_phase] = 0
-            counters[first_step] = 0
-            self.state = WalkState.MOVING
-        elif self.state == _MOVING and not has_command:
-            self.state = WalkState.STOPPING
-        elif self.state == _STOPPING and counters[at_phase] == count and posing_complete:
-            counters[at_phase] = 0
-            self.state = WalkState.STOPPED
-        return False
+    @property
+    def desired_angular(self) -> float:
+        """Desired yaw rate [rad/s]."""
+        return float(self._walk[stepping.DESIRED_YAW_RATE])
+
+    @property
+    def odometry_position(self) -> Vector:
+        """Ideal odometry: integrated commanded position in the start frame [m]."""
+        return np.array(self._walk[stepping.ODOMETRY_X:stepping.ODOMETRY_Z + 1])
+
+    @property
+    def odometry_yaw(self) -> float:
+        """Ideal odometry heading [rad]."""
+        return float(self._walk[stepping.ODOMETRY_YAW])
 
     def _update_walk_plane(self) -> None:
         """Least-squares plane through the legs' default tips (study §7.6)."""
@@ -201,15 +154,6 @@ class WalkController:
         self.walk_plane = np.linalg.inv(design.T @ design) @ design.T @ tips[:, 2]
         normal = np.array([-self.walk_plane[0], -self.walk_plane[1], 1.0])
         self.walk_plane_normal = normal / np.linalg.norm(normal)
-
-    def _integrate_odometry(self) -> None:
-        """Ideal odometry: compose this cycle's commanded motion (study §4.4)."""
-        dt = self.time_delta
-        sx, sy = float(self.desired_linear[0]) * dt, float(self.desired_linear[1]) * dt
-        c, s = math.cos(self.odometry_yaw), math.sin(self.odometry_yaw)
-        x, y, z = self.odometry_position.tolist()
-        self.odometry_position = np.array([x + (c * sx - s * sy), y + (s * sx + c * sy), z])
-        self.odometry_yaw += self.desired_angular * dt
 
     def set_cycle(self, cycle: StepCycle, limits: Limits, rephase: bool = False) -> None:
         """Install a new step cycle and limits; offsets are reassigned (OpenSHC ``generateLimits``).
