@@ -567,6 +567,7 @@ class Controller:
                 joints = list(spec.legs.values())[leg].joints
                 if spec.manipulation.mode == "joint_control" and len(joints) == 3:
                     step = spec.pose.max_rotation_velocity * self.dt
+                    self.model.joints = self.model.joints.copy()  # outputs hold the previous array: never mutate
                     self.model.joints[leg, 0] += velocity[1] * step
                     self.model.joints[leg, 2] += velocity[0] * step
                     self.model.tips = self.model.chains.tips(self.model.joints)
@@ -662,12 +663,14 @@ class Controller:
             velocity, walk_state = (0.0, 0.0, 0.0), WalkState.STOPPED
         pose = self.poser.current
         roll, pitch, yaw = pose.euler()
+        # The model's arrays and the poser tips are replaced, never modified in place, each cycle: the output
+        # can share them without copies.
         return CycleOutput(
-            joints=self.model.joints.copy(),
-            joint_velocities=self.model.joint_velocities.copy(),
+            joints=self.model.joints,
+            joint_velocities=self.model.joint_velocities,
             walker_tips=walker_tips,
-            poser_tips=self.poser_tips.copy(),
-            model_tips=self.model.tips.copy(),
+            poser_tips=self.poser_tips,
+            model_tips=self.model.tips,
             stance_progress=stance,
             swing_progress=swing,
             velocity=velocity,
