@@ -113,22 +113,19 @@ def tips_kernel(base, d, theta, r, alpha, q, tips):  # type: ignore[no-untyped-d
 def ik_step_one(  # type: ignore[no-untyped-def]
     base, d, theta, r, alpha, lower, upper, max_vel,
     q, qd, current_tip, desired_tip, dt, clamp_positions, clamp_velocities,
-    q_out, qd_out, tip_out, frames, null_space=1.0,
+    q_out, qd_out, tip_out, frames, jac, z, v, delta, null_space=1.0,
 ):
     """One DLS step with joint-limit avoidance for one chain (study §2.1–§2.2).
 
     Returns ``(flags, proximity)``: flags bit 0 = tip within tolerance, bit 1 = a position was clamped,
     bit 2 = a velocity was clamped; proximity ρ ∈ [0, 1] as OpenSHC's ``updateJointPositions``.
-    ``frames`` is scratch space of shape ``(n + 1, 4, 4)``. ``null_space`` scales the limit-avoidance
+    ``frames`` ``(n + 1, 4, 4)``, ``jac`` ``(3, n)``, ``z`` ``(n, 3)``, ``v`` ``(n,)`` and ``delta`` ``(3,)`` are
+    scratch space (allocated once per batch by the callers). ``null_space`` scales the limit-avoidance
     motion: 1 is OpenSHC; 0 gives a plain damped-least-squares step (used to polish planning solutions).
     """
     n = d.shape[0]
     w = JOINT_LIMIT_COST_WEIGHT
     lam2 = DLS_COEFFICIENT * DLS_COEFFICIENT
-    jac = np.empty((3, n))
-    z = np.empty((n, 3))
-    v = np.empty(n)
-    delta = np.empty(3)
     chain_frames(base, d, theta, r, alpha, q, frames)
     # Tip displacement in the leg frame: T_leg⁻¹·p_des − T_leg⁻¹·p_cur.
     for i in range(3):
@@ -248,12 +245,12 @@ def ik_step_kernel(  # type: ignore[no-untyped-def]
 ):
     """:func:`ik_step_one` for every chain ``b`` of ``(B, n)`` arrays."""
     chains, n = d.shape
-    frames = np.empty((n + 1, 4, 4))
+    frames, jac, z, v, delta = np.empty((n + 1, 4, 4)), np.empty((3, n)), np.empty((n, 3)), np.empty(n), np.empty(3)
     for b in range(chains):
         flags_out[b], proximity_out[b] = ik_step_one(
             base[b], d[b], theta[b], r[b], alpha[b], lower[b], upper[b], max_vel[b],
             q[b], qd[b], current_tip[b], desired_tip[b], dt, clamp_positions, clamp_velocities,
-            q_out[b], qd_out[b], tip_out[b], frames, null_space,
+            q_out[b], qd_out[b], tip_out[b], frames, jac, z, v, delta, null_space,
         )
 
 
@@ -269,7 +266,7 @@ def linear_search_kernel(  # type: ignore[no-untyped-def]
     limit). ``q`` is updated in place; ``distance_out[b]`` receives |tip − origin| at the last step taken.
     """
     chains, n = d.shape
-    frames = np.empty((n + 1, 4, 4))
+    frames, jac, z, v, delta = np.empty((n + 1, 4, 4)), np.empty((3, n)), np.empty((n, 3)), np.empty(n), np.empty(3)
     qd = np.zeros(n)
     q_new = np.empty(n)
     qd_new = np.empty(n)
@@ -286,7 +283,7 @@ def linear_search_kernel(  # type: ignore[no-untyped-def]
                 target[a] = start_tip[b, a] * (1.0 - share) + end_tip[b, a] * share
             flags, prox = ik_step_one(
                 base[b], d[b], theta[b], r[b], alpha[b], lower[b], upper[b], max_vel[b],
-                q[b], qd, tip, target, dt, True, False, q_new, qd_new, tip_new, frames,
+                q[b], qd, tip, target, dt, True, False, q_new, qd_new, tip_new, frames, jac, z, v, delta,
             )
             q[b, :] = q_new
             qd[:] = qd_new
