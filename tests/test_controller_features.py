@@ -219,3 +219,22 @@ def test_at_most_two_legs_can_be_manual(running: Controller) -> None:
     modes = [LegMode(m) for m in controller.leg_modes]
     assert modes.count(LegMode.MANUAL) == 2
     assert modes[list(controller.robot.legs).index("BR")] == LegMode.WALKING
+
+
+def test_manual_posing_stops_at_the_limits_and_resets(running: Controller) -> None:
+    """Bullet: max_translation z 0.2 m at 0.05 m/s, max_rotation roll 0.5 rad at 0.2 rad/s (study §7.2)."""
+    from shc_cli.control.pose import PoseReset
+
+    controller = copy.deepcopy(running)
+    for _ in range(500):  # 5 s: z would reach 0.25 m and roll 1.0 rad without limits
+        out = controller.step(Command(pose_velocity=(0.0, 0.0, 1.0, 1.0, 0.0, 0.0)))
+    assert out.pose[2] == pytest.approx(0.25 + 0.2, abs=1e-12)
+    assert out.pose[3] == pytest.approx(0.5, abs=1e-9)
+    assert np.all(out.joints >= controller.model.chains.lower) and np.all(out.joints <= controller.model.chains.upper)
+    for _ in range(300):  # z returns at 0.05 m/s (4 s), roll at 0.2 rad/s (2.5 s)
+        out = controller.step(Command(pose_reset=PoseReset.ALL))
+    assert out.pose[2] == pytest.approx(0.25 + 0.2 - 0.15, abs=1e-9)
+    assert out.pose[3] == pytest.approx(0.0, abs=1e-12)
+    out = controller.step(Command(pose_reset=PoseReset.IMMEDIATE_ALL))
+    out = controller.step(Command())
+    assert out.pose[2] == pytest.approx(0.25, abs=1e-12) and out.pose[3] == 0.0
