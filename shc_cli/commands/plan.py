@@ -18,7 +18,6 @@ from shc_cli.errors import Issue, ShcError, SpecError
 from shc_cli.runlog import RunWriter
 from shc_cli.spec.autopose import AutoPoseSet, compatibility_issues, load_auto_pose_set
 from shc_cli.spec.gait import Gait
-from shc_cli.spec.loading import load_gait, load_robot
 from shc_cli.spec.robot import Robot
 from shc_cli.spec.timeline import Timeline, constant, load_timeline
 
@@ -42,20 +41,10 @@ def parse_velocity(text: str) -> tuple[float, float, float]:
 def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
              commands: Path | None, out: Path | None, plots: bool) -> Path:
     """Load, run, log; returns the run directory."""
-    from shc_cli.spec.checks import check_gait, check_robot
+    from shc_cli.spec.checks import load_checked
 
-    loaded = load_robot(robot_name)
-    robot = loaded.robot
-    assert robot is not None
-    problems = check_robot(loaded)
-    if problems:
-        raise SpecError(problems)
+    robot, gait, loaded = load_checked(robot_name, gait_name)
     gait_file, _ = loaded.where(("walker", "gait"))
-    gait_loaded = load_gait(gait_name or robot.walker.gait, relative_to=None if gait_name else gait_file.parent)
-    problems = check_gait(gait_loaded, robot)
-    if problems:
-        raise SpecError(problems)
-    assert gait_loaded.gait is not None
     if duration is not None and (duration <= 0 or not math.isfinite(duration)):
         raise SpecError([Issue(None, None, "--duration", f"{duration:g} must be a positive number of seconds",
                                "e.g. --duration 20")])
@@ -72,11 +61,11 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
             raise SpecError([Issue(commands, None, "gait", f"gait '{new_gait.name}' does not fit robot '{robot.name}'",
                                    f"give one multiplier for each of {', '.join(robot.legs)}")])
     walk_cycles = _walk_cycles(timeline, duration, robot.time_delta, commands is not None)
-    gaits = [gait_loaded.gait]
+    gaits = [gait]
     gaits += [switch for _, c in timeline.changes if isinstance(switch := c.get("gait"), Gait)]
     pose_sets = _pose_sets(robot, gaits, gait_file.parent) if robot.pose.auto else {}
     directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-plan"
-    controller = Controller(robot, gait_loaded.gait, pose_sets=pose_sets)
+    controller = Controller(robot, gait, pose_sets=pose_sets)
     writer = RunWriter(directory, robot)
     started = time.perf_counter()
     try:
@@ -90,7 +79,7 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
 
         plot_plan(robot, outputs, writer.partial)
     path = writer.finish(summary)
-    typer.echo(f"{robot.name} / {gait_loaded.gait.name}: {summary['cycles']} cycles "
+    typer.echo(f"{robot.name} / {gait.name}: {summary['cycles']} cycles "
                f"({summary['duration_s']:.2f} s), mean speed {summary['achieved_mean_speed_mps']:.4f} m/s "
                f"(eq. 16: {summary['eq16_speed_mps']:.4f}), IK deviations {summary['ik_deviation_count']}, "
                f"clamped {summary['ik_clamp_count']} → {path}")

@@ -12,7 +12,6 @@ import typer
 from shc_cli.analysis.workspace import WorkspaceReport, analyse_workspace
 from shc_cli.errors import Issue, SpecError
 from shc_cli.outputs import atomic_path, write_text
-from shc_cli.spec.loading import load_gait, load_robot
 
 
 def run_workspace(
@@ -24,27 +23,16 @@ def run_workspace(
     out: Path | None,
     json_output: bool,
 ) -> None:
-    from shc_cli.spec.checks import check_gait, check_robot
+    from shc_cli.spec.checks import load_checked
 
-    loaded = load_robot(robot_name)
-    robot = loaded.robot
-    assert robot is not None
-    problems = check_robot(loaded)
-    if problems:
-        raise SpecError(problems)
-    file, _ = loaded.where(("walker", "gait"))
-    gait_loaded = load_gait(gait_name or robot.walker.gait, relative_to=None if gait_name else file.parent)
-    problems = check_gait(gait_loaded, robot)
-    if problems:
-        raise SpecError(problems)
-    assert gait_loaded.gait is not None
+    robot, gait, _ = load_checked(robot_name, gait_name)
     if bearing_count < 1 or 360 % bearing_count:
         raise SpecError([_option_issue("--bearings", f"{bearing_count} does not divide 360",
                                        "use 8, 12, 24, 36 or 72")])
     if step_frequency is not None and step_frequency <= 0:
         raise SpecError([_option_issue("--step-frequency", f"{step_frequency:g} must be > 0",
                                        "give a frequency in Hz")])
-    report = analyse_workspace(robot, gait_loaded.gait, step_frequency, bearing_count, volumetric)
+    report = analyse_workspace(robot, gait, step_frequency, bearing_count, volumetric)
     if out is not None:
         write_outputs(report, out)
     if json_output:

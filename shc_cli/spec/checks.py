@@ -11,6 +11,7 @@ import math
 import numpy as np
 
 from shc_cli.errors import Issue
+from shc_cli.spec.gait import Gait
 from shc_cli.spec.loading import LoadedGait, LoadedRobot, one_per_mistake
 from shc_cli.spec.robot import Robot
 
@@ -212,3 +213,26 @@ def check_gait_pattern(loaded_gait: LoadedGait) -> list[Issue]:
                                   f"base units only {fewest} of {len(offsets)} legs are on the ground",
                                   "spread the offset multipliers so swings do not all coincide")]
     return []
+
+
+def load_checked(robot_name: str, gait_name: str | None) -> tuple[Robot, Gait, LoadedRobot]:
+    """A robot and a gait (the robot's own unless named), both loaded and fully checked; raises SpecError.
+
+    The robot's own gait is looked up from the folder of the file that names it.
+    """
+    from shc_cli.errors import SpecError
+    from shc_cli.spec.loading import load_gait, load_robot
+
+    loaded = load_robot(robot_name)
+    robot = loaded.robot
+    assert robot is not None
+    problems = check_robot(loaded)
+    if problems:
+        raise SpecError(problems)
+    gait_file, _ = loaded.where(("walker", "gait"))
+    gait_loaded = load_gait(gait_name or robot.walker.gait, relative_to=None if gait_name else gait_file.parent)
+    problems = check_gait(gait_loaded, robot)
+    if problems:
+        raise SpecError(problems)
+    assert gait_loaded.gait is not None
+    return robot, gait_loaded.gait, loaded
