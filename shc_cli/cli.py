@@ -97,6 +97,36 @@ def plan(
 
 
 @app.command()
+def simulate(
+    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
+    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    velocity: Annotated[str, typer.Option(help="Velocity input VX,VY,WZ in the robot's input mode.")] = "1,0,0",
+    duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
+    commands: Annotated[
+        Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
+    ] = None,
+    terrain: Annotated[
+        str, typer.Option(help="flat, ramp:DEG, blocks[:LOW,HIGH[,SIZE]], stairs:RISE,RUN or heightfield:FILE[,SCALE]")
+    ] = "flat",
+    scenario: Annotated[str, typer.Option(help="WG walk ground, SG stance ground, WA walk air, SA stance air.")] = "WG",
+    physics_rate: Annotated[float, typer.Option(help="Physics steps per second (whole multiple of control).")] = 400.0,
+    friction: Annotated[float, typer.Option(help="Lateral friction of feet and terrain.")] = 0.9,
+    restitution: Annotated[float, typer.Option(help="Restitution of feet and terrain.")] = 0.0,
+    seed: Annotated[int, typer.Option(help="Seed of every random thing (terrain, sensor noise).")] = 0,
+    imu_noise: Annotated[float, typer.Option(help="IMU noise standard deviation (rad/s, m/s²).")] = 0.0,
+    start: Annotated[str, typer.Option(help="Spawn pose: unpacked or packed.")] = "unpacked",
+    out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-simulate).")] = None,
+    plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
+    gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
+) -> None:
+    """Run the controller on the robot in PyBullet physics: terrains, servos, sensors, power, CoT."""
+    from shc_cli.commands.simulate import run_simulate
+
+    run_simulate(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate, friction,
+                 restitution, seed, imu_noise, start, gui)
+
+
+@app.command()
 def schema(
     kind: Annotated[str, typer.Argument(help="'robot' or 'gait'.")],
 ) -> None:

@@ -65,3 +65,7 @@ class KinematicsError(ShcError):
 
 class OutputError(ShcError):
     """An output cannot be written (e.g. the output directory is not writable)."""
+
+
+class BackendError(ShcError):
+    """A backend (physics engine, servo bus) cannot do what was asked."""

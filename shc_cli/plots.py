@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from shc_cli.analysis.workspace import WorkspaceReport
@@ -111,4 +111,56 @@ def plot_plan(robot: Robot, outputs: list[CycleOutput], folder: Path) -> None:
     (axes_grid[-1] if len(legs) > 1 else axes_grid).set_xlabel("time [s]")
     figure.tight_layout()
     figure.savefig(folder / "joints.png")
+    plt.close(figure)
+
+
+def plot_simulation(robot: Robot, series: dict[str, list[Any]], folder: Path) -> None:
+    """trajectory.png (body path, top view), power.png (total electrical power) and contacts.png (feet on the
+    ground over time: the measured gait diagram) in ``folder``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    t = np.array(series["t"])
+    position = np.array(series["position"])
+    figure, axes = plt.subplots(figsize=(6, 5), dpi=110)
+    axes.plot(position[:, 0], position[:, 1], lw=1.0)
+    axes.plot(position[0, 0], position[0, 1], "go", label="start")
+    axes.plot(position[-1, 0], position[-1, 1], "rs", label="end")
+    axes.set_aspect("equal", adjustable="datalim")
+    axes.set_xlabel("x [m]")
+    axes.set_ylabel("y [m]")
+    axes.set_title(f"{robot.name}: body trajectory")
+    axes.legend(fontsize=8)
+    figure.tight_layout()
+    figure.savefig(folder / "trajectory.png")
+    plt.close(figure)
+
+    figure, axes = plt.subplots(figsize=(8, 3.5), dpi=110)
+    axes.plot(t, series["power"], lw=0.8)
+    axes.set_xlabel("time [s]")
+    axes.set_ylabel("electrical power [W]")
+    axes.set_title(f"{robot.name}: total servo power")
+    axes.grid(True, lw=0.3)
+    figure.tight_layout()
+    figure.savefig(folder / "power.png")
+    plt.close(figure)
+
+    contact = np.array(series["contact"], dtype=bool)
+    legs = list(robot.legs)
+    figure, axes = plt.subplots(figsize=(9, 0.45 * len(legs) + 1.2), dpi=110)
+    for row in range(len(legs)):
+        on = contact[:, row].astype(int)
+        starts = np.flatnonzero(np.diff(np.concatenate([[0], on])) == 1)
+        ends = np.flatnonzero(np.diff(np.concatenate([on, [0]])) == -1)
+        axes.broken_barh([(t[a], t[b] - t[a] + (t[1] - t[0] if len(t) > 1 else 0.0)) for a, b in
+                          zip(starts, ends, strict=True)], (row - 0.4, 0.8), facecolors="0.2")
+    axes.set_yticks(range(len(legs)), legs)
+    axes.invert_yaxis()
+    axes.set_xlabel("time [s] (black: foot on the ground)")
+    axes.set_title(f"{robot.name}: measured foot contacts")
+    figure.tight_layout()
+    figure.savefig(folder / "contacts.png")
     plt.close(figure)

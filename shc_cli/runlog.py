@@ -29,15 +29,17 @@ from shc_cli.spec.robot import Robot
 PARTIAL_SUFFIX = ".partial"
 
 
-class RunWriter:
-    """Streams controller outputs into a run directory.
+class RunDirectory:
+    """A run directory written while the run goes on: ``<name>.partial`` until :meth:`finish` renames it.
+
+    Tables are CSV files whose rows are formatted with one ``%`` operation each (fast) and flushed by
+    :meth:`flush`, so an interrupted run keeps every flushed row.
 
     Args:
         directory: final run directory (must not exist yet).
-        robot: the robot (for column names).
     """
 
-    def __init__(self, directory: Path, robot: Robot) -> None:
+    def __init__(self, directory: Path) -> None:
         if directory.exists():
             raise OutputError(f"{directory}: already exists (choose another --out or remove it)")
         self.directory = directory
@@ -47,36 +49,14 @@ class RunWriter:
         except OSError as error:
             raise OutputError(f"{self.partial}: cannot create run directory: {error.strerror} "
                               "(choose another --out)") from None
-        legs = list(robot.legs)
-        joints = [f"{leg}_{joint}" for leg, spec in robot.legs.items() for joint in spec.joints]
-        tips = [f"{leg}_{stage}_{axis}" for leg in legs for stage in ("walker", "poser", "model") for axis in "xyz"]
-        tips = [c for leg in legs for c in (*[t for t in tips if t.startswith(f"{leg}_")],
-                                            f"{leg}_stance_progress", f"{leg}_swing_progress")]
-        body = ["cmd_vx", "cmd_vy", "cmd_wz", "vel_x", "vel_y", "vel_wz", "pose_x", "pose_y", "pose_z",
-                "pose_roll", "pose_pitch", "pose_yaw", "robot_state", "walk_state"]
         self._handles: list[IO[str]] = []
-        self._joints = self._open("joints.csv", joints, ["%.9g"] * len(joints))
-        self._tips = self._open("tips.csv", tips, ["%.9g"] * len(tips))
-        self._body = self._open("body.csv", body, ["%.9g"] * 12 + ["%s", "%s"])
 
-    def _open(self, name: str, columns: list[str], formats: list[str]) -> tuple[IO[str], str]:
-        """The table's file (header written) and its row format (one % operation per row is fast)."""
+    def table(self, name: str, columns: list[str], formats: list[str]) -> tuple[IO[str], str]:
+        """A new table: its file (header written) and its row format (``cycle``, ``t`` come first)."""
         handle = (self.partial / name).open("w", encoding="utf-8")
         self._handles.append(handle)
         handle.write(",".join(["cycle", "t", *columns]) + "\n")
         return handle, ",".join(["%d", "%.4f", *formats]) + "\n"
-
-    def write(self, cycle: int, time: float, command: tuple[float, float, float], out: CycleOutput) -> None:
-        """Append one control cycle to every table."""
-        handle, row = self._joints
-        handle.write(row % (cycle, time, *out.joints.ravel().tolist()))
-        stages = np.concatenate([out.walker_tips, out.poser_tips, out.model_tips, out.stance_progress[:, None],
-                                 out.swing_progress[:, None]], axis=1)
-        handle, row = self._tips
-        handle.write(row % (cycle, time, *stages.ravel().tolist()))
-        handle, row = self._body
-        handle.write(row % (cycle, time, *command, *out.velocity, *out.pose, out.robot_state.name,
-                            out.walk_state.name))
 
     def flush(self) -> None:
         for handle in self._handles:
@@ -92,3 +72,48 @@ class RunWriter:
         (self.partial / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
         os.replace(self.partial, self.directory)
         return self.directory
+
+
+def joint_columns(robot: Robot, suffix: str = "") -> list[str]:
+    """``<LEG>_<joint><suffix>`` for every joint, legs in id order."""
+    return [f"{leg}_{joint}{suffix}" for leg, spec in robot.legs.items() for joint in spec.joints]
+
+
+def joint_values(robot: Robot, values: np.ndarray) -> list[float]:
+    """The real joints' values of a padded ``(L, n)`` array, in :func:`joint_columns` order."""
+    return [float(v) for i, leg in enumerate(robot.legs.values()) for v in values[i, :len(leg.joints)]]
+
+
+class RunWriter(RunDirectory):
+    """Streams controller outputs into a ``plan`` run directory (joints, tips, body tables).
+
+    Args:
+        directory: final run directory (must not exist yet).
+        robot: the robot (for column names).
+    """
+
+    def __init__(self, directory: Path, robot: Robot) -> None:
+        super().__init__(directory)
+        self.robot = robot
+        legs = list(robot.legs)
+        joints = joint_columns(robot)
+        tips = [f"{leg}_{stage}_{axis}" for leg in legs for stage in ("walker", "poser", "model") for axis in "xyz"]
+        tips = [c for leg in legs for c in (*[t for t in tips if t.startswith(f"{leg}_")],
+                                            f"{leg}_stance_progress", f"{leg}_swing_progress")]
+        body = ["cmd_vx", "cmd_vy", "cmd_wz", "vel_x", "vel_y", "vel_wz", "pose_x", "pose_y", "pose_z",
+                "pose_roll", "pose_pitch", "pose_yaw", "robot_state", "walk_state"]
+        self._joints = self.table("joints.csv", joints, ["%.9g"] * len(joints))
+        self._tips = self.table("tips.csv", tips, ["%.9g"] * len(tips))
+        self._body = self.table("body.csv", body, ["%.9g"] * 12 + ["%s", "%s"])
+
+    def write(self, cycle: int, time: float, command: tuple[float, float, float], out: CycleOutput) -> None:
+        """Append one control cycle to every table."""
+        handle, row = self._joints
+        handle.write(row % (cycle, time, *joint_values(self.robot, out.joints)))
+        stages = np.concatenate([out.walker_tips, out.poser_tips, out.model_tips, out.stance_progress[:, None],
+                                 out.swing_progress[:, None]], axis=1)
+        handle, row = self._tips
+        handle.write(row % (cycle, time, *stages.ravel().tolist()))
+        handle, row = self._body
+        handle.write(row % (cycle, time, *command, *out.velocity, *out.pose, out.robot_state.name,
+                            out.walk_state.name))

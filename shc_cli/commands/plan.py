@@ -61,9 +61,7 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
             raise SpecError([Issue(commands, None, "gait", f"gait '{new_gait.name}' does not fit robot '{robot.name}'",
                                    f"give one multiplier for each of {', '.join(robot.legs)}")])
     walk_cycles = _walk_cycles(timeline, duration, robot.time_delta, commands is not None)
-    gaits = [gait]
-    gaits += [switch for _, c in timeline.changes if isinstance(switch := c.get("gait"), Gait)]
-    pose_sets = _pose_sets(robot, gaits, gait_file.parent) if robot.pose.auto else {}
+    pose_sets = pose_sets_for(robot, gait, timeline, gait_file.parent)
     directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-plan"
     controller = Controller(robot, gait, pose_sets=pose_sets)
     writer = RunWriter(directory, robot)
@@ -90,16 +88,20 @@ def _mapping(value: object) -> dict[str, object]:
     return dict(value) if isinstance(value, dict) else {}
 
 
-def _pose_sets(robot: Robot, gaits: list[Gait], folder: Path) -> dict[str, AutoPoseSet]:
-    """The auto-pose set of every gait the run uses (``pose.auto_pose_type``; 'auto' = named after the gait)."""
+def pose_sets_for(robot: Robot, gait: Gait, timeline: Timeline, folder: Path) -> dict[str, AutoPoseSet]:
+    """The auto-pose set of every gait a run uses (``pose.auto_pose_type``; 'auto' = named after the gait);
+    empty when the robot does not auto-pose."""
+    if not robot.pose.auto:
+        return {}
+    gaits = [gait, *(switch for _, c in timeline.changes if isinstance(switch := c.get("gait"), Gait))]
     sets: dict[str, AutoPoseSet] = {}
-    for gait in gaits:
-        loaded = load_auto_pose_set(robot.pose.auto_pose_type, gait, relative_to=folder)
-        problems = compatibility_issues(loaded, gait, list(robot.legs))
+    for used in gaits:
+        loaded = load_auto_pose_set(robot.pose.auto_pose_type, used, relative_to=folder)
+        problems = compatibility_issues(loaded, used, list(robot.legs))
         if problems:
             raise SpecError(problems)
         assert loaded.pose_set is not None
-        sets[gait.name] = loaded.pose_set
+        sets[used.name] = loaded.pose_set
     return sets
 
 

@@ -247,6 +247,26 @@ class Admittance(Strict):
     liftoff_threshold: NonNegative = Field(0.1, description="tip force below which contact is cleared [N]")
 
 
+class Servo(Strict):
+    """The joint actuators (every joint the same model) and their electrical model, for simulation.
+
+    Electrical power per servo: ``P = idle_power + (τ/torque_constant)²·winding_resistance + max(τω, 0)
+    + regenerative_efficiency·min(τω, 0)`` — electronics, copper loss, mechanical output; negative mechanical
+    work (the load driving the motor) is dissipated, not returned, unless ``regenerative_efficiency`` > 0.
+    """
+
+    model: str = Field("generic", description="servo model name, e.g. 'Dynamixel MX-106'")
+    stall_torque: Positive = Field(8.4, description="torque limit passed to the physics engine [N·m]")
+    no_load_speed: Positive = Field(4.7, description="speed limit passed to the physics engine [rad/s]")
+    torque_constant: Positive = Field(1.6, description="output torque per ampere, gearbox included [N·m/A]")
+    winding_resistance: Positive = Field(2.3, description="motor winding resistance [Ω]")
+    idle_power: NonNegative = Field(0.9, description="electronics power of one powered servo [W]")
+    regenerative_efficiency: Annotated[float, Field(ge=0.0, le=1.0)] = Field(
+        0.0, description="share of negative mechanical power returned to the supply [ratio]")
+    position_gain: Positive = Field(0.3, description="PyBullet position-control gain (Kp) [ratio]")
+    velocity_gain: Positive = Field(1.0, description="PyBullet position-control velocity gain (Kd) [ratio]")
+
+
 class Robot(Strict):
     """A fully expanded robot: what ``shc validate --show`` prints and the controller uses."""
 
@@ -262,6 +282,7 @@ class Robot(Strict):
     start_up: StartUp = Field(default_factory=StartUp)
     manipulation: Manipulation = Field(default_factory=Manipulation)
     admittance: Admittance = Field(default_factory=Admittance)
+    servo: Servo = Field(default_factory=Servo)
 
     @property
     def leg_ids(self) -> list[str]:

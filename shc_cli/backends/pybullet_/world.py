@@ -1,0 +1,244 @@
+"""The PyBullet world: robot, terrain, servos and sensors, advanced one control period at a time.
+
+The simulation backend of the one controller: :meth:`World.command` sends the controller's joint targets
+to position-controlled servos (torque limit and no-load speed passed explicitly: POSITION_CONTROL
+ignores the URDF's limits), :meth:`World.step` runs the physics sub-steps of one control period and
+:meth:`World.read` returns what the robot's sensors see. ``pybullet`` is imported here only.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import tempfile
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from shc_cli.backends.pybullet_.terrain import TerrainSpec, build_terrain
+from shc_cli.backends.pybullet_.urdf import foot_radius, robot_urdf
+from shc_cli.errors import BackendError
+from shc_cli.spec.robot import Robot
+
+GRAVITY = 9.81
+"""Standard gravity [m/s²]."""
+SOLVER_ITERATIONS = 50
+"""Constraint solver iterations: fewer make position-controlled legs sag (measured on these machines)."""
+SPAWN_GAP = 0.01
+"""Height of the lowest foot above the ground when the robot is spawned [m]."""
+
+
+@contextmanager
+def quiet_stdout() -> Iterator[None]:
+    """Silence PyBullet's C-level messages, which go to file descriptor 1."""
+    saved = os.dup(1)
+    with open(os.devnull, "w") as null:
+        os.dup2(null.fileno(), 1)
+    try:
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+@dataclass(frozen=True)
+class Reading:
+    """What the robot's sensors report after a control period (legs in id order, joints leg by leg).
+
+    Attributes:
+        joints: joint positions ``(L, n)`` [rad] (0 where a leg has fewer joints).
+        joint_velocities: ``(L, n)`` [rad/s].
+        joint_efforts: motor torques ``(L, n)`` [N·m].
+        orientation: IMU orientation quaternion (x, y, z, w), world → body.
+        angular_rate: IMU angular velocity in the body frame [rad/s].
+        linear_acceleration: IMU specific force in the body frame (gravity included, at rest +9.81 z) [m/s²].
+        foot_forces: contact normal force on each foot ``(L,)`` [N].
+        foot_contact: whether each foot touches anything ``(L,)``.
+        body_height: height of the body origin above the terrain below it (ray) [m].
+        position: ground-truth body position [m].
+        rpy: ground-truth roll, pitch, yaw [rad].
+        linear_velocity: ground-truth body velocity in the world frame [m/s].
+        angular_velocity: ground-truth body angular velocity in the world frame [rad/s].
+    """
+
+    joints: np.ndarray
+    joint_velocities: np.ndarray
+    joint_efforts: np.ndarray
+    orientation: np.ndarray
+    angular_rate: np.ndarray
+    linear_acceleration: np.ndarray
+    foot_forces: np.ndarray
+    foot_contact: np.ndarray
+    body_height: float
+    position: np.ndarray
+    rpy: np.ndarray
+    linear_velocity: np.ndarray
+    angular_velocity: np.ndarray
+
+
+class World:
+    """A PyBullet client holding one robot on one terrain.
+
+    Args:
+        robot: the robot.
+        terrain: the terrain.
+        control_period: the controller's period [s].
+        substeps: physics steps per control period (physics rate = substeps / control_period).
+        fixed_base: hold the body in the air at its standing height (scenarios SA, WA).
+        initial_joints: joint positions to spawn with ``(L, n)`` [rad].
+        friction: lateral friction of terrain and feet.
+        restitution: restitution of terrain and feet.
+        seed: seed of every random thing (terrain blocks, IMU noise).
+        imu_noise: standard deviation of IMU noise (rad, rad/s, m/s² alike); 0 = none.
+        gui: open the PyBullet GUI.
+    """
+
+    def __init__(self, robot: Robot, terrain: TerrainSpec, control_period: float, substeps: int,
+                 fixed_base: bool, initial_joints: np.ndarray, friction: float = 0.9, restitution: float = 0.0,
+                 seed: int = 0, imu_noise: float = 0.0, gui: bool = False) -> None:
+        with quiet_stdout():  # importing pybullet prints its build time
+            import pybullet
+
+        self.p = pybullet
+        self.robot = robot
+        self.control_period = control_period
+        self.substeps = substeps
+        self.physics_time = 0.0
+        """Wall time spent inside ``stepSimulation`` [s]."""
+        self.rng = np.random.default_rng(seed)
+        self.imu_noise = imu_noise
+        with quiet_stdout():
+            self.client = pybullet.connect(pybullet.GUI if gui else pybullet.DIRECT)
+        if self.client < 0:
+            raise BackendError("PyBullet: cannot open a GUI here (no display?); run without --gui")
+        p, c = pybullet, self.client
+        p.setGravity(0.0, 0.0, -GRAVITY, physicsClientId=c)
+        p.setTimeStep(control_period / substeps, physicsClientId=c)
+        p.setPhysicsEngineParameter(numSolverIterations=SOLVER_ITERATIONS, deterministicOverlappingPairs=1,
+                                    physicsClientId=c)
+        self.terrain = build_terrain(c, terrain, friction, restitution, seed)
+        self._load_robot(fixed_base, initial_joints, friction, restitution)
+        self._previous_velocity = np.zeros(3)
+
+    # -- set-up ------------------------------------------------------------------------------------------------
+
+    def _load_robot(self, fixed_base: bool, joints: np.ndarray, friction: float, restitution: float) -> None:
+        from shc_cli.model.chains import Chains
+
+        p, c, robot = self.p, self.client, self.robot
+        chains = Chains.from_robot(robot)
+        tips = chains.tips(joints)
+        feet = [foot_radius(leg) for leg in robot.legs.values()]
+        ground = self.terrain.height_at(0.0, 0.0)
+        if fixed_base:
+            height = ground + robot.walker.body_clearance
+        else:
+            height = ground + SPAWN_GAP + max(-(tips[i, 2]) + feet[i] for i in range(len(feet)))
+        with tempfile.NamedTemporaryFile("w", suffix=".urdf", delete=False) as handle:
+            handle.write(robot_urdf(robot))
+            path = handle.name
+        try:
+            with quiet_stdout():
+                self.body = p.loadURDF(path, [0.0, 0.0, height], [0.0, 0.0, 0.0, 1.0], useFixedBase=fixed_base,
+                                       flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=c)
+        finally:
+            os.unlink(path)
+        names = {p.getJointInfo(self.body, j, physicsClientId=c)[1].decode(): j
+                 for j in range(p.getNumJoints(self.body, physicsClientId=c))}
+        links = {p.getJointInfo(self.body, j, physicsClientId=c)[12].decode(): j
+                 for j in range(p.getNumJoints(self.body, physicsClientId=c))}
+        self.joint_index: list[list[int]] = []
+        for leg_id, leg in robot.legs.items():
+            self.joint_index.append([names[f"{leg_id}_{joint}_joint"] for joint in leg.joints])
+        self.foot_links = [links[f"{leg_id}_foot"] for leg_id in robot.legs]
+        # PyBullet reports the base's centre of mass; the body frame (base_link) is offset from it.
+        self.com_offset = np.array(p.getDynamicsInfo(self.body, -1, physicsClientId=c)[3])
+        self.width = chains.joints
+        for j in range(p.getNumJoints(self.body, physicsClientId=c)):  # free joints: no default motors
+            p.setJointMotorControl2(self.body, j, p.VELOCITY_CONTROL, force=0.0, physicsClientId=c)
+        for link in [-1, *range(p.getNumJoints(self.body, physicsClientId=c))]:
+            p.changeDynamics(self.body, link, lateralFriction=friction, restitution=restitution,
+                             physicsClientId=c)
+        for row, indices in enumerate(self.joint_index):
+            for k, index in enumerate(indices):
+                p.resetJointState(self.body, index, float(joints[row, k]), 0.0, physicsClientId=c)
+        self.command(joints)
+
+    # -- the loop ----------------------------------------------------------------------------------------------
+
+    def command(self, targets: np.ndarray) -> None:
+        """Position targets for every servo ``(L, n)`` [rad], with the servo's torque and speed limits."""
+        p, c, servo = self.p, self.client, self.robot.servo
+        for leg, indices in enumerate(self.joint_index):
+            for k, index in enumerate(indices):
+                p.setJointMotorControl2(self.body, index, p.POSITION_CONTROL, targetPosition=float(targets[leg, k]),
+                                        force=servo.stall_torque, maxVelocity=servo.no_load_speed,
+                                        positionGain=servo.position_gain, velocityGain=servo.velocity_gain,
+                                        physicsClientId=c)
+
+    def step(self) -> None:
+        """Advance one control period (``substeps`` physics steps); adds the time spent to ``physics_time``."""
+        started = time.perf_counter()
+        for _ in range(self.substeps):
+            self.p.stepSimulation(physicsClientId=self.client)
+        self.physics_time += time.perf_counter() - started
+
+    def read(self) -> Reading:
+        """Sensor readings now."""
+        p, c = self.p, self.client
+        legs = len(self.joint_index)
+        joints = np.zeros((legs, self.width))
+        velocities = np.zeros((legs, self.width))
+        efforts = np.zeros((legs, self.width))
+        for leg, indices in enumerate(self.joint_index):
+            for k, state in enumerate(p.getJointStates(self.body, indices, physicsClientId=c)):
+                joints[leg, k], velocities[leg, k], _, efforts[leg, k] = state
+        com, orientation = p.getBasePositionAndOrientation(self.body, physicsClientId=c)
+        linear, angular = p.getBaseVelocity(self.body, physicsClientId=c)
+        rotation = np.array(p.getMatrixFromQuaternion(orientation)).reshape(3, 3)
+        position = np.array(com) - rotation @ self.com_offset  # the base_link frame's origin
+        linear_v, angular_v = np.array(linear), np.array(angular)
+        acceleration = (linear_v - self._previous_velocity) / self.control_period
+        self._previous_velocity = linear_v
+        specific_force = rotation.T @ (acceleration + np.array([0.0, 0.0, GRAVITY]))
+        rate = rotation.T @ angular_v
+        if self.imu_noise > 0.0:
+            specific_force = specific_force + self.rng.normal(0.0, self.imu_noise, 3)
+            rate = rate + self.rng.normal(0.0, self.imu_noise, 3)
+        forces = np.zeros(legs)
+        for leg, link in enumerate(self.foot_links):
+            contacts = p.getContactPoints(bodyA=self.body, linkIndexA=link, physicsClientId=c)
+            forces[leg] = sum(point[9] for point in contacts)
+        return Reading(
+            joints=joints, joint_velocities=velocities, joint_efforts=efforts,
+            orientation=np.array(orientation), angular_rate=rate, linear_acceleration=specific_force,
+            foot_forces=forces, foot_contact=forces > 0.0, body_height=self._ray_height(position),
+            position=np.array(position), rpy=np.array(p.getEulerFromQuaternion(orientation)),
+            linear_velocity=linear_v, angular_velocity=angular_v,
+        )
+
+    def _ray_height(self, position: Any) -> float:
+        """Body-origin height above the terrain, from a ray cast down that passes through the robot itself."""
+        x, y, z = position
+        start = z - 0.001
+        for _ in range(8):
+            hit = self.p.rayTest([x, y, start], [x, y, z - 10.0], physicsClientId=self.client)[0]
+            if hit[0] < 0:
+                break
+            if hit[0] != self.body:
+                return float(z - hit[3][2])
+            start = hit[3][2] - 0.001
+        return float(z - self.terrain.height_at(x, y))
+
+    def close(self) -> None:
+        self.p.disconnect(physicsClientId=self.client)
+
+
+def tilt(rpy: np.ndarray) -> float:
+    """Angle between the body's z axis and the vertical [rad]."""
+    roll, pitch = float(rpy[0]), float(rpy[1])
+    return math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch))))

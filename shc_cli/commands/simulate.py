@@ -1,0 +1,229 @@
+"""``shc simulate``: the one controller driving the robot in PyBullet physics, logged and summarised."""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from datetime import datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import typer
+
+from shc_cli.commands.plan import parse_velocity, pose_sets_for
+from shc_cli.control.controller import Command, Controller, RobotState
+from shc_cli.errors import Issue, ShcError, SpecError
+from shc_cli.runlog import RunDirectory, joint_columns, joint_values
+from shc_cli.spec.robot import Robot
+from shc_cli.spec.timeline import Timeline, constant, load_timeline
+
+SCENARIOS = {"SA": (True, False), "WA": (True, True), "SG": (False, False), "WG": (False, True)}
+"""Paper §VII-A scenarios: (body held in the air, walking)."""
+FALL_TILT = 0.8
+"""Body tilt above which the robot has fallen [rad] (≈ 46°)."""
+FALL_HEIGHT_SHARE = 0.3
+"""The robot has fallen when its body is lower than this share of the body clearance above the terrain."""
+START_UP_MARGIN_S = 2.0
+
+
+def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
+                 commands: Path | None, out: Path | None, plots: bool, terrain_text: str, scenario: str,
+                 physics_rate: float, friction: float, restitution: float, seed: int, imu_noise: float,
+                 start_pose: str, gui: bool) -> Path:
+    """Load, simulate, log; returns the run directory."""
+    from shc_cli.backends.pybullet_.terrain import parse_terrain
+    from shc_cli.spec.checks import load_checked
+
+    robot, gait, loaded = load_checked(robot_name, gait_name)
+    terrain = parse_terrain(terrain_text)
+    scenario = scenario.upper()
+    if scenario not in SCENARIOS:
+        raise SpecError([Issue(None, None, "--scenario", f"'{scenario}' is not a scenario",
+                               "use SA (stance air), WA (walk air), SG (stance ground) or WG (walk ground)")])
+    substeps = round(physics_rate * robot.time_delta)
+    if substeps < 1 or abs(substeps - physics_rate * robot.time_delta) > 1e-6:
+        raise SpecError([Issue(None, None, "--physics-rate", f"{physics_rate:g} Hz is not a whole multiple of the "
+                               f"control rate {1 / robot.time_delta:g} Hz",
+                               f"e.g. {4 / robot.time_delta:g} Hz")])
+    if start_pose not in ("unpacked", "packed"):
+        raise SpecError([Issue(None, None, "--start", f"'{start_pose}' is not a start pose", "use unpacked or packed")])
+    walking = SCENARIOS[scenario][1]
+    timeline = load_timeline(commands, robot.time_delta) if commands else constant(
+        parse_velocity(velocity) if walking else (0.0, 0.0, 0.0))
+    walk_cycles = round((duration if duration is not None else 20.0) / robot.time_delta)
+    if commands is not None and duration is None:
+        walk_cycles = timeline.last_cycle + round(1.0 / robot.time_delta)
+    gait_file, _ = loaded.where(("walker", "gait"))
+    pose_sets = pose_sets_for(robot, gait, timeline, gait_file.parent)
+    directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-simulate"
+    run = Simulation(robot, gait, pose_sets, terrain, scenario, substeps, friction, restitution, seed, imu_noise,
+                     start_pose, gui)
+    log = RunDirectory(directory)
+    try:
+        summary, series = run.execute(timeline, walk_cycles, log)
+    except KeyboardInterrupt:
+        log.close()
+        raise ShcError(f"interrupted: the cycles completed so far are in {log.partial}") from None
+    finally:
+        run.world.close()
+    if plots:
+        from shc_cli.plots import plot_simulation
+
+        plot_simulation(robot, series, log.partial)
+    path = log.finish(summary)
+    typer.echo(f"{robot.name} / {gait.name} / {scenario} on {terrain_text}: {summary['sim_time_s']:.1f} s simulated "
+               f"in {summary['wall_time_s']:.1f} s, distance {summary['distance_m']:.3f} m, mean speed "
+               f"{summary['mean_speed_mps']:.4f} m/s, mean power {summary['mean_power_w']:.1f} W, "
+               f"CoT {summary['cot'] if summary['cot'] is None else round(summary['cot'], 3)}"
+               f"{', FELL' if summary['fell'] else ''} → {path}")
+    return path
+
+
+class Simulation:
+    """One simulated run: a :class:`~shc_cli.backends.pybullet_.world.World` and the controller."""
+
+    def __init__(self, robot: Robot, gait: Any, pose_sets: dict[str, Any], terrain: Any, scenario: str,
+                 substeps: int, friction: float, restitution: float, seed: int, imu_noise: float,
+                 start_pose: str, gui: bool) -> None:
+        from shc_cli.backends.pybullet_.world import World
+        from shc_cli.control.sequence import joint_configurations
+        from shc_cli.model.chains import Chains
+
+        self.robot, self.gait, self.scenario, self.seed = robot, gait, scenario, seed
+        chains = Chains.from_robot(robot)
+        packed, unpacked = joint_configurations(robot, chains.joints)
+        initial = np.clip(packed[-1] if start_pose == "packed" and len(packed) else unpacked, chains.lower,
+                          chains.upper)
+        airborne, _ = SCENARIOS[scenario]
+        self.world = World(robot, terrain, robot.time_delta, substeps, airborne, initial, friction, restitution,
+                           seed, imu_noise, gui)
+        self.controller = Controller(robot, gait, joints=self.world.read().joints, pose_sets=pose_sets)
+        self.airborne = airborne
+
+    def execute(self, timeline: Timeline, walk_cycles: int, log: RunDirectory) -> tuple[dict[str, Any], dict[str, Any]]:
+        """Start up, play the timeline, log every control cycle; returns (summary, series for the plots)."""
+        from shc_cli.backends.pybullet_.power import servo_power
+        from shc_cli.backends.pybullet_.world import tilt
+
+        robot, world, controller = self.robot, self.world, self.controller
+        dt = robot.time_delta
+        legs = list(robot.legs)
+        columns = (joint_columns(robot, "_cmd") + joint_columns(robot) + joint_columns(robot, "_torque")
+                   + joint_columns(robot, "_power")
+                   + [f"{leg}_force" for leg in legs] + [f"{leg}_contact" for leg in legs]
+                   + ["x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz", "wx", "wy", "wz",
+                      "imu_qx", "imu_qy", "imu_qz", "imu_qw", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z",
+                      "height", "power_w", "robot_state", "walk_state"])
+        handle, row = log.table("log.csv", columns, ["%.6g"] * (len(columns) - 2) + ["%s", "%s"])
+        limit = round((robot.start_up.time_to_start + START_UP_MARGIN_S) / dt)
+        series: dict[str, list[Any]] = {"t": [], "position": [], "power": [], "contact": [], "running": []}
+        commands = iter(timeline.commands(walk_cycles))
+        started = time.perf_counter()
+        cycle, walked, fell, max_tilt = 0, 0, False, 0.0
+        window_start: np.ndarray | None = None
+        progress = _progress(walk_cycles)
+        while walked < walk_cycles:
+            if controller.state != RobotState.RUNNING:
+                if cycle > limit:
+                    raise ShcError(f"{robot.name}: did not reach RUNNING within {limit} cycles of start-up")
+                command = Command(state_request=RobotState.RUNNING)
+            else:
+                command = next(commands)
+                walked += 1
+                if progress is not None and walked % 50 == 0:
+                    progress(walked)
+            out = controller.step(command)
+            world.command(out.joints)
+            world.step()
+            reading = world.read()
+            power = servo_power(robot.servo, reading.joint_efforts, reading.joint_velocities)
+            total = float(sum(joint_values(robot, power)))
+            running = out.robot_state == RobotState.RUNNING
+            handle.write(row % (cycle, cycle * dt, *joint_values(robot, out.joints),
+                                *joint_values(robot, reading.joints),
+                                *joint_values(robot, reading.joint_efforts), *joint_values(robot, power),
+                                *reading.foot_forces.tolist(), *reading.foot_contact.astype(int).tolist(),
+                                *reading.position.tolist(), *reading.rpy.tolist(), *reading.linear_velocity.tolist(),
+                                *reading.angular_velocity.tolist(), *reading.orientation.tolist(),
+                                *reading.angular_rate.tolist(), *reading.linear_acceleration.tolist(),
+                                reading.body_height, total, out.robot_state.name, out.walk_state.name))
+            series["t"].append(cycle * dt)
+            series["position"].append(reading.position)
+            series["power"].append(total)
+            series["contact"].append(reading.foot_contact)
+            series["running"].append(running)
+            if running:
+                if window_start is None:
+                    window_start = reading.position.copy()
+                max_tilt = max(max_tilt, tilt(reading.rpy))
+                low = reading.body_height < FALL_HEIGHT_SHARE * robot.walker.body_clearance
+                if max_tilt > FALL_TILT or (low and not self.airborne):
+                    fell = True
+                    break
+            cycle += 1
+            if cycle % 200 == 0:
+                log.flush()
+        wall = time.perf_counter() - started
+        if progress is not None:
+            progress(walk_cycles)
+        return self._summary(series, window_start, wall, fell, max_tilt), series
+
+    def _summary(self, series: dict[str, list[Any]], window_start: np.ndarray | None, wall: float, fell: bool,
+                 max_tilt: float) -> dict[str, Any]:
+        """Paper eq. 22 cost of transport over the RUNNING window: mean power / (m·g·v)."""
+        import pybullet
+
+        from shc_cli import __version__
+
+        robot, dt = self.robot, self.robot.time_delta
+        running = np.array(series["running"], dtype=bool)
+        power = np.array(series["power"])
+        window = float(running.sum()) * dt
+        end = series["position"][-1] if series["position"] else np.zeros(3)
+        start = window_start if window_start is not None else end
+        distance = float(np.linalg.norm((end - start)[:2]))
+        speed = distance / window if window > 0 else 0.0
+        mean_power = float(power[running].mean()) if running.any() else 0.0
+        mass = robot.total_mass()
+        cot = mean_power / (mass * 9.81 * speed) if speed > 1e-3 else None
+        return {
+            "robot": robot.name,
+            "gait": self.controller.gait.name,
+            "scenario": self.scenario,
+            "sim_time_s": len(series["t"]) * dt,
+            "analysed_time_s": window,
+            "wall_time_s": wall,
+            "physics_time_s": self.world.physics_time,
+            "physics_rate_hz": self.world.substeps / dt,
+            "distance_m": distance,
+            "forward_distance_m": float((end - start)[0]),
+            "mean_speed_mps": speed,
+            "mean_power_w": mean_power,
+            "mass_kg": mass,
+            "cot": cot,
+            "max_tilt_rad": max_tilt,
+            "fell": fell,
+            "seed": self.seed,
+            "versions": {"shc": __version__, "pybullet": str(pybullet.getAPIVersion()),
+                         "numpy": np.__version__},
+        }
+
+
+def _progress(total: int) -> Any:
+    """A rich progress bar on a terminal; None in pipes and CI (quiet)."""
+    if not sys.stderr.isatty() or os.environ.get("CI"):
+        return None
+    from rich.progress import Progress
+
+    bar = Progress(transient=True)
+    task = bar.add_task("simulating", total=total)
+    bar.start()
+
+    def update(done: int) -> None:
+        bar.update(task, completed=done)
+        if done >= total:
+            bar.stop()
+
+    return update

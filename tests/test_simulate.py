@@ -1,0 +1,70 @@
+"""``shc simulate`` end to end: PyBullet physics with the one controller (short runs)."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import pytest
+
+from .test_cli import run
+
+TIMING = {"wall_time_s", "physics_time_s"}
+REQUIRED = {"sim_time_s", "wall_time_s", "physics_time_s", "distance_m", "mean_speed_mps", "mean_power_w", "cot",
+            "fell", "seed"}
+
+
+def _simulate(tmp_path: Path, name: str, args: list[str], capsys, monkeypatch) -> tuple[int, str, Path]:  # type: ignore[no-untyped-def]
+    out = tmp_path / name
+    code, stdout, err = run(["simulate", *args, "--out", str(out)], capsys, monkeypatch)
+    assert err == "" or code != 0, err
+    return code, stdout, out
+
+
+def test_bullet_walks_forward_on_flat_ground(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    code, stdout, out = _simulate(tmp_path, "walk", ["--duration", "4"], capsys, monkeypatch)
+    assert code == 0 and "bullet / tripod / WG on flat" in stdout
+    summary = json.loads((out / "summary.json").read_text())
+    assert set(summary) >= REQUIRED
+    assert summary["fell"] is False
+    assert summary["distance_m"] > 0.4  # accelerating towards 0.232 m/s for 4 s
+    assert summary["forward_distance_m"] > 0.95 * summary["distance_m"]
+    assert summary["mean_power_w"] > 30 * 0.9  # at least every servo's idle power
+    assert summary["cot"] > 0.0
+    with (out / "log.csv").open() as handle:
+        header = next(csv.reader(handle))
+    for column in ("cycle", "t", "AR_coxa_cmd", "AR_coxa", "AR_coxa_torque", "AR_coxa_power", "AR_force",
+                   "AR_contact", "x", "roll", "vx", "wz", "imu_qw", "gyro_x", "acc_z", "height", "power_w"):
+        assert column in header
+    assert {p.name for p in out.glob("*.png")} == {"trajectory.png", "power.png", "contacts.png"}
+
+
+def test_same_seed_gives_the_same_summary(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    args = ["--duration", "1", "--terrain", "blocks", "--seed", "7", "--imu-noise", "0.01", "--no-plots"]
+    summaries = []
+    for name in ("a", "b"):
+        code, _, out = _simulate(tmp_path, name, args, capsys, monkeypatch)
+        assert code == 0
+        summary = json.loads((out / "summary.json").read_text())
+        summaries.append({k: v for k, v in summary.items() if k not in TIMING})
+    assert summaries[0] == summaries[1]
+    assert (tmp_path / "a" / "log.csv").read_bytes() == (tmp_path / "b" / "log.csv").read_bytes()
+
+
+def test_stance_in_the_air_holds_the_body_still(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    code, _, out = _simulate(tmp_path, "sa", ["--scenario", "SA", "--duration", "1", "--no-plots"], capsys,
+                             monkeypatch)
+    assert code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["distance_m"] < 1e-6 and summary["cot"] is None and summary["fell"] is False
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--terrain", "ramps:10"], "--terrain: unknown terrain 'ramps'"),
+    (["--physics-rate", "333"], "--physics-rate: 333 Hz is not a whole multiple of the control rate 100 Hz"),
+    (["--scenario", "XX"], "--scenario: 'XX' is not a scenario"),
+])
+def test_bad_options_are_one_line(tmp_path: Path, args: list[str], message: str, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    code, _, err = run(["simulate", *args, "--out", str(tmp_path / "x")], capsys, monkeypatch)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and message in err
