@@ -126,6 +126,30 @@ def simulate(
                  restitution, seed, imu_noise, start, gui)
 
 
+export_app = typer.Typer(help="Export robots and runs to other formats.", no_args_is_help=True)
+app.add_typer(export_app, name="export")
+
+
+@export_app.command("urdf")
+def export_urdf(
+    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
+    out: Annotated[Path | None, typer.Option(help="Write the URDF here (default: print it).")] = None,
+) -> None:
+    """The physics model generated from the robot file, as URDF (what `simulate` loads)."""
+    from shc_cli.backends.pybullet_.urdf import robot_urdf
+    from shc_cli.outputs import write_text
+    from shc_cli.spec.loading import load_robot
+
+    loaded = load_robot(robot)
+    assert loaded.robot is not None
+    text = robot_urdf(loaded.robot)
+    if out is None:
+        typer.echo(text)
+    else:
+        write_text(out, text)
+        typer.echo(f"wrote {out}")
+
+
 @app.command()
 def schema(
     kind: Annotated[str, typer.Argument(help="'robot' or 'gait'.")],

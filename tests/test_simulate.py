@@ -68,3 +68,15 @@ def test_stance_in_the_air_holds_the_body_still(tmp_path: Path, capsys, monkeypa
 def test_bad_options_are_one_line(tmp_path: Path, args: list[str], message: str, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     code, _, err = run(["simulate", *args, "--out", str(tmp_path / "x")], capsys, monkeypatch)
     assert code == 2 and len(err.strip().splitlines()) == 1 and message in err
+
+
+def test_export_urdf_writes_the_generated_model(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    import xml.etree.ElementTree as ET
+
+    target = tmp_path / "bullet.urdf"
+    code, out, _ = run(["export", "urdf", "bullet", "--out", str(target)], capsys, monkeypatch)
+    assert code == 0 and str(target) in out
+    root = ET.fromstring(target.read_text())
+    joints = [j.get("name") for j in root.iter("joint") if j.get("type") == "revolute"]
+    assert len(joints) == 30 and joints[0] == "AR_coxa_joint"
+    assert sum(1 for link in root.iter("link") if link.get("name", "").endswith("_foot")) == 6
