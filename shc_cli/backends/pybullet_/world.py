@@ -30,6 +30,8 @@ SOLVER_ITERATIONS = 50
 """Constraint solver iterations: fewer make position-controlled legs sag (measured on these machines)."""
 SPAWN_GAP = 0.01
 """Height of the lowest foot above the ground when the robot is spawned [m]."""
+AIR_LIFT = 0.3
+"""In the air scenarios the body is held this far above its standing height, so no foot reaches the ground [m]."""
 
 
 @contextmanager
@@ -88,7 +90,7 @@ class World:
         terrain: the terrain.
         control_period: the controller's period [s].
         substeps: physics steps per control period (physics rate = substeps / control_period).
-        fixed_base: hold the body in the air at its standing height (scenarios SA, WA).
+        fixed_base: hold the body in the air, :data:`AIR_LIFT` above its standing height (scenarios SA, WA).
         initial_joints: joint positions to spawn with ``(L, n)`` [rad].
         friction: lateral friction of terrain and feet.
         restitution: restitution of terrain and feet.
@@ -135,7 +137,7 @@ class World:
         feet = [foot_radius(leg) for leg in robot.legs.values()]
         ground = self.terrain.height_at(0.0, 0.0)
         if fixed_base:
-            height = ground + robot.walker.body_clearance
+            height = ground + robot.walker.body_clearance + AIR_LIFT
         else:
             height = ground + SPAWN_GAP + max(-(tips[i, 2]) + feet[i] for i in range(len(feet)))
         with tempfile.NamedTemporaryFile("w", suffix=".urdf", delete=False) as handle:
