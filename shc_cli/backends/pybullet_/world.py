@@ -157,6 +157,9 @@ class World:
         for leg_id, leg in robot.legs.items():
             self.joint_index.append([names[f"{leg_id}_{joint}_joint"] for joint in leg.joints])
         self.foot_links = [links[f"{leg_id}_foot"] for leg_id in robot.legs]
+        self.flat_joints = [index for indices in self.joint_index for index in indices]
+        self.slots = [(leg, k) for leg, indices in enumerate(self.joint_index) for k in range(len(indices))]
+        self.foot_leg = {link: leg for leg, link in enumerate(self.foot_links)}
         # PyBullet reports the base's centre of mass; the body frame (base_link) is offset from it.
         self.com_offset = np.array(p.getDynamicsInfo(self.body, -1, physicsClientId=c)[3])
         self.width = chains.joints
@@ -165,6 +168,13 @@ class World:
         for link in [-1, *range(p.getNumJoints(self.body, physicsClientId=c))]:
             p.changeDynamics(self.body, link, lateralFriction=friction, restitution=restitution,
                              physicsClientId=c)
+        servo = robot.servo
+        for index in self.flat_joints:  # the servo's no-load speed as the joint's speed limit
+            p.changeDynamics(self.body, index, maxJointVelocity=servo.no_load_speed, physicsClientId=c)
+        count = len(self.flat_joints)
+        self._forces = [servo.stall_torque] * count
+        self._position_gains = [servo.position_gain] * count
+        self._velocity_gains = [servo.velocity_gain] * count
         for row, indices in enumerate(self.joint_index):
             for k, index in enumerate(indices):
                 p.resetJointState(self.body, index, float(joints[row, k]), 0.0, physicsClientId=c)
@@ -173,14 +183,14 @@ class World:
     # -- the loop ----------------------------------------------------------------------------------------------
 
     def command(self, targets: np.ndarray) -> None:
-        """Position targets for every servo ``(L, n)`` [rad], with the servo's torque and speed limits."""
-        p, c, servo = self.p, self.client, self.robot.servo
-        for leg, indices in enumerate(self.joint_index):
-            for k, index in enumerate(indices):
-                p.setJointMotorControl2(self.body, index, p.POSITION_CONTROL, targetPosition=float(targets[leg, k]),
-                                        force=servo.stall_torque, maxVelocity=servo.no_load_speed,
-                                        positionGain=servo.position_gain, velocityGain=servo.velocity_gain,
-                                        physicsClientId=c)
+        """Position targets for every servo ``(L, n)`` [rad], at most the servo's stall torque; the no-load
+        speed is the joints' velocity limit (set once with ``maxJointVelocity``, since POSITION_CONTROL
+        ignores the URDF's limits)."""
+        p = self.p
+        p.setJointMotorControlArray(self.body, self.flat_joints, p.POSITION_CONTROL,
+                                    targetPositions=[float(targets[leg, k]) for leg, k in self.slots],
+                                    forces=self._forces, positionGains=self._position_gains,
+                                    velocityGains=self._velocity_gains, physicsClientId=self.client)
 
     def step(self) -> None:
         """Advance one control period (``substeps`` physics steps); adds the time spent to ``physics_time``."""
@@ -196,9 +206,9 @@ class World:
         joints = np.zeros((legs, self.width))
         velocities = np.zeros((legs, self.width))
         efforts = np.zeros((legs, self.width))
-        for leg, indices in enumerate(self.joint_index):
-            for k, state in enumerate(p.getJointStates(self.body, indices, physicsClientId=c)):
-                joints[leg, k], velocities[leg, k], _, efforts[leg, k] = state
+        states = p.getJointStates(self.body, self.flat_joints, physicsClientId=c)
+        for (leg, k), state in zip(self.slots, states, strict=True):
+            joints[leg, k], velocities[leg, k], _, efforts[leg, k] = state
         com, orientation = p.getBasePositionAndOrientation(self.body, physicsClientId=c)
         linear, angular = p.getBaseVelocity(self.body, physicsClientId=c)
         rotation = np.array(p.getMatrixFromQuaternion(orientation)).reshape(3, 3)
@@ -212,9 +222,10 @@ class World:
             specific_force = specific_force + self.rng.normal(0.0, self.imu_noise, 3)
             rate = rate + self.rng.normal(0.0, self.imu_noise, 3)
         forces = np.zeros(legs)
-        for leg, link in enumerate(self.foot_links):
-            contacts = p.getContactPoints(bodyA=self.body, linkIndexA=link, physicsClientId=c)
-            forces[leg] = sum(point[9] for point in contacts)
+        for point in p.getContactPoints(bodyA=self.body, physicsClientId=c):
+            foot = self.foot_leg.get(point[3])
+            if foot is not None and point[2] != self.body:
+                forces[foot] += point[9]
         return Reading(
             joints=joints, joint_velocities=velocities, joint_efforts=efforts,
             orientation=np.array(orientation), angular_rate=rate, linear_acceleration=specific_force,
