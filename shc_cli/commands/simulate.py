@@ -104,7 +104,6 @@ class Simulation:
 
     def execute(self, timeline: Timeline, walk_cycles: int, log: RunDirectory) -> tuple[dict[str, Any], dict[str, Any]]:
         """Start up, play the timeline, log every control cycle; returns (summary, series for the plots)."""
-        from shc_cli.backends.pybullet_.power import servo_power
         from shc_cli.backends.pybullet_.world import tilt
 
         robot, world, controller = self.robot, self.world, self.controller
@@ -138,7 +137,7 @@ class Simulation:
             world.command(out.joints)
             world.step()
             reading = world.read()
-            power = servo_power(robot.servo, reading.joint_efforts, reading.joint_velocities)
+            power = reading.servo_power
             total = float(sum(joint_values(robot, power)))
             running = out.robot_state == RobotState.RUNNING
             handle.write(row % (cycle, cycle * dt, *joint_values(robot, out.joints),

@@ -263,7 +263,7 @@ class Servo(Strict):
     idle_power: NonNegative = Field(0.9, description="electronics power of one powered servo [W]")
     regenerative_efficiency: Annotated[float, Field(ge=0.0, le=1.0)] = Field(
         0.0, description="share of negative mechanical power returned to the supply [ratio]")
-    position_gain: Positive = Field(0.3, description="PyBullet position-control gain (Kp) [ratio]")
+    position_gain: Positive = Field(0.1, description="PyBullet position-control gain (Kp) [ratio]")
     velocity_gain: Positive = Field(1.0, description="PyBullet position-control velocity gain (Kd) [ratio]")
 
 

@@ -54,7 +54,8 @@ class Reading:
     Attributes:
         joints: joint positions ``(L, n)`` [rad] (0 where a leg has fewer joints).
         joint_velocities: ``(L, n)`` [rad/s].
-        joint_efforts: motor torques ``(L, n)`` [N·m].
+        joint_efforts: motor torques averaged over the control period's physics steps ``(L, n)`` [N·m].
+        servo_power: electrical power of each servo averaged over the same steps ``(L, n)`` [W].
         orientation: IMU orientation quaternion (x, y, z, w), world → body.
         angular_rate: IMU angular velocity in the body frame [rad/s].
         linear_acceleration: IMU specific force in the body frame (gravity included, at rest +9.81 z) [m/s²].
@@ -70,6 +71,7 @@ class Reading:
     joints: np.ndarray
     joint_velocities: np.ndarray
     joint_efforts: np.ndarray
+    servo_power: np.ndarray
     orientation: np.ndarray
     angular_rate: np.ndarray
     linear_acceleration: np.ndarray
@@ -175,6 +177,8 @@ class World:
         self._forces = [servo.stall_torque] * count
         self._position_gains = [servo.position_gain] * count
         self._velocity_gains = [servo.velocity_gain] * count
+        self._mean_torque = np.zeros(count)
+        self._mean_power = np.full(count, servo.idle_power)
         for row, indices in enumerate(self.joint_index):
             for k, index in enumerate(indices):
                 p.resetJointState(self.body, index, float(joints[row, k]), 0.0, physicsClientId=c)
@@ -193,11 +197,27 @@ class World:
                                     velocityGains=self._velocity_gains, physicsClientId=self.client)
 
     def step(self) -> None:
-        """Advance one control period (``substeps`` physics steps); adds the time spent to ``physics_time``."""
-        started = time.perf_counter()
+        """Advance one control period (``substeps`` physics steps); adds the time spent to ``physics_time``.
+
+        Motor torque and joint speed are averaged over the sub-steps and the electrical power is computed
+        from those means: a position-controlled joint's torque chatters from physics step to physics step,
+        faster than a servo's current can follow (motor inductance, PWM and gearbox compliance filter it), and
+        squaring the chatter would make the copper loss depend on the physics rate.
+        """
+        from shc_cli.backends.pybullet_.power import servo_power
+
+        p, c = self.p, self.client
+        torque_sum = np.zeros(len(self.flat_joints))
+        speed_sum = np.zeros(len(self.flat_joints))
         for _ in range(self.substeps):
-            self.p.stepSimulation(physicsClientId=self.client)
-        self.physics_time += time.perf_counter() - started
+            started = time.perf_counter()
+            p.stepSimulation(physicsClientId=c)
+            self.physics_time += time.perf_counter() - started
+            for i, state in enumerate(p.getJointStates(self.body, self.flat_joints, physicsClientId=c)):
+                speed_sum[i] += state[1]
+                torque_sum[i] += state[3]
+        self._mean_torque = torque_sum / self.substeps
+        self._mean_power = servo_power(self.robot.servo, self._mean_torque, speed_sum / self.substeps)
 
     def read(self) -> Reading:
         """Sensor readings now."""
@@ -206,9 +226,11 @@ class World:
         joints = np.zeros((legs, self.width))
         velocities = np.zeros((legs, self.width))
         efforts = np.zeros((legs, self.width))
+        power = np.zeros((legs, self.width))
         states = p.getJointStates(self.body, self.flat_joints, physicsClientId=c)
-        for (leg, k), state in zip(self.slots, states, strict=True):
-            joints[leg, k], velocities[leg, k], _, efforts[leg, k] = state
+        for i, ((leg, k), state) in enumerate(zip(self.slots, states, strict=True)):
+            joints[leg, k], velocities[leg, k] = state[0], state[1]
+            efforts[leg, k], power[leg, k] = self._mean_torque[i], self._mean_power[i]
         com, orientation = p.getBasePositionAndOrientation(self.body, physicsClientId=c)
         linear, angular = p.getBaseVelocity(self.body, physicsClientId=c)
         rotation = np.array(p.getMatrixFromQuaternion(orientation)).reshape(3, 3)
@@ -228,6 +250,7 @@ class World:
                 forces[foot] += point[9]
         return Reading(
             joints=joints, joint_velocities=velocities, joint_efforts=efforts,
+            servo_power=power,
             orientation=np.array(orientation), angular_rate=rate, linear_acceleration=specific_force,
             foot_forces=forces, foot_contact=forces > 0.0, body_height=self._ray_height(position),
             position=np.array(position), rpy=np.array(p.getEulerFromQuaternion(orientation)),
