@@ -115,6 +115,9 @@ def simulate(
     seed: Annotated[int, typer.Option(help="Seed of every random thing (terrain, sensor noise).")] = 0,
     imu_noise: Annotated[float, typer.Option(help="IMU noise standard deviation (rad/s, m/s²).")] = 0.0,
     start: Annotated[str, typer.Option(help="Spawn pose: unpacked or packed.")] = "unpacked",
+    stand: Annotated[
+        bool, typer.Option(help="Start up held at standing height (as OpenSHC's Gazebo stand), then release.")
+    ] = False,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-simulate).")] = None,
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
@@ -123,7 +126,7 @@ def simulate(
     from shc_cli.commands.simulate import run_simulate
 
     run_simulate(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate, friction,
-                 restitution, seed, imu_noise, start, gui)
+                 restitution, seed, imu_noise, start, gui, stand)
 
 
 export_app = typer.Typer(help="Export robots and runs to other formats.", no_args_is_help=True)

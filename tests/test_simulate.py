@@ -80,3 +80,12 @@ def test_export_urdf_writes_the_generated_model(tmp_path: Path, capsys, monkeypa
     joints = [j.get("name") for j in root.iter("joint") if j.get("type") == "revolute"]
     assert len(joints) == 30 and joints[0] == "AR_coxa_joint"
     assert sum(1 for link in root.iter("link") if link.get("name", "").endswith("_foot")) == 6
+
+
+def test_mammalian_starts_on_the_stand_and_walks_its_bipod(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    code, _, out = _simulate(tmp_path, "mammal", ["bullet_mammalian", "--stand", "--duration", "3", "--no-plots"],
+                             capsys, monkeypatch)
+    assert code == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["gait"] == "bipod" and summary["fell"] is False
+    assert summary["distance_m"] > 0.3

@@ -31,7 +31,7 @@ START_UP_MARGIN_S = 2.0
 def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
                  commands: Path | None, out: Path | None, plots: bool, terrain_text: str, scenario: str,
                  physics_rate: float, friction: float, restitution: float, seed: int, imu_noise: float,
-                 start_pose: str, gui: bool) -> Path:
+                 start_pose: str, gui: bool, stand: bool = False) -> Path:
     """Load, simulate, log; returns the run directory."""
     from shc_cli.backends.pybullet_.terrain import parse_terrain
     from shc_cli.spec.checks import load_checked
@@ -59,7 +59,7 @@ def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration
     pose_sets = pose_sets_for(robot, gait, timeline, gait_file.parent)
     directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-simulate"
     run = Simulation(robot, gait, pose_sets, terrain, scenario, substeps, friction, restitution, seed, imu_noise,
-                     start_pose, gui)
+                     start_pose, gui, stand)
     log = RunDirectory(directory)
     try:
         summary, series = run.execute(timeline, walk_cycles, log)
@@ -86,7 +86,7 @@ class Simulation:
 
     def __init__(self, robot: Robot, gait: Any, pose_sets: dict[str, Any], terrain: Any, scenario: str,
                  substeps: int, friction: float, restitution: float, seed: int, imu_noise: float,
-                 start_pose: str, gui: bool) -> None:
+                 start_pose: str, gui: bool, stand: bool = False) -> None:
         from shc_cli.backends.pybullet_.world import World
         from shc_cli.control.sequence import joint_configurations
         from shc_cli.model.chains import Chains
@@ -98,7 +98,7 @@ class Simulation:
                           chains.upper)
         airborne, _ = SCENARIOS[scenario]
         self.world = World(robot, terrain, robot.time_delta, substeps, airborne, initial, friction, restitution,
-                           seed, imu_noise, gui)
+                           seed, imu_noise, gui, stand)
         self.controller = Controller(robot, gait, joints=self.world.read().joints, pose_sets=pose_sets)
         self.airborne = airborne
 
@@ -140,6 +140,8 @@ class Simulation:
             power = reading.servo_power
             total = float(sum(joint_values(robot, power)))
             running = out.robot_state == RobotState.RUNNING
+            if running and world.stand is not None:
+                world.release_stand()  # started up on the stand: now on its own feet
             handle.write(row % (cycle, cycle * dt, *joint_values(robot, out.joints),
                                 *joint_values(robot, reading.joints),
                                 *joint_values(robot, reading.joint_efforts), *joint_values(robot, power),
@@ -186,7 +188,8 @@ class Simulation:
         speed = distance / window if window > 0 else 0.0
         mean_power = float(power[running].mean()) if running.any() else 0.0
         mass = robot.total_mass()
-        cot = mean_power / (mass * 9.81 * speed) if speed > 1e-3 else None
+        walking_on_ground = self.scenario == "WG"
+        cot = mean_power / (mass * 9.81 * speed) if walking_on_ground and speed > 1e-3 else None  # eq. 22, WG only
         return {
             "robot": robot.name,
             "gait": self.controller.gait.name,

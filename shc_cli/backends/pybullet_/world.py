@@ -93,6 +93,8 @@ class World:
         control_period: the controller's period [s].
         substeps: physics steps per control period (physics rate = substeps / control_period).
         fixed_base: hold the body in the air, :data:`AIR_LIFT` above its standing height (scenarios SA, WA).
+        stand: spawn the body at its standing height held by a removable support (:meth:`release_stand`),
+            like the stand box of OpenSHC's Gazebo launch, instead of on its feet just above the ground.
         initial_joints: joint positions to spawn with ``(L, n)`` [rad].
         friction: lateral friction of terrain and feet.
         restitution: restitution of terrain and feet.
@@ -103,7 +105,7 @@ class World:
 
     def __init__(self, robot: Robot, terrain: TerrainSpec, control_period: float, substeps: int,
                  fixed_base: bool, initial_joints: np.ndarray, friction: float = 0.9, restitution: float = 0.0,
-                 seed: int = 0, imu_noise: float = 0.0, gui: bool = False) -> None:
+                 seed: int = 0, imu_noise: float = 0.0, gui: bool = False, stand: bool = False) -> None:
         with quiet_stdout():  # importing pybullet prints its build time
             import pybullet
 
@@ -125,12 +127,14 @@ class World:
         p.setPhysicsEngineParameter(numSolverIterations=SOLVER_ITERATIONS, deterministicOverlappingPairs=1,
                                     physicsClientId=c)
         self.terrain = build_terrain(c, terrain, friction, restitution, seed)
-        self._load_robot(fixed_base, initial_joints, friction, restitution)
+        self.stand: int | None = None
+        self._load_robot(fixed_base, initial_joints, friction, restitution, stand and not fixed_base)
         self._previous_velocity = np.zeros(3)
 
     # -- set-up ------------------------------------------------------------------------------------------------
 
-    def _load_robot(self, fixed_base: bool, joints: np.ndarray, friction: float, restitution: float) -> None:
+    def _load_robot(self, fixed_base: bool, joints: np.ndarray, friction: float, restitution: float,
+                    stand: bool = False) -> None:
         from shc_cli.model.chains import Chains
 
         p, c, robot = self.p, self.client, self.robot
@@ -140,6 +144,8 @@ class World:
         ground = self.terrain.height_at(0.0, 0.0)
         if fixed_base:
             height = ground + robot.walker.body_clearance + AIR_LIFT
+        elif stand:
+            height = ground + robot.walker.body_clearance + max(feet)
         else:
             height = ground + SPAWN_GAP + max(-(tips[i, 2]) + feet[i] for i in range(len(feet)))
         with tempfile.NamedTemporaryFile("w", suffix=".urdf", delete=False) as handle:
@@ -183,6 +189,16 @@ class World:
             for k, index in enumerate(indices):
                 p.resetJointState(self.body, index, float(joints[row, k]), 0.0, physicsClientId=c)
         self.command(joints)
+        if stand:
+            base = p.getBasePositionAndOrientation(self.body, physicsClientId=c)
+            self.stand = p.createConstraint(self.body, -1, -1, -1, p.JOINT_FIXED, [0, 0, 0], [0, 0, 0], base[0],
+                                            physicsClientId=c)
+
+    def release_stand(self) -> None:
+        """Take the stand away: the robot now carries itself."""
+        if self.stand is not None:
+            self.p.removeConstraint(self.stand, physicsClientId=self.client)
+            self.stand = None
 
     # -- the loop ----------------------------------------------------------------------------------------------
 
