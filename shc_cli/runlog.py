@@ -81,6 +81,9 @@ def joint_columns(robot: Robot, suffix: str = "") -> list[str]:
 
 def joint_values(robot: Robot, values: np.ndarray) -> list[float]:
     """The real joints' values of a padded ``(L, n)`` array, in :func:`joint_columns` order."""
+    counts = {len(leg.joints) for leg in robot.legs.values()}
+    if len(counts) == 1 and counts.pop() == values.shape[1]:  # no padding: every value, row by row
+        return list(values.ravel().tolist())
     return [float(v) for i, leg in enumerate(robot.legs.values()) for v in values[i, :len(leg.joints)]]
 
 

@@ -10,7 +10,7 @@ import pytest
 
 from .test_cli import run
 
-TIMING = {"wall_time_s", "physics_time_s"}
+TIMING = {"wall_time_s", "physics_time_s", "running_wall_time_s", "running_physics_time_s"}
 REQUIRED = {"sim_time_s", "wall_time_s", "physics_time_s", "distance_m", "mean_speed_mps", "mean_power_w", "cot",
             "fell", "seed"}
 

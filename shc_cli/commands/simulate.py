@@ -158,6 +158,7 @@ class Simulation:
             if running:
                 if window_start is None:
                     window_start = reading.position.copy()
+                    self._running_since = (time.perf_counter(), world.physics_time)
                 max_tilt = max(max_tilt, tilt(reading.rpy))
                 low = reading.body_height < FALL_HEIGHT_SHARE * robot.walker.body_clearance
                 if max_tilt > FALL_TILT or (low and not self.airborne):
@@ -167,6 +168,8 @@ class Simulation:
             if cycle % 200 == 0:
                 log.flush()
         wall = time.perf_counter() - started
+        since_wall, since_physics = getattr(self, "_running_since", (time.perf_counter(), world.physics_time))
+        self.running_times = (time.perf_counter() - since_wall, world.physics_time - since_physics)
         if progress is not None:
             progress(walk_cycles)
         return self._summary(series, window_start, wall, fell, max_tilt), series
@@ -197,6 +200,8 @@ class Simulation:
             "sim_time_s": len(series["t"]) * dt,
             "analysed_time_s": window,
             "wall_time_s": wall,
+            "running_wall_time_s": self.running_times[0],
+            "running_physics_time_s": self.running_times[1],
             "physics_time_s": self.world.physics_time,
             "physics_rate_hz": self.world.substeps / dt,
             "distance_m": distance,

@@ -222,18 +222,17 @@ class World:
         """
         from shc_cli.backends.pybullet_.power import servo_power
 
-        p, c = self.p, self.client
-        torque_sum = np.zeros(len(self.flat_joints))
-        speed_sum = np.zeros(len(self.flat_joints))
+        p, c, body, joints = self.p, self.client, self.body, self.flat_joints
+        speeds, torques = [], []
         for _ in range(self.substeps):
             started = time.perf_counter()
             p.stepSimulation(physicsClientId=c)
             self.physics_time += time.perf_counter() - started
-            for i, state in enumerate(p.getJointStates(self.body, self.flat_joints, physicsClientId=c)):
-                speed_sum[i] += state[1]
-                torque_sum[i] += state[3]
-        self._mean_torque = torque_sum / self.substeps
-        self._mean_power = servo_power(self.robot.servo, self._mean_torque, speed_sum / self.substeps)
+            states = p.getJointStates(body, joints, physicsClientId=c)
+            speeds.append([state[1] for state in states])
+            torques.append([state[3] for state in states])
+        self._mean_torque = np.mean(torques, axis=0)
+        self._mean_power = servo_power(self.robot.servo, self._mean_torque, np.mean(speeds, axis=0))
 
     def read(self) -> Reading:
         """Sensor readings now."""
