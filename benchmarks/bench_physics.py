@@ -1,0 +1,77 @@
+"""Physics step cost vs PyBullet solver iterations, and the per-cycle cost around it.
+
+Run:  .venv/bin/python benchmarks/bench_physics.py [--cycles 800] [--iterations 50 30 20]
+
+For each iteration count, in one process (these machines are noisy: compare within a run): build the Bullet
+insectoid on flat ground at 400 Hz, start it up, walk ``--cycles`` control cycles of tripod at throttle 1, and
+print the mean physics step [µs], the distance walked [m] and the final body height [m]; then the medians of
+the per-cycle costs outside physics (controller step, sensor read, sub-step sampling) [µs].
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from shc_cli.backends.pybullet_ import world as world_module
+from shc_cli.backends.pybullet_.terrain import parse_terrain
+from shc_cli.commands.simulate import Simulation
+from shc_cli.control.controller import Command, RobotState
+from shc_cli.spec.checks import load_checked
+
+
+def walk(iterations: int, cycles: int) -> dict[str, float]:
+    """One walk with ``iterations`` solver iterations; returns its figures."""
+    world_module.SOLVER_ITERATIONS = iterations
+    robot, gait, _ = load_checked("bullet", "tripod")
+    sim = Simulation(robot, gait, {}, parse_terrain("flat"), "WG", 8, 0.9, 0.0, 0, 0.0, "unpacked", False, False)
+    world, controller, p = sim.world, sim.controller, sim.world.p
+    start = Command(state_request=RobotState.RUNNING)
+    while controller.state != RobotState.RUNNING:
+        world.command(controller.step(start).joints)
+        world.step()
+    go = Command(velocity=(1.0, 0.0, 0.0), state_request=RobotState.RUNNING)
+    x0 = p.getBasePositionAndOrientation(world.body, physicsClientId=world.client)[0][0]
+    physics0 = world.physics_time
+    control, sampling, read = [], [], []
+    for _ in range(cycles):
+        t0 = time.perf_counter()
+        out = controller.step(go)
+        t1 = time.perf_counter()
+        world.command(out.joints)
+        before = world.physics_time
+        t2 = time.perf_counter()
+        world.step()
+        t3 = time.perf_counter()
+        world.read()
+        t4 = time.perf_counter()
+        control.append(t1 - t0)
+        sampling.append((t3 - t2) - (world.physics_time - before))
+        read.append(t4 - t3)
+    position = p.getBasePositionAndOrientation(world.body, physicsClientId=world.client)[0]
+    figures = {
+        "physics_step_us": (world.physics_time - physics0) / (cycles * world.substeps) * 1e6,
+        "distance_m": position[0] - x0,
+        "body_z_m": position[2],
+        "controller_us": float(np.median(control)) * 1e6,
+        "substep_sampling_us": float(np.median(sampling)) * 1e6,
+        "read_us": float(np.median(read)) * 1e6,
+    }
+    world.close()
+    return figures
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cycles", type=int, default=800)
+    parser.add_argument("--iterations", type=int, nargs="+", default=[50, 30, 20])
+    args = parser.parse_args()
+    for iterations in args.iterations:
+        figures = walk(iterations, args.cycles)
+        print(f"{iterations:3d} iterations: " + ", ".join(f"{k} {v:.4g}" for k, v in figures.items()), flush=True)
+
+
+if __name__ == "__main__":
+    main()
