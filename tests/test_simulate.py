@@ -89,3 +89,29 @@ def test_mammalian_starts_on_the_stand_and_walks_its_bipod(tmp_path: Path, capsy
     summary = json.loads((out / "summary.json").read_text())
     assert summary["gait"] == "bipod" and summary["fell"] is False
     assert summary["distance_m"] > 0.3
+
+
+@pytest.mark.parametrize("substeps", [8, 9])
+def test_readings_are_those_after_the_last_physics_step(substeps: int) -> None:
+    """Joint torques/speeds are sampled every k-th physics step for the power means; the joint positions the
+    controller reads must still be those after the control period's last physics step (9 = 4·2 + 1)."""
+    import numpy as np
+
+    from shc_cli.backends.pybullet_.terrain import parse_terrain
+    from shc_cli.commands.simulate import Simulation
+    from shc_cli.control.controller import Command, RobotState
+    from shc_cli.spec.checks import load_checked
+
+    robot, gait, _ = load_checked("bullet", "tripod")
+    sim = Simulation(robot, gait, {}, parse_terrain("flat"), "WG", substeps, 0.9, 0.0, 0, 0.0, "unpacked", False)
+    world = sim.world
+    try:
+        for _ in range(5):
+            world.command(sim.controller.step(Command(state_request=RobotState.RUNNING)).joints)
+            world.step()
+        fresh = world.p.getJointStates(world.body, world.flat_joints, physicsClientId=world.client)
+        reading = world.read()
+        measured = [reading.joints[leg, k] for leg, k in world.slots]
+        assert np.array_equal(measured, [state[0] for state in fresh])
+    finally:
+        world.close()
