@@ -68,20 +68,8 @@ def plot_plan(robot: Robot, outputs: list[CycleOutput], folder: Path) -> None:
     t = np.arange(len(outputs)) * dt
     swing = np.array([o.swing_progress for o in outputs])
 
-    figure, axes = plt.subplots(figsize=(9, 0.45 * len(legs) + 1.2), dpi=110)
-    for row in range(len(legs)):
-        in_swing = swing[:, row] >= 0.0
-        starts = np.flatnonzero(np.diff(np.concatenate([[0], in_swing.astype(int)])) == 1)
-        ends = np.flatnonzero(np.diff(np.concatenate([in_swing.astype(int), [0]])) == -1)
-        axes.broken_barh([(t[a], (b - a + 1) * dt) for a, b in zip(starts, ends, strict=True)],
-                         (row - 0.4, 0.8), facecolors="0.2")
-    axes.set_yticks(range(len(legs)), legs)
-    axes.invert_yaxis()
-    axes.set_xlabel("time [s] (black: swing, white: stance)")
-    axes.set_title(f"{robot.name}: gait diagram")
-    figure.tight_layout()
-    figure.savefig(folder / "gait.png")
-    plt.close(figure)
+    _leg_bars(legs, t, dt, swing >= 0.0, "time [s] (black: swing, white: stance)", f"{robot.name}: gait diagram",
+              folder / "gait.png")
 
     walker = np.array([o.walker_tips for o in outputs])
     figure, (side, top) = plt.subplots(1, 2, figsize=(11, 4.5), dpi=110)
@@ -149,18 +137,26 @@ def plot_simulation(robot: Robot, series: dict[str, list[Any]], folder: Path) ->
     plt.close(figure)
 
     contact = np.array(series["contact"], dtype=bool)
-    legs = list(robot.legs)
+    _leg_bars(list(robot.legs), t, robot.time_delta, contact, "time [s] (black: foot on the ground)",
+              f"{robot.name}: measured foot contacts", folder / "contacts.png")
+
+
+def _leg_bars(legs: list[str], t: Any, dt: float, flags: Any, xlabel: str, title: str, path: Path) -> None:
+    """One row of black bars per leg where ``flags[:, leg]`` is set (cycles at times ``t`` [s], ``dt`` apart)."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+
     figure, axes = plt.subplots(figsize=(9, 0.45 * len(legs) + 1.2), dpi=110)
     for row in range(len(legs)):
-        on = contact[:, row].astype(int)
+        on = flags[:, row].astype(int)
         starts = np.flatnonzero(np.diff(np.concatenate([[0], on])) == 1)
         ends = np.flatnonzero(np.diff(np.concatenate([on, [0]])) == -1)
-        axes.broken_barh([(t[a], t[b] - t[a] + (t[1] - t[0] if len(t) > 1 else 0.0)) for a, b in
-                          zip(starts, ends, strict=True)], (row - 0.4, 0.8), facecolors="0.2")
+        axes.broken_barh([(t[a], (b - a + 1) * dt) for a, b in zip(starts, ends, strict=True)],
+                         (row - 0.4, 0.8), facecolors="0.2")
     axes.set_yticks(range(len(legs)), legs)
     axes.invert_yaxis()
-    axes.set_xlabel("time [s] (black: foot on the ground)")
-    axes.set_title(f"{robot.name}: measured foot contacts")
+    axes.set_xlabel(xlabel)
+    axes.set_title(title)
     figure.tight_layout()
-    figure.savefig(folder / "contacts.png")
+    figure.savefig(path)
     plt.close(figure)

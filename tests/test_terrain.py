@@ -100,7 +100,8 @@ def test_parse_png_heightfields(tmp_path: Path) -> None:
     spec = parse_terrain(f"heightfield:{rgba}")
     assert spec.scale == 0.1  # default: 0.1 m per full white
     assert np.allclose(np.array(spec.heights), 0.1 * grey[::-1, :].T, atol=2 * 0.1 / 255)  # 8-bit levels
-    pil = pytest.importorskip("PIL.Image")
+    from PIL import Image as pil  # Pillow comes with matplotlib
+
     levels = np.arange(12, dtype=np.uint16).reshape(3, 4) * 5000
     grey16 = tmp_path / "grey16.png"
     pil.fromarray(levels.astype(np.uint16)).save(grey16)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import xml.etree.ElementTree as ET
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -12,26 +11,15 @@ import numpy as np
 import pytest
 
 from shc_cli.backends.pybullet_ import urdf
+from shc_cli.backends.pybullet_.world import quiet_stdout
 from shc_cli.model.chains import Chains
 from shc_cli.spec.loading import bundled, load_robot
 from shc_cli.spec.robot import Robot
 
-p = pytest.importorskip("pybullet")
+with quiet_stdout():  # importing pybullet prints its build time
+    import pybullet as p
 
 ROBOTS = bundled("robots")
-
-
-@contextmanager
-def quiet_stdout() -> Iterator[None]:
-    """PyBullet's C-level warnings go to file descriptor 1: send them to /dev/null."""
-    saved = os.dup(1)
-    with open(os.devnull, "w") as null:
-        os.dup2(null.fileno(), 1)
-    try:
-        yield
-    finally:
-        os.dup2(saved, 1)
-        os.close(saved)
 
 
 def robot_named(name: str) -> Robot:

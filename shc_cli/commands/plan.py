@@ -60,14 +60,14 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
         if isinstance(new_gait, Gait) and set(new_gait.offset_multiplier) != set(robot.legs):
             raise SpecError([Issue(commands, None, "gait", f"gait '{new_gait.name}' does not fit robot '{robot.name}'",
                                    f"give one multiplier for each of {', '.join(robot.legs)}")])
-    walk_cycles = _walk_cycles(timeline, duration, robot.time_delta, commands is not None)
+    cycles = walk_cycles(timeline, duration, robot.time_delta, commands is not None)
     pose_sets = pose_sets_for(robot, gait, timeline, gait_file.parent)
     directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-plan"
     controller = Controller(robot, gait, pose_sets=pose_sets)
     writer = RunWriter(directory, robot)
     started = time.perf_counter()
     try:
-        outputs = _run(controller, robot, timeline, walk_cycles, writer)
+        outputs = _run(controller, robot, timeline, cycles, writer)
     except KeyboardInterrupt:
         writer.close()
         raise ShcError(f"interrupted: the cycles completed so far are in {writer.partial}") from None
@@ -105,12 +105,15 @@ def pose_sets_for(robot: Robot, gait: Gait, timeline: Timeline, folder: Path) ->
     return sets
 
 
-def _walk_cycles(timeline: Timeline, duration: float | None, dt: float, from_file: bool) -> int:
+def walk_cycles(timeline: Timeline, duration: float | None, dt: float, from_file: bool,
+                default_s: float = 10.0) -> int:
+    """Control cycles to play after start-up: ``duration`` [s] if given, else a timeline file's length plus 1 s,
+    else ``default_s`` [s]."""
     if duration is not None:
         return max(1, round(duration / dt))
     if from_file:
         return timeline.last_cycle + round(1.0 / dt)
-    return round(10.0 / dt)
+    return round(default_s / dt)
 
 
 def _run(controller: Controller, robot: Robot, timeline: Timeline, walk_cycles: int,

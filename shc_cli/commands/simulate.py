@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import typer
 
-from shc_cli.commands.plan import parse_velocity, pose_sets_for
+from shc_cli.commands.plan import parse_velocity, pose_sets_for, walk_cycles
 from shc_cli.control.controller import Command, Controller, RobotState
 from shc_cli.errors import Issue, ShcError, SpecError
 from shc_cli.runlog import RunDirectory, joint_columns, joint_values
@@ -52,9 +52,7 @@ def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration
     walking = SCENARIOS[scenario][1]
     timeline = load_timeline(commands, robot.time_delta) if commands else constant(
         parse_velocity(velocity) if walking else (0.0, 0.0, 0.0))
-    walk_cycles = round((duration if duration is not None else 20.0) / robot.time_delta)
-    if commands is not None and duration is None:
-        walk_cycles = timeline.last_cycle + round(1.0 / robot.time_delta)
+    cycles = walk_cycles(timeline, duration, robot.time_delta, commands is not None, default_s=20.0)
     gait_file, _ = loaded.where(("walker", "gait"))
     pose_sets = pose_sets_for(robot, gait, timeline, gait_file.parent)
     directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-simulate"
@@ -62,7 +60,7 @@ def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration
                      start_pose, gui, stand)
     log = RunDirectory(directory)
     try:
-        summary, series = run.execute(timeline, walk_cycles, log)
+        summary, series = run.execute(timeline, cycles, log)
     except KeyboardInterrupt:
         log.close()
         raise ShcError(f"interrupted: the cycles completed so far are in {log.partial}") from None
