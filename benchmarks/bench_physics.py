@@ -1,9 +1,9 @@
 """Physics step cost vs PyBullet solver iterations, and the per-cycle cost around it.
 
-Run:  .venv/bin/python benchmarks/bench_physics.py [--cycles 800] [--iterations 50 30 20]
+Run:  .venv/bin/python benchmarks/bench_physics.py [--cycles 1600] [--rate 400] [--iterations 50 30 20]
 
 For each iteration count, in one process (these machines are noisy: compare within a run): build the Bullet
-insectoid on flat ground at 400 Hz, start it up, walk ``--cycles`` control cycles of tripod at throttle 1, and
+insectoid on flat ground at ``--rate``, start it up, walk ``--cycles`` control cycles of tripod at throttle 1, and
 print the mean physics step [µs], the distance walked [m] and the final body height [m]; then the medians of
 the per-cycle costs outside physics (controller step, sensor read, sub-step sampling) [µs].
 """
@@ -22,11 +22,12 @@ from shc_cli.control.controller import Command, RobotState
 from shc_cli.spec.checks import load_checked
 
 
-def walk(iterations: int, cycles: int) -> dict[str, float]:
-    """One walk with ``iterations`` solver iterations; returns its figures."""
+def walk(iterations: int, cycles: int, rate: float) -> dict[str, float]:
+    """One walk with ``iterations`` solver iterations at ``rate`` [Hz]; returns its figures."""
     world_module.SOLVER_ITERATIONS = iterations
     robot, gait, _ = load_checked("bullet", "tripod")
-    sim = Simulation(robot, gait, {}, parse_terrain("flat"), "WG", 8, 0.9, 0.0, 0, 0.0, "unpacked", False, False)
+    substeps = round(rate * robot.time_delta)
+    sim = Simulation(robot, gait, {}, parse_terrain("flat"), "WG", substeps, 0.9, 0.0, 0, 0.0, "unpacked", False)
     world, controller, p = sim.world, sim.controller, sim.world.p
     start = Command(state_request=RobotState.RUNNING)
     while controller.state != RobotState.RUNNING:
@@ -65,11 +66,12 @@ def walk(iterations: int, cycles: int) -> dict[str, float]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cycles", type=int, default=800)
+    parser.add_argument("--cycles", type=int, default=1600, help="timed control cycles (0.01 s each)")
+    parser.add_argument("--rate", type=float, default=400.0, help="physics rate [Hz]")
     parser.add_argument("--iterations", type=int, nargs="+", default=[50, 30, 20])
     args = parser.parse_args()
     for iterations in args.iterations:
-        figures = walk(iterations, args.cycles)
+        figures = walk(iterations, args.cycles, args.rate)
         print(f"{iterations:3d} iterations: " + ", ".join(f"{k} {v:.4g}" for k, v in figures.items()), flush=True)
 
 

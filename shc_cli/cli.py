@@ -18,7 +18,7 @@ from shc_cli.errors import ShcError
 
 app = typer.Typer(
     name="shc",
-    help="OpenSHC's multilegged gait controller in Python: check robots, see workspaces, plan gaits.",
+    help="OpenSHC's multilegged gait controller in Python: check robots, see workspaces, plan gaits, simulate.",
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,

@@ -93,8 +93,8 @@ def test_mammalian_starts_on_the_stand_and_walks_its_bipod(tmp_path: Path, capsy
 
 @pytest.mark.parametrize("substeps", [8, 9])
 def test_readings_are_those_after_the_last_physics_step(substeps: int) -> None:
-    """Joint torques/speeds are sampled every k-th physics step for the power means; the joint positions the
-    controller reads must still be those after the control period's last physics step (9 = 4·2 + 1)."""
+    """The world keeps the joint states of the control period's last physics step for the next reading instead of
+    asking PyBullet again: they must equal a fresh read."""
     import numpy as np
 
     from shc_cli.backends.pybullet_.terrain import parse_terrain

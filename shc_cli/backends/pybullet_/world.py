@@ -30,9 +30,6 @@ SOLVER_ITERATIONS = 30
 """Constraint solver iterations. Measured on the Bullet tripod walk (docs/physics-model.md): 30 instead of 50
 costs 29 % less physics time, lowers the walking body by 0.5 mm and changes speed by −1.3 % and power by +5 %;
 20 sags 1.3 mm."""
-SERVO_SAMPLES = 4
-"""Torque/speed samples per control period for the servo power means: every k-th physics step, k = substeps // 4
-(every 2nd at 400 Hz; at least 4 samples), counted back from the last step, which is always sampled."""
 SPAWN_GAP = 0.01
 """Height of the lowest foot above the ground when the robot is spawned [m]."""
 AIR_LIFT = 0.3
@@ -175,7 +172,6 @@ class World:
         self._slot_rows = np.array([leg for leg, _ in self.slots], dtype=np.intp)
         self._slot_cols = np.array([k for _, k in self.slots], dtype=np.intp)
         self._states: Any = None
-        self._sample_every = max(1, self.substeps // SERVO_SAMPLES)
         """The joint states after the last physics step (``None`` until the first step)."""
         self.foot_leg = {link: leg for leg, link in enumerate(self.foot_links)}
         # PyBullet reports the base's centre of mass; the body frame (base_link) is offset from it.
@@ -234,15 +230,13 @@ class World:
 
         p, c, body, joints = self.p, self.client, self.body, self.flat_joints
         speeds, torques = [], []
-        every = self._sample_every
-        for remaining in range(self.substeps - 1, -1, -1):
+        for _ in range(self.substeps):
             started = time.perf_counter()
             p.stepSimulation(physicsClientId=c)
             self.physics_time += time.perf_counter() - started
-            if remaining % every == 0:  # counted from the end: the last physics step is always sampled
-                states = p.getJointStates(body, joints, physicsClientId=c)
-                speeds.append([state[1] for state in states])
-                torques.append([state[3] for state in states])
+            states = p.getJointStates(body, joints, physicsClientId=c)
+            speeds.append([state[1] for state in states])
+            torques.append([state[3] for state in states])
         self._states = states
         self._mean_torque = np.mean(torques, axis=0)
         self._mean_power = servo_power(self.robot.servo, self._mean_torque, np.mean(speeds, axis=0))
