@@ -27,9 +27,9 @@ from shc_cli.spec.robot import Robot
 GRAVITY = 9.81
 """Standard gravity [m/s²]."""
 SOLVER_ITERATIONS = 30
-"""Constraint solver iterations. Measured on the Bullet tripod walk (docs/physics-model.md): 30 instead of 50
-costs 29 % less physics time, lowers the walking body by 0.5 mm and changes speed by −1.3 % and power by +5 %;
-20 sags 1.3 mm."""
+"""Constraint solver iterations. Measured on the Bullet tripod walk at 400 Hz (docs/physics-model.md): 30 instead
+of 50 takes 21–29 % less physics time, lowers the walking body by 0.8 mm and changes speed by −1.3 % and power
+by +5 %; 20 sags 1.9 mm."""
 SPAWN_GAP = 0.01
 """Height of the lowest foot above the ground when the robot is spawned [m]."""
 AIR_LIFT = 0.3
