@@ -115,3 +115,51 @@ def test_readings_are_those_after_the_last_physics_step(substeps: int) -> None:
         assert np.array_equal(measured, [state[0] for state in fresh])
     finally:
         world.close()
+
+
+def test_mean_joint_speed_from_the_displacement_equals_the_mean_of_every_physics_step() -> None:
+    """The power model takes the period's mean joint speed as displacement / period instead of sampling the speed
+    after every physics step; that is exact only because Bullet integrates q += v·h with the new v. Record the
+    speeds PyBullet reports after each sub-step and compare."""
+    import numpy as np
+
+    from shc_cli.backends.pybullet_.power import servo_power
+    from shc_cli.backends.pybullet_.terrain import parse_terrain
+    from shc_cli.commands.simulate import Simulation
+    from shc_cli.control.controller import Command, RobotState
+    from shc_cli.spec.checks import load_checked
+
+    robot, gait, _ = load_checked("bullet", "tripod")
+    sim = Simulation(robot, gait, {}, parse_terrain("flat"), "WG", 4, 0.9, 0.0, 0, 0.0, "unpacked", False)
+    world = sim.world
+    recorded: list[list[tuple[float, float]]] = []
+
+    class Recorder:
+        """PyBullet, with every getJointStates answer kept (speed, torque)."""
+
+        def __getattr__(self, name: str) -> object:
+            return getattr(pybullet, name)
+
+        def getJointStates(self, *args: object, **kwargs: object) -> object:
+            states = pybullet.getJointStates(*args, **kwargs)
+            recorded.append([(state[1], state[3]) for state in states])
+            return states
+
+    pybullet = world.p
+    world.p = Recorder()
+    try:
+        largest = 0.0
+        for _ in range(300):  # start-up: the legs move fast
+            recorded.clear()
+            world.command(sim.controller.step(Command(state_request=RobotState.RUNNING)).joints)
+            world.step()
+            samples = np.array(recorded)  # (sub-steps, servos, [speed, torque])
+            assert samples.shape[0] == 4
+            speed, torque = samples[:, :, 0].mean(axis=0), samples[:, :, 1].mean(axis=0)
+            power = world.read().servo_power[world.slot_rows, world.slot_cols]
+            np.testing.assert_allclose(power, servo_power(robot.servo, torque, speed), rtol=1e-9, atol=1e-9)
+            largest = max(largest, float(np.abs(speed).max()))
+        assert largest > 0.5  # the joints really moved [rad/s]
+    finally:
+        world.p = pybullet
+        world.close()

@@ -15,7 +15,7 @@ import typer
 from shc_cli.commands.plan import parse_velocity, pose_sets_for, walk_cycles
 from shc_cli.control.controller import Command, Controller, RobotState
 from shc_cli.errors import Issue, ShcError, SpecError
-from shc_cli.runlog import RunDirectory, joint_columns, joint_values
+from shc_cli.runlog import RunDirectory, joint_columns
 from shc_cli.spec.robot import Robot
 from shc_cli.spec.timeline import Timeline, constant, load_timeline
 
@@ -114,6 +114,7 @@ class Simulation:
                       "imu_qx", "imu_qy", "imu_qz", "imu_qw", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z",
                       "height", "power_w", "robot_state", "walk_state"])
         handle, row = log.table("log.csv", columns, ["%.6g"] * (len(columns) - 2) + ["%s", "%s"])
+        rows, cols = world.slot_rows, world.slot_cols  # padded (L, n) arrays → the log's joint columns
         limit = round((robot.start_up.time_to_start + START_UP_MARGIN_S) / dt)
         series: dict[str, list[Any]] = {"t": [], "position": [], "power": [], "contact": [], "running": []}
         commands = iter(timeline.commands(walk_cycles))
@@ -135,19 +136,17 @@ class Simulation:
             world.command(out.joints)
             world.step()
             reading = world.read()
-            power = reading.servo_power
-            total = float(sum(joint_values(robot, power)))
+            power = reading.servo_power[rows, cols]
+            total = float(power.sum())
             running = out.robot_state == RobotState.RUNNING
             if running and world.stand is not None:
                 world.release_stand()  # started up on the stand: now on its own feet
-            handle.write(row % (cycle, cycle * dt, *joint_values(robot, out.joints),
-                                *joint_values(robot, reading.joints),
-                                *joint_values(robot, reading.joint_efforts), *joint_values(robot, power),
-                                *reading.foot_forces.tolist(), *reading.foot_contact.astype(int).tolist(),
-                                *reading.position.tolist(), *reading.rpy.tolist(), *reading.linear_velocity.tolist(),
-                                *reading.angular_velocity.tolist(), *reading.orientation.tolist(),
-                                *reading.angular_rate.tolist(), *reading.linear_acceleration.tolist(),
-                                reading.body_height, total, out.robot_state.name, out.walk_state.name))
+            values = np.concatenate((out.joints[rows, cols], reading.joints[rows, cols],
+                                     reading.joint_efforts[rows, cols], power, reading.foot_forces,
+                                     reading.foot_contact, reading.position, reading.rpy, reading.linear_velocity,
+                                     reading.angular_velocity, reading.orientation, reading.angular_rate,
+                                     reading.linear_acceleration, (reading.body_height, total)))
+            handle.write(row % (cycle, cycle * dt, *values.tolist(), out.robot_state.name, out.walk_state.name))
             series["t"].append(cycle * dt)
             series["position"].append(reading.position)
             series["power"].append(total)

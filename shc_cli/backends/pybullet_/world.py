@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from shc_cli.backends.pybullet_.power import servo_power
 from shc_cli.backends.pybullet_.terrain import TerrainSpec, build_terrain
 from shc_cli.backends.pybullet_.urdf import foot_radius, robot_urdf
 from shc_cli.errors import BackendError
@@ -169,14 +170,17 @@ class World:
         self.foot_links = [links[f"{leg_id}_foot"] for leg_id in robot.legs]
         self.flat_joints = [index for indices in self.joint_index for index in indices]
         self.slots = [(leg, k) for leg, indices in enumerate(self.joint_index) for k in range(len(indices))]
-        self._slot_rows = np.array([leg for leg, _ in self.slots], dtype=np.intp)
-        self._slot_cols = np.array([k for _, k in self.slots], dtype=np.intp)
+        self.slot_rows = np.array([leg for leg, _ in self.slots], dtype=np.intp)
+        """Row (leg) of each servo in the padded ``(L, n)`` arrays; with :attr:`slot_cols`, ``a[slot_rows, slot_cols]``
+        lists the real joints of ``a`` in servo (= log column) order."""
+        self.slot_cols = np.array([k for _, k in self.slots], dtype=np.intp)
         self._states: Any = None
         """The joint states after the last physics step (``None`` until the first step)."""
         self.foot_leg = {link: leg for leg, link in enumerate(self.foot_links)}
         # PyBullet reports the base's centre of mass; the body frame (base_link) is offset from it.
         self.com_offset = np.array(p.getDynamicsInfo(self.body, -1, physicsClientId=c)[3])
         self.width = chains.joints
+        self._unpadded = len(self.flat_joints) == len(self.joint_index) * self.width  # every leg has n joints
         for j in range(p.getNumJoints(self.body, physicsClientId=c)):  # free joints: no default motors
             p.setJointMotorControl2(self.body, j, p.VELOCITY_CONTROL, force=0.0, physicsClientId=c)
         for link in [-1, *range(p.getNumJoints(self.body, physicsClientId=c))]:
@@ -194,6 +198,7 @@ class World:
         for row, indices in enumerate(self.joint_index):
             for k, index in enumerate(indices):
                 p.resetJointState(self.body, index, float(joints[row, k]), 0.0, physicsClientId=c)
+        self._positions = joints[self.slot_rows, self.slot_cols].astype(float)
         self.command(joints)
         if stand:
             base = p.getBasePositionAndOrientation(self.body, physicsClientId=c)
@@ -221,41 +226,36 @@ class World:
     def step(self) -> None:
         """Advance one control period (``substeps`` physics steps); adds the time spent to ``physics_time``.
 
-        Motor torque and joint speed are averaged over the sub-steps and the electrical power is computed
-        from those means: a position-controlled joint's torque chatters from physics step to physics step,
-        faster than a servo's current can follow (motor inductance, PWM and gearbox compliance filter it), and
-        squaring the chatter would make the copper loss depend on the physics rate.
+        Motor torque (sampled after every physics step) and joint speed are averaged over the sub-steps and
+        the electrical power is computed from those means: a position-controlled joint's torque chatters from
+        physics step to physics step, faster than a servo's current can follow (motor inductance, PWM and gearbox
+        compliance filter it), and squaring the chatter would make the copper loss depend on the physics rate.
         """
-        from shc_cli.backends.pybullet_.power import servo_power
-
-        p, c, body, joints = self.p, self.client, self.body, self.flat_joints
-        speeds, torques = [], []
+        p, c, body, joints, count = self.p, self.client, self.body, self.flat_joints, len(self.flat_joints)
+        clock = time.perf_counter
+        samples = []
         for _ in range(self.substeps):
-            started = time.perf_counter()
+            started = clock()
             p.stepSimulation(physicsClientId=c)
-            self.physics_time += time.perf_counter() - started
-            states = p.getJointStates(body, joints, physicsClientId=c)
-            speeds.append([state[1] for state in states])
-            torques.append([state[3] for state in states])
+            self.physics_time += clock() - started
+            samples.append(p.getJointStates(body, joints, physicsClientId=c))
+        states = samples[-1]
         self._states = states
-        self._mean_torque = np.mean(torques, axis=0)
-        self._mean_power = servo_power(self.robot.servo, self._mean_torque, np.mean(speeds, axis=0))
+        positions = np.fromiter([state[0] for state in states], float, count)
+        # Bullet integrates q += v·h with the new v (semi-implicit Euler), so the mean of the sub-steps'
+        # speeds is exactly the displacement over the period: no per-step speed sampling needed.
+        mean_speed = (positions - self._positions) / self.control_period
+        self._positions = positions
+        torques = np.fromiter([state[3] for sample in samples for state in sample], float, self.substeps * count)
+        self._mean_torque = torques.reshape(self.substeps, count).mean(axis=0)
+        self._mean_power = servo_power(self.robot.servo, self._mean_torque, mean_speed)
 
     def read(self) -> Reading:
         """Sensor readings now."""
         p, c = self.p, self.client
-        legs = len(self.joint_index)
-        joints = np.zeros((legs, self.width))
-        velocities = np.zeros((legs, self.width))
-        efforts = np.zeros((legs, self.width))
-        power = np.zeros((legs, self.width))
         states = self._states if self._states is not None else p.getJointStates(self.body, self.flat_joints,
                                                                                   physicsClientId=c)
-        rows, cols = self._slot_rows, self._slot_cols
-        joints[rows, cols] = [state[0] for state in states]
-        velocities[rows, cols] = [state[1] for state in states]
-        efforts[rows, cols] = self._mean_torque
-        power[rows, cols] = self._mean_power
+        velocities = np.fromiter([state[1] for state in states], float, len(states))
         com, orientation = p.getBasePositionAndOrientation(self.body, physicsClientId=c)
         linear, angular = p.getBaseVelocity(self.body, physicsClientId=c)
         rotation = np.array(p.getMatrixFromQuaternion(orientation)).reshape(3, 3)
@@ -268,19 +268,27 @@ class World:
         if self.imu_noise > 0.0:
             specific_force = specific_force + self.rng.normal(0.0, self.imu_noise, 3)
             rate = rate + self.rng.normal(0.0, self.imu_noise, 3)
-        forces = np.zeros(legs)
+        forces = np.zeros(len(self.joint_index))
         for point in p.getContactPoints(bodyA=self.body, physicsClientId=c):
             foot = self.foot_leg.get(point[3])
             if foot is not None and point[2] != self.body:
                 forces[foot] += point[9]
         return Reading(
-            joints=joints, joint_velocities=velocities, joint_efforts=efforts,
-            servo_power=power,
+            joints=self.padded(self._positions), joint_velocities=self.padded(velocities),
+            joint_efforts=self.padded(self._mean_torque), servo_power=self.padded(self._mean_power),
             orientation=np.array(orientation), angular_rate=rate, linear_acceleration=specific_force,
             foot_forces=forces, foot_contact=forces > 0.0, body_height=self._ray_height(position),
-            position=np.array(position), rpy=np.array(p.getEulerFromQuaternion(orientation)),
+            position=position, rpy=np.array(p.getEulerFromQuaternion(orientation)),
             linear_velocity=linear_v, angular_velocity=angular_v,
         )
+
+    def padded(self, values: np.ndarray) -> np.ndarray:
+        """Per-servo values (servo order) as a padded ``(L, n)`` array, 0 where a leg has fewer joints."""
+        if self._unpadded:
+            return values.reshape(len(self.joint_index), self.width)
+        out = np.zeros((len(self.joint_index), self.width))
+        out[self.slot_rows, self.slot_cols] = values
+        return out
 
     def _ray_height(self, position: Any) -> float:
         """Body-origin height above the terrain, from a ray cast down that passes through the robot itself."""
