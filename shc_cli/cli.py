@@ -116,8 +116,11 @@ def simulate(
     imu_noise: Annotated[float, typer.Option(help="IMU noise standard deviation (rad/s, m/s²).")] = 0.0,
     start: Annotated[str, typer.Option(help="Spawn pose: unpacked or packed.")] = "unpacked",
     stand: Annotated[
-        bool, typer.Option(help="Start up held at standing height (as OpenSHC's Gazebo stand), then release.")
-    ] = False,
+        bool | None,
+        typer.Option("--stand/--ground", help="Start up held at standing height on a stand (as OpenSHC's Gazebo "
+                     "launch) that is removed when the robot runs, or on the ground [default: start_up.simulation].",
+                     show_default=False),
+    ] = None,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-simulate).")] = None,
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,

@@ -157,9 +157,12 @@ def test_padding_short_legs_changes_nothing() -> None:
     """A 3-DOF leg padded to 5 joints (as in a mixed robot) moves exactly as the unpadded leg."""
     robot: Robot = load_robot("openshc_default").robot  # type: ignore[assignment]
     plain = Chains.from_robot(robot)
+    def pad(values: np.ndarray) -> np.ndarray:
+        return np.pad(values, ((0, 0), (0, 2)))
+
     padded = Chains(
-        plain.names, plain.base,
-        *(np.pad(getattr(plain, k), ((0, 0), (0, 2))) for k in ("d", "theta", "r", "alpha", "lower", "upper")),
+        plain.names, plain.base, d=pad(plain.d), theta=pad(plain.theta), r=pad(plain.r), alpha=pad(plain.alpha),
+        lower=pad(plain.lower), upper=pad(plain.upper),
         max_vel=np.pad(plain.max_vel, ((0, 0), (0, 2)), constant_values=1.0), joint_count=plain.joint_count,
     )
     q = (plain.lower + plain.upper) / 2 + 0.05

@@ -31,7 +31,7 @@ START_UP_MARGIN_S = 2.0
 def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
                  commands: Path | None, out: Path | None, plots: bool, terrain_text: str, scenario: str,
                  physics_rate: float, friction: float, restitution: float, seed: int, imu_noise: float,
-                 start_pose: str, gui: bool, stand: bool = False) -> Path:
+                 start_pose: str, gui: bool, stand: bool | None = None) -> Path:
     """Load, simulate, log; returns the run directory."""
     from shc_cli.backends.pybullet_.terrain import parse_terrain
     from shc_cli.spec.checks import load_checked
@@ -56,6 +56,8 @@ def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration
     gait_file, _ = loaded.where(("walker", "gait"))
     pose_sets = pose_sets_for(robot, gait, timeline, gait_file.parent)
     directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-simulate"
+    if stand is None:
+        stand = robot.start_up.simulation == "stand"
     run = Simulation(robot, gait, pose_sets, terrain, scenario, substeps, friction, restitution, seed, imu_noise,
                      start_pose, gui, stand)
     log = RunDirectory(directory)

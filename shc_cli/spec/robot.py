@@ -220,6 +220,9 @@ class StartUp(Strict):
         False, description="stepped start-up/shut-down with pack/unpack [OpenSHC: start_up_sequence]"
     )
     time_to_start: Positive = Field(6.0, description="duration of the direct start-up [s]")
+    simulation: Literal["ground", "stand"] = Field(
+        "ground", description="where `shc simulate` starts the robot up: on its feet just above the ground, or "
+        "held at standing height on a stand that is removed when it runs (OpenSHC's Gazebo launch)")
 
 
 class Manipulation(Strict):
