@@ -1,17 +1,25 @@
 """Physics step cost vs PyBullet solver iterations, and the per-cycle cost around it.
 
 Run:  .venv/bin/python benchmarks/bench_physics.py [--cycles 1600] [--rate 400] [--iterations 50 30 20]
+      .venv/bin/python benchmarks/bench_physics.py --floor [--cycles 1600]
 
 For each iteration count, in one process (these machines are noisy: compare within a run): build the Bullet
 insectoid on flat ground at ``--rate``, start it up, walk ``--cycles`` control cycles of tripod at throttle 1, and
 print the mean physics step [µs], the distance walked [m] and the final body height [m]; then the medians of
 the per-cycle costs outside physics (controller step, sensor read, sub-step sampling) [µs].
+
+``--floor``: wall time ÷ physics time of the walking loop built up layer by layer — physics alone; + the
+joint-state read after every physics step (the power model's torque samples); + the servo commands; + the
+controller; + the sensor read; and the whole ``Simulation.execute`` loop with its log — so the cost of each layer
+is a ratio measured in the same process.
 """
 
 from __future__ import annotations
 
 import argparse
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -19,7 +27,11 @@ from shc_cli.backends.pybullet_ import world as world_module
 from shc_cli.backends.pybullet_.terrain import parse_terrain
 from shc_cli.commands.simulate import Simulation
 from shc_cli.control.controller import Command, RobotState
+from shc_cli.runlog import RunDirectory
 from shc_cli.spec.checks import load_checked
+from shc_cli.spec.timeline import constant
+
+LAYERS = ("physics", "+ joint-state samples", "+ servo commands", "+ controller", "+ sensor read")
 
 
 def walk(iterations: int, cycles: int, rate: float) -> dict[str, float]:
@@ -64,12 +76,54 @@ def walk(iterations: int, cycles: int, rate: float) -> dict[str, float]:
     return figures
 
 
+def floor(cycles: int) -> None:
+    """Print wall ÷ physics for each layer of the loop, then for the whole logged loop."""
+    robot, gait, _ = load_checked("bullet", "tripod")
+    sim = Simulation(robot, gait, {}, parse_terrain("flat"), "WG", 4, 0.9, 0.0, 0, 0.0, "unpacked", False)
+    world, controller, p = sim.world, sim.controller, sim.world.p
+    start = Command(state_request=RobotState.RUNNING)
+    while controller.state != RobotState.RUNNING:
+        world.command(controller.step(start).joints)
+        world.step()
+    go = Command(velocity=(1.0, 0.0, 0.0), state_request=RobotState.RUNNING)
+    body, joints, client, clock = world.body, world.flat_joints, world.client, time.perf_counter
+    out = controller.step(go)
+    for level, name in enumerate(LAYERS):
+        physics = 0.0
+        began = clock()
+        for _ in range(cycles // len(LAYERS)):
+            if level >= 3:
+                out = controller.step(go)
+            if level >= 2:
+                world.command(out.joints)
+            for _ in range(world.substeps):
+                started = clock()
+                p.stepSimulation(physicsClientId=client)
+                physics += clock() - started
+                if level >= 1:
+                    p.getJointStates(body, joints, physicsClientId=client)
+            if level >= 4:
+                world.read()
+        print(f"{name:24s} wall/physics {(clock() - began) / physics:.3f}", flush=True)
+    world.close()
+    sim = Simulation(robot, gait, {}, parse_terrain("flat"), "WG", 4, 0.9, 0.0, 0, 0.0, "unpacked", False)
+    with tempfile.TemporaryDirectory() as directory:
+        sim.execute(constant((1.0, 0.0, 0.0)), cycles, RunDirectory(Path(directory) / "run"))
+    sim.world.close()
+    wall, physics = sim.running_times
+    print(f"{'whole loop + log.csv':24s} wall/physics {wall / physics:.3f} (walking part of Simulation.execute)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cycles", type=int, default=1600, help="timed control cycles (0.01 s each)")
     parser.add_argument("--rate", type=float, default=400.0, help="physics rate [Hz]")
     parser.add_argument("--iterations", type=int, nargs="+", default=[50, 30, 20])
+    parser.add_argument("--floor", action="store_true", help="wall ÷ physics layer by layer (30 iterations)")
     args = parser.parse_args()
+    if args.floor:
+        floor(args.cycles)
+        return
     for iterations in args.iterations:
         figures = walk(iterations, args.cycles, args.rate)
         print(f"{iterations:3d} iterations: " + ", ".join(f"{k} {v:.4g}" for k, v in figures.items()), flush=True)
