@@ -18,7 +18,8 @@ from shc_cli.errors import ShcError
 
 app = typer.Typer(
     name="shc",
-    help="OpenSHC's multilegged gait controller in Python: check robots, see workspaces, plan gaits, simulate.",
+    help="OpenSHC's multilegged gait controller in Python: check robots, see workspaces, plan gaits, simulate, "
+    "analyse.",
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
@@ -130,6 +131,22 @@ def simulate(
 
     run_simulate(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate, friction,
                  restitution, seed, imu_noise, start, gui, stand)
+
+
+@app.command()
+def analyze(
+    runs: Annotated[list[Path], typer.Argument(help="Run directories from plan or simulate.")],
+    json_output: Annotated[bool, typer.Option("--json", help="Print JSON only (an object, or a list for several).")]
+    = False,
+    out: Annotated[Path | None, typer.Option(help="Write analysis.json and the plots here.")] = None,
+    skip: Annotated[float, typer.Option(help="Seconds of RUNNING to leave out at the start of the window.")] = 0.0,
+    steady: Annotated[bool, typer.Option(help="Only cycles whose desired velocity held for a whole gait cycle.")]
+    = False,
+) -> None:
+    """Cost of transport (eq. 22), power, speed, duty factor, slip, stability margins, per-cycle posture."""
+    from shc_cli.commands.analyze import run_analyze
+
+    run_analyze(runs, json_output, out, skip, steady)
 
 
 export_app = typer.Typer(help="Export robots and runs to other formats.", no_args_is_help=True)

@@ -160,3 +160,128 @@ def _leg_bars(legs: list[str], t: Any, dt: float, flags: Any, xlabel: str, title
     figure.tight_layout()
     figure.savefig(path)
     plt.close(figure)
+
+
+def _save(figure: Any, path: Path) -> None:
+    """Save a figure atomically (complete or absent) and close it."""
+    import matplotlib.pyplot as plt
+
+    from shc_cli.outputs import atomic_path
+
+    with atomic_path(path) as temporary:
+        figure.savefig(temporary, format=path.suffix.lstrip("."))
+    plt.close(figure)
+
+
+def _label(result: dict[str, Any]) -> str:
+    return Path(str(result["run"])).name
+
+
+def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) -> list[Path]:
+    """The ``shc analyze --out`` plots; returns the files written.
+
+    * ``power.png`` — total electrical power over time, one line per run (runs with power only);
+    * ``cycles.png`` — boxplots of the per-gait-cycle RMS of body height, roll rate and pitch rate, one box per run
+      (ATHENA Fig. 10 style);
+    * ``zmp_<run>.png`` — the ZMP (ATHENA eq. 32) and the centre of mass over the support polygons, top view;
+    * ``cot.png`` — cost of transport and speed vs step frequency, one line per robot / gait / velocity input
+      (OpenSHC paper Fig. 14–16 style), when the runs differ in step frequency.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    written: list[Path] = []
+    powered = [(r, run) for r, run in zip(results, runs, strict=True) if run.power is not None]
+    if powered:
+        figure, axes = plt.subplots(figsize=(8, 3.5), dpi=110)
+        for result, run in powered:
+            axes.plot(run.t, run.power, lw=0.7, label=_label(result))
+        axes.set_xlabel("time [s]")
+        axes.set_ylabel("electrical power [W]")
+        axes.grid(True, lw=0.3)
+        axes.legend(fontsize=7)
+        figure.tight_layout()
+        _save(figure, folder / "power.png")
+        written.append(folder / "power.png")
+
+    figure, axes = plt.subplots(1, 3, figsize=(10, 3.6), dpi=110)
+    names = [_label(r) for r in results]
+    for ax, (key, unit) in zip(axes, (("height", "m"), ("roll_rate", "rad/s"), ("pitch_rate", "rad/s")),
+                               strict=True):
+        data = [r["_series"]["cycles"][key] if "_series" in r else np.zeros(0) for r in results]
+        if any(len(d) for d in data):
+            ax.boxplot([d if len(d) else [np.nan] for d in data])
+            ax.set_xticks(range(1, len(names) + 1), names, rotation=30, ha="right", fontsize=7)
+        ax.set_title(f"RMS {key.replace('_', ' ')} per gait cycle [{unit}]", fontsize=9)
+        ax.grid(True, axis="y", lw=0.3)
+    figure.tight_layout()
+    _save(figure, folder / "cycles.png")
+    written.append(folder / "cycles.png")
+
+    for result in results:
+        series = result.get("_series")
+        if series is None or not np.isfinite(series["margin"]).any():
+            continue
+        feet, contact, com, zmp = series["feet"], series["contact"], series["com"], series["zmp"]
+        from shc_cli.analysis.metrics import support_polygon
+
+        figure, axes = plt.subplots(figsize=(7, 5), dpi=110)
+        step = max(1, len(feet) // 60)  # about 60 polygons
+        for i in range(0, len(feet), step):
+            polygon = support_polygon(feet[i, contact[i], :2])
+            if len(polygon) >= 3:
+                closed = np.vstack([polygon, polygon[:1]])
+                axes.plot(closed[:, 0], closed[:, 1], color="0.75", lw=0.5)
+        axes.plot(com[:, 0], com[:, 1], lw=1.0, label="centre of mass")
+        if np.isfinite(zmp).any():
+            axes.plot(zmp[:, 0], zmp[:, 1], lw=0.6, label="ZMP (eq. 32)")
+        axes.set_aspect("equal", adjustable="datalim")
+        axes.set_xlabel("x [m]")
+        axes.set_ylabel("y [m]")
+        axes.set_title(f"{_label(result)}: ZMP and CoM over the support polygons", fontsize=9)
+        axes.legend(fontsize=7)
+        figure.tight_layout()
+        path = folder / f"zmp_{_label(result)}.png"
+        _save(figure, path)
+        written.append(path)
+
+    frequencies = {r["step_frequency_hz"] for r in results}
+    if len(frequencies) > 1:
+        written.append(plot_cot(results, folder / "cot.png"))
+    return written
+
+
+def plot_cot(results: list[dict[str, Any]], path: Path) -> Path:
+    """CoT and mean speed vs step frequency, one line per (robot, gait, group) — OpenSHC paper Fig. 14–16 style.
+
+    A result's group is its ``group`` entry (a sweep's stride share, say) if present, else its velocity input.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    lines: dict[str, list[tuple[float, float | None, float | None]]] = {}
+    for r in results:
+        group = r.get("group") or ""
+        label = " / ".join(str(x) for x in (r.get("robot"), r.get("gait"), group) if x)
+        lines.setdefault(label, []).append((float(r["step_frequency_hz"]), r.get("cot"), r.get("mean_speed_mps")))
+    figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6.5), dpi=110, sharex=True)
+    for label, points in sorted(lines.items()):
+        points.sort()
+        top.plot([p[0] for p in points if p[1] is not None], [p[1] for p in points if p[1] is not None], "o-",
+                 ms=3, lw=1.0, label=label)
+        bottom.plot([p[0] for p in points if p[2] is not None], [p[2] for p in points if p[2] is not None], "o-",
+                    ms=3, lw=1.0, label=label)
+    top.set_ylabel("CoT (eq. 22)")
+    top.grid(True, lw=0.3)
+    top.legend(fontsize=6, ncol=2)
+    bottom.set_ylabel("mean speed [m/s]")
+    bottom.set_xlabel("step frequency [Hz]")
+    bottom.grid(True, lw=0.3)
+    figure.tight_layout()
+    _save(figure, path)
+    return path

@@ -3,6 +3,7 @@
 While a run is going its directory is ``<name>.partial``; every completed control cycle is already on
 disk (rows are flushed as they are written), so an interrupted run keeps what it did and is clearly
 marked. :meth:`RunWriter.finish` writes the summary and renames the directory to its final name.
+``robot.toml`` holds the fully expanded robot of the run.
 
 Tables (one row per control cycle, ``cycle`` and time ``t`` [s] first):
 * ``joints.csv`` — desired joint positions [rad], one column ``<LEG>_<joint>`` per joint;
@@ -27,6 +28,7 @@ from shc_cli.errors import OutputError
 from shc_cli.spec.robot import Robot
 
 PARTIAL_SUFFIX = ".partial"
+ROBOT_FILE = "robot.toml"
 
 
 class RunDirectory:
@@ -57,6 +59,14 @@ class RunDirectory:
         self._handles.append(handle)
         handle.write(",".join(["cycle", "t", *columns]) + "\n")
         return handle, ",".join(["%d", "%.4f", *formats]) + "\n"
+
+    def write_robot(self, robot: Robot) -> None:
+        """``robot.toml``: the fully expanded robot the run used (``shc validate --show`` format), so the run can
+        be analysed without the original files."""
+        from shc_cli.spec.toml_out import dump_toml
+
+        text = f"# the robot of this run, expanded\n{dump_toml(robot.model_dump(mode='json'))}"
+        (self.partial / ROBOT_FILE).write_text(text, encoding="utf-8")
 
     def flush(self) -> None:
         for handle in self._handles:

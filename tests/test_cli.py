@@ -31,7 +31,7 @@ def run(argv: list[str], capsys: pytest.CaptureFixture[str], monkeypatch: pytest
 def test_help_lists_every_command_with_one_line(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     code, out, _ = run(["--help"], capsys, monkeypatch)
     assert code == 0
-    for command in ("validate", "workspace", "schema"):
+    for command in ("validate", "workspace", "plan", "simulate", "analyze", "schema"):
         assert f"  {command} " in out
 
 

@@ -65,6 +65,7 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
     directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-plan"
     controller = Controller(robot, gait, pose_sets=pose_sets)
     writer = RunWriter(directory, robot)
+    writer.write_robot(robot)
     started = time.perf_counter()
     try:
         outputs = _run(controller, robot, timeline, cycles, writer)
@@ -166,6 +167,7 @@ def _summary(robot: Robot, controller: Controller, outputs: list[CycleOutput], s
         "startup_cycles": sum(1 for o in outputs if o.robot_state != RobotState.RUNNING),
         "step_period_cycles": cycle.period,
         "cycle_frequency_hz": cycle.frequency,
+        "step_frequency_hz": controller.parameters["step_frequency"],
         "duty_factor": cycle.duty_factor,
         "moving_cycles": len(predicted),
         "achieved_mean_speed_mps": float(np.mean(achieved)) if achieved else 0.0,

@@ -61,6 +61,7 @@ def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration
     run = Simulation(robot, gait, pose_sets, terrain, scenario, substeps, friction, restitution, seed, imu_noise,
                      start_pose, gui, stand)
     log = RunDirectory(directory)
+    log.write_robot(robot)
     try:
         summary, series = run.execute(timeline, cycles, log)
     except KeyboardInterrupt:
@@ -114,7 +115,8 @@ class Simulation:
                    + [f"{leg}_force" for leg in legs] + [f"{leg}_contact" for leg in legs]
                    + ["x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz", "wx", "wy", "wz",
                       "imu_qx", "imu_qy", "imu_qz", "imu_qw", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z",
-                      "height", "power_w", "robot_state", "walk_state"])
+                      "height", "power_w", "cmd_vx", "cmd_vy", "cmd_wz", "vel_x", "vel_y", "vel_wz",
+                      "robot_state", "walk_state"])
         handle, row = log.table("log.csv", columns, ["%.6g"] * (len(columns) - 2) + ["%s", "%s"])
         rows, cols = world.slot_rows, world.slot_cols  # padded (L, n) arrays → the log's joint columns
         limit = round((robot.start_up.time_to_start + START_UP_MARGIN_S) / dt)
@@ -147,7 +149,8 @@ class Simulation:
                                      reading.joint_efforts[rows, cols], power, reading.foot_forces,
                                      reading.foot_contact, reading.position, reading.rpy, reading.linear_velocity,
                                      reading.angular_velocity, reading.orientation, reading.angular_rate,
-                                     reading.linear_acceleration, (reading.body_height, total)))
+                                     reading.linear_acceleration, (reading.body_height, total), command.velocity,
+                                     out.velocity))
             handle.write(row % (cycle, cycle * dt, *values.tolist(), out.robot_state.name, out.walk_state.name))
             series["t"].append(cycle * dt)
             series["position"].append(reading.position)
@@ -155,8 +158,8 @@ class Simulation:
             series["contact"].append(reading.foot_contact)
             series["running"].append(running)
             if running:
-                if window_start is None:
-                    window_start = reading.position.copy()
+                if window_start is None:  # where the body was when the first RUNNING cycle began
+                    window_start = series["position"][-2] if len(series["position"]) > 1 else reading.position
                     self._running_since = (time.perf_counter(), world.physics_time)
                 max_tilt = max(max_tilt, tilt(reading.rpy))
                 low = reading.body_height < FALL_HEIGHT_SHARE * robot.walker.body_clearance
@@ -208,6 +211,10 @@ class Simulation:
             "mean_speed_mps": speed,
             "mean_power_w": mean_power,
             "mass_kg": mass,
+            "step_frequency_hz": self.controller.parameters["step_frequency"],
+            "step_period_cycles": self.controller.cycle.period,
+            "cycle_frequency_hz": self.controller.cycle.frequency,
+            "duty_factor": self.controller.cycle.duty_factor,
             "cot": cot,
             "max_tilt_rad": max_tilt,
             "fell": fell,

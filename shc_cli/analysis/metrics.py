@@ -1,0 +1,282 @@
+"""The numbers legged-robotics papers report, from one run log.
+
+* Cost of transport, OpenSHC paper eq. 22: ``CoT = P̄ / (m·g·Δx/Δt)`` — mean electrical power over the window
+  divided by weight times the speed from the body's horizontal displacement over that window.
+* Static stability margin: horizontal distance from the whole robot's centre of mass to the nearest edge of the
+  support polygon (the convex hull of the feet in contact), positive inside.
+* ZMP (ATHENA eq. 32): the normal-force weighted mean of the contact feet; its margin (eq. 33) is the distance to
+  the nearest support-polygon edge, and its distance to the polygon's centroid is ATHENA Fig. 18a's measure.
+* Per gait cycle (ATHENA §5.2): the RMS of body height, roll rate and pitch rate over each gait cycle, summarised
+  by median and interquartile range over the cycles.
+
+Distances to an edge are to the edge's line: exact for a point inside a convex polygon (the margin), a lower
+bound of the true distance outside it (then negative).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from shc_cli.runread import RunLog
+
+GRAVITY = 9.81
+"""[m/s²], as in the simulation."""
+
+
+@dataclass(frozen=True)
+class Window:
+    """Which cycles to analyse: RUNNING cycles, after ``skip_s`` seconds of running, and with ``steady`` only those
+    where the controller's desired velocity has not changed for a whole gait cycle while moving."""
+
+    skip_s: float = 0.0
+    steady: bool = False
+
+
+def window_mask(run: RunLog, window: Window) -> np.ndarray:
+    """Boolean mask of the analysed cycles."""
+    mask = run.running.copy()
+    if not mask.any():
+        return mask
+    first = int(np.argmax(mask))
+    skip = round(window.skip_s / run.dt)
+    mask[first:first + skip] = False
+    if window.steady:
+        period = int(run.summary.get("step_period_cycles") or 1)
+        same = np.zeros_like(mask)
+        change = np.abs(run.desired[period:] - run.desired[:-period]).max(axis=1) < 1e-9
+        same[period:] = change
+        mask &= same & (run.walk_state == "MOVING")
+    return mask
+
+
+def support_polygon(points: np.ndarray) -> np.ndarray:
+    """Convex hull of 2-D points, counter-clockwise, ``(k, 2)`` (monotone chain; duplicates and collinear points
+    dropped)."""
+    pts = sorted({(float(x), float(y)) for x, y in points})
+    if len(pts) <= 2:
+        return np.array(pts).reshape(-1, 2)
+
+    def cross(o: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower: list[tuple[float, float]] = []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    upper: list[tuple[float, float]] = []
+    for p in reversed(pts):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return np.array(lower[:-1] + upper[:-1])
+
+
+def edge_margin(polygon: np.ndarray, point: np.ndarray) -> float:
+    """Signed distance from ``point`` to the nearest edge line of a counter-clockwise convex polygon [m]: positive
+    inside. With fewer than three vertices there is no area to be inside: minus the distance to the segment or
+    point (``nan`` for no vertex)."""
+    if len(polygon) == 0:
+        return math.nan
+    if len(polygon) < 3:
+        a = polygon[0]
+        b = polygon[-1]
+        ab = b - a
+        s = 0.0 if not ab.any() else float(np.clip(np.dot(point - a, ab) / np.dot(ab, ab), 0.0, 1.0))
+        return -float(np.linalg.norm(point - (a + s * ab)))
+    a = polygon
+    b = np.roll(polygon, -1, axis=0)
+    edge = b - a
+    length = np.linalg.norm(edge, axis=1)
+    signed = (edge[:, 0] * (point[1] - a[:, 1]) - edge[:, 1] * (point[0] - a[:, 0])) / length
+    return float(signed.min())
+
+
+def polygon_centroid(polygon: np.ndarray) -> np.ndarray:
+    """Area centroid of a convex polygon (the vertex mean below three vertices)."""
+    if len(polygon) < 3:
+        return np.asarray(polygon.mean(axis=0))
+    x, y = polygon[:, 0], polygon[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    area = cross.sum() / 2.0
+    if abs(area) < 1e-12:
+        return np.asarray(polygon.mean(axis=0))
+    return np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / float(6.0 * area)
+
+
+def rotation_rpy(rpy: np.ndarray) -> np.ndarray:
+    """Rotation matrices body → world from roll, pitch, yaw (z-y-x), ``(N, 3, 3)``."""
+    r, p, y = rpy[:, 0], rpy[:, 1], rpy[:, 2]
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.stack([
+        np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], axis=-1),
+        np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], axis=-1),
+        np.stack([-sp, cp * sr, cp * cr], axis=-1),
+    ], axis=1)
+
+
+def feet_and_com(run: RunLog, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World positions of the feet ``(M, L, 3)`` and of the whole robot's centre of mass ``(M, 3)`` [m] at the
+    given cycles, from the logged joints and body pose (link masses at segment midpoints, as in the generated
+    URDF; feet at the DH tips)."""
+    from shc_cli.backends.pybullet_.urdf import FOOT_MASS, link_mass
+    from shc_cli.model.chains import Chains
+
+    robot = run.robot
+    chains = Chains.from_robot(robot)
+    legs = len(robot.legs)
+    m = len(rows)
+    q = run.joints[rows].reshape(m * legs, -1)
+    big = chains.take(np.tile(np.arange(legs), m))
+    frames = big.frames(q)  # leg frames (m·L, n+1, 4, 4)
+    origins = np.einsum("bij,bkj->bki", big.base[:, :3, :3], frames[:, :, :3, 3]) + big.base[:, None, :3, 3]
+    width = chains.joints
+    masses = np.zeros((legs, width + 1))
+    for i, leg in enumerate(robot.legs.values()):
+        for k, joint in enumerate(leg.joints.values()):
+            masses[i, k] = link_mass(joint)
+        masses[i, width] = FOOT_MASS
+    segment_mid = np.concatenate([(origins[:, :-1] + origins[:, 1:]) / 2.0, origins[:, -1:]], axis=1)
+    weighted = (segment_mid.reshape(m, legs, width + 1, 3) * masses[None, :, :, None]).sum(axis=(1, 2))
+    body_mass = robot.body.mass
+    total = body_mass + masses.sum()
+    com_body = (weighted + body_mass * np.asarray(robot.body.com)) / total
+    tips = origins[:, -1].reshape(m, legs, 3)
+    rotation = rotation_rpy(run.rpy[rows])
+    position = run.position[rows]
+    feet = np.einsum("mij,mlj->mli", rotation, tips) + position[:, None, :]
+    com = np.einsum("mij,mj->mi", rotation, com_body) + position
+    return feet, com
+
+
+def _median_iqr(values: np.ndarray) -> tuple[float | None, float | None]:
+    values = values[np.isfinite(values)]
+    if len(values) == 0:
+        return None, None
+    q1, median, q3 = np.percentile(values, [25, 50, 75])
+    return float(median), float(q3 - q1)
+
+
+def per_cycle_rms(values: np.ndarray, period: int) -> np.ndarray:
+    """RMS of ``values`` over each whole gait cycle of ``period`` samples (a last partial cycle is dropped)."""
+    cycles = len(values) // max(period, 1)
+    if cycles == 0:
+        return np.zeros(0)
+    block = values[:cycles * period].reshape(cycles, period)
+    return np.asarray(np.sqrt((block * block).mean(axis=1)))
+
+
+def _before(run: RunLog, row: int) -> np.ndarray:
+    """Horizontal body position when cycle ``row`` began: the row before's (each row is logged after its cycle)."""
+    return np.asarray(run.position[max(row - 1, 0), :2])
+
+
+def _period(run: RunLog) -> int:
+    """Gait period in cycles from the robot and the gait the summary names (0 if that gait cannot be loaded)."""
+    from shc_cli.control.gait import step_cycle
+    from shc_cli.errors import ShcError
+    from shc_cli.spec.loading import load_gait
+
+    try:
+        gait = load_gait(str(run.summary.get("gait") or run.robot.walker.gait)).gait
+    except ShcError:
+        return 0
+    if gait is None:
+        return 0
+    frequency = float(run.summary.get("step_frequency_hz") or run.robot.walker.step_frequency.default)
+    return step_cycle(gait, frequency, run.dt).period
+
+
+def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
+    """Every metric of one run over the window; keys documented in docs/commands.md (``shc analyze``)."""
+    mask = window_mask(run, window)
+    rows = np.flatnonzero(mask)
+    dt = run.dt
+    summary = run.summary
+    out: dict[str, Any] = {
+        "run": str(run.path), "kind": run.kind, "robot": run.robot.name, "gait": summary.get("gait"),
+        "scenario": summary.get("scenario", "plan"),
+        "step_frequency_hz": summary.get("step_frequency_hz", run.robot.walker.step_frequency.default),
+        "window_s": len(rows) * dt, "window_start_s": float(run.t[rows[0]]) if len(rows) else None,
+    }
+    keys = ("cot", "mean_power_w", "mean_speed_mps", "steady_speed_mps", "commanded_speed_mps", "speed_ratio",
+            "distance_m", "duty_factor", "foot_slip_m", "height_median_m", "height_iqr_m", "pitch_rate_median_rps",
+            "pitch_rate_iqr_rps", "roll_rate_median_rps", "roll_rate_iqr_rps", "stability_margin_median_m",
+            "stability_margin_min_m", "zmp_margin_median_m", "zmp_margin_iqr_m", "zmp_centre_distance_median_m",
+            "zmp_centre_distance_iqr_m", "gait_cycles")
+    out.update(dict.fromkeys(keys))
+    if len(rows) < 2:
+        return out
+    mass = run.robot.total_mass()
+    span = (rows[-1] - rows[0] + 1) * dt
+    displacement = run.position[rows[-1], :2] - _before(run, rows[0])
+    distance = float(np.linalg.norm(displacement))
+    speed = float(distance / span)
+    commanded = float(np.linalg.norm(run.desired[rows, :2], axis=1).mean())
+    out.update(distance_m=distance, mean_speed_mps=float(speed), commanded_speed_mps=commanded,
+               speed_ratio=float(speed / commanded) if commanded > 1e-9 else None)
+    steady = rows if window.steady else np.flatnonzero(window_mask(run, Window(window.skip_s, steady=True)))
+    if len(steady) >= 2:
+        moved = np.linalg.norm(run.position[steady[-1], :2] - _before(run, steady[0]))
+        out["steady_speed_mps"] = float(moved / ((steady[-1] - steady[0] + 1) * dt))
+    if run.power is not None:
+        power = float(run.power[rows].mean())
+        out["mean_power_w"] = power
+        walking = summary.get("scenario", "WG") == "WG"
+        out["cot"] = float(power / (mass * GRAVITY * speed)) if walking and speed > 1e-3 else None  # eq. 22
+    contact = run.contact[rows]
+    per_leg = contact.mean(axis=0)
+    out["duty_factor"] = float(per_leg.mean())
+    out["duty_factor_per_leg"] = {leg: float(v) for leg, v in zip(run.legs, per_leg, strict=True)}
+
+    feet, com = feet_and_com(run, rows)
+    both = contact[1:] & contact[:-1]
+    moved = np.linalg.norm(feet[1:, :, :2] - feet[:-1, :, :2], axis=2)
+    slip = (moved * both).sum(axis=0)
+    out["foot_slip_m"] = float(slip.mean())
+    out["foot_slip_per_leg_m"] = {leg: float(v) for leg, v in zip(run.legs, slip, strict=True)}
+
+    margins = np.full(len(rows), np.nan)
+    zmp_margin = np.full(len(rows), np.nan)
+    zmp_centre = np.full(len(rows), np.nan)
+    zmp = np.full((len(rows), 2), np.nan)
+    forces = run.foot_force[rows] if run.foot_force is not None else None
+    for i in range(len(rows)):
+        down = contact[i]
+        if not down.any():
+            continue
+        polygon = support_polygon(feet[i, down, :2])
+        margins[i] = edge_margin(polygon, com[i, :2])
+        if forces is not None and forces[i, down].sum() > 0.0:
+            weights = forces[i, down]
+            zmp[i] = (feet[i, down, :2] * weights[:, None]).sum(axis=0) / weights.sum()  # eq. 32
+            zmp_margin[i] = edge_margin(polygon, zmp[i])  # eq. 33
+            zmp_centre[i] = float(np.linalg.norm(zmp[i] - polygon_centroid(polygon)))
+    out["stability_margin_median_m"], _ = _median_iqr(margins)
+    out["stability_margin_min_m"] = float(np.nanmin(margins)) if np.isfinite(margins).any() else None
+    if forces is not None:
+        out["zmp_margin_median_m"], out["zmp_margin_iqr_m"] = _median_iqr(zmp_margin)
+        out["zmp_centre_distance_median_m"], out["zmp_centre_distance_iqr_m"] = _median_iqr(zmp_centre)
+
+    cycles = {"height": np.zeros(0), "roll_rate": np.zeros(0), "pitch_rate": np.zeros(0)}
+    period = int(summary.get("step_period_cycles") or _period(run))
+    if period > 0:
+        first, last = rows[0], rows[-1] + 1  # whole cycles of the window's span
+        height = per_cycle_rms(run.height[first:last], period) if run.height is not None else np.zeros(0)
+        out["gait_cycles"] = int((last - first) // period)
+        out["height_median_m"], out["height_iqr_m"] = _median_iqr(height)
+        if run.body_rate is not None:
+            roll = per_cycle_rms(run.body_rate[first:last, 0], period)
+            pitch = per_cycle_rms(run.body_rate[first:last, 1], period)
+            out["roll_rate_median_rps"], out["roll_rate_iqr_rps"] = _median_iqr(roll)
+            out["pitch_rate_median_rps"], out["pitch_rate_iqr_rps"] = _median_iqr(pitch)
+            cycles.update(roll_rate=roll, pitch_rate=pitch)
+        cycles["height"] = height
+    out["_series"] = {"rows": rows, "margin": margins, "zmp": zmp, "zmp_margin": zmp_margin, "feet": feet,
+                      "com": com, "contact": contact, "cycles": cycles}
+    return out

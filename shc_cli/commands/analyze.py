@@ -1,0 +1,74 @@
+"""``shc analyze``: cost of transport, power, speed, duty factor, slip and stability of one or more runs."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import typer
+
+from shc_cli.analysis.metrics import Window
+
+COLUMNS = (
+    ("scenario", "scen", "{}"),
+    ("step_frequency_hz", "f_s Hz", "{:.2f}"),
+    ("window_s", "window s", "{:.1f}"),
+    ("mean_speed_mps", "speed m/s", "{:.4f}"),
+    ("speed_ratio", "÷cmd", "{:.2f}"),
+    ("mean_power_w", "power W", "{:.1f}"),
+    ("cot", "CoT", "{:.2f}"),
+    ("duty_factor", "duty", "{:.3f}"),
+    ("foot_slip_m", "slip m", "{:.3f}"),
+    ("stability_margin_median_m", "margin m", "{:.3f}"),
+    ("zmp_margin_median_m", "ZMP m", "{:.3f}"),
+    ("height_median_m", "height m", "{:.3f}"),
+    ("roll_rate_median_rps", "roll r/s", "{:.3f}"),
+    ("pitch_rate_median_rps", "pitch r/s", "{:.3f}"),
+)
+"""Terminal table columns: result key, header, format."""
+
+
+def public(result: dict[str, Any]) -> dict[str, Any]:
+    """A result without its plot series (what ``--json`` prints)."""
+    return {k: v for k, v in result.items() if not k.startswith("_")}
+
+
+def _cell(value: Any, fmt: str) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "–"
+    return fmt.format(value)
+
+
+def table(results: list[dict[str, Any]]) -> str:
+    """One row per run, aligned columns."""
+    header = ["run", *[h for _, h, _ in COLUMNS]]
+    rows = [[Path(str(r["run"])).name, *[_cell(r.get(k), f) for k, _, f in COLUMNS]] for r in results]
+    widths = [max(len(row[i]) for row in [header, *rows]) for i in range(len(header))]
+    lines = ["  ".join(cell.ljust(w) if i == 0 else cell.rjust(w) for i, (cell, w) in enumerate(zip(row, widths,
+                                                                                                       strict=True)))
+             for row in [header, *rows]]
+    return "\n".join(lines)
+
+
+def run_analyze(runs: list[Path], as_json: bool, out: Path | None, skip: float, steady: bool) -> None:
+    from shc_cli.analysis.metrics import analyze_run
+    from shc_cli.outputs import ensure_dir, write_text
+    from shc_cli.runread import read_run
+
+    logs = [read_run(path) for path in runs]
+    window = Window(skip_s=skip, steady=steady)
+    results = [analyze_run(log, window) for log in logs]
+    if as_json:
+        data: Any = public(results[0]) if len(results) == 1 else [public(r) for r in results]
+        typer.echo(json.dumps(data, indent=2))
+    else:
+        typer.echo(table(results))
+    if out is not None:
+        from shc_cli.plots import plot_analysis
+
+        ensure_dir(out)
+        write_text(out / "analysis.json", json.dumps([public(r) for r in results], indent=2) + "\n")
+        written = plot_analysis(results, logs, out)
+        typer.echo(f"wrote {out / 'analysis.json'} and {len(written)} plots in {out}", err=as_json)

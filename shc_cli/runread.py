@@ -1,0 +1,191 @@
+"""The one run-log reader: a ``plan`` or ``simulate`` run directory as arrays, whatever wrote it.
+
+:func:`read_run` gives a :class:`RunLog` with the same fields for every kind of run; what a kind cannot know
+is ``None`` (a plan has no measured power, forces or IMU). ``simulate`` logs what the sensors saw; a ``plan``
+run gives the ideal body path (its desired velocity integrated) and the commanded joints.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from shc_cli.errors import OutputError, SpecError
+from shc_cli.runlog import PARTIAL_SUFFIX, ROBOT_FILE
+from shc_cli.spec.robot import Robot
+
+
+@dataclass
+class RunLog:
+    """One run, one row per control cycle (legs in id order).
+
+    Attributes:
+        path: the run directory.
+        kind: ``"simulate"`` or ``"plan"``.
+        summary: the run's ``summary.json``.
+        robot: the robot the run used (its ``robot.toml``).
+        t: time [s], ``(N,)``.
+        running: robot state RUNNING, ``(N,)``.
+        walk_state: walk state name per cycle, ``(N,)``.
+        command: velocity input (x, y, yaw) in the robot's input mode, ``(N, 3)``.
+        desired: body velocity the controller commanded after its limits [m/s, m/s, rad/s], ``(N, 3)``.
+        position: body (base_link) position in the world [m], ``(N, 3)``.
+        rpy: body roll, pitch, yaw [rad], ``(N, 3)``.
+        joints: joint positions ``(N, L, n)`` [rad] — measured (simulate) or commanded (plan).
+        contact: foot on the ground, ``(N, L)`` — contact sensor (simulate) or stance phase (plan).
+        power: total electrical power [W], ``(N,)``, or ``None``.
+        foot_force: contact normal force per foot [N], ``(N, L)``, or ``None``.
+        body_rate: body-frame angular rate (roll, pitch, yaw rate) [rad/s], ``(N, 3)``, or ``None``.
+        height: body height above the terrain [m], ``(N,)``, or ``None``.
+    """
+
+    path: Path
+    kind: str
+    summary: dict[str, Any]
+    robot: Robot
+    t: np.ndarray
+    running: np.ndarray
+    walk_state: np.ndarray
+    command: np.ndarray
+    desired: np.ndarray
+    position: np.ndarray
+    rpy: np.ndarray
+    joints: np.ndarray
+    contact: np.ndarray
+    power: np.ndarray | None = None
+    foot_force: np.ndarray | None = None
+    body_rate: np.ndarray | None = None
+    height: np.ndarray | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def dt(self) -> float:
+        return float(self.robot.time_delta)
+
+    @property
+    def legs(self) -> list[str]:
+        return list(self.robot.legs)
+
+
+def read_run(path: Path) -> RunLog:
+    """Read a run directory written by ``shc plan`` or ``shc simulate``; raises :class:`SpecError` (exit 2) with
+    one line when it is not one."""
+    path = Path(path)
+    if not path.is_dir():
+        raise _bad(path, "not a run directory", "give a directory written by shc plan or shc simulate")
+    if path.name.endswith(PARTIAL_SUFFIX) and not (path / "summary.json").exists():
+        raise _bad(path, "an unfinished run (no summary.json)", "analyse a finished run")
+    try:
+        summary = json.loads((path / "summary.json").read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise _bad(path, "no summary.json", "give a directory written by shc plan or shc simulate") from None
+    except (OSError, json.JSONDecodeError) as error:
+        raise _bad(path / "summary.json", f"unreadable: {error}", "re-run to regenerate it") from None
+    robot = _robot(path, summary)
+    if (path / "log.csv").exists():
+        return _simulate_run(path, summary, robot)
+    if (path / "joints.csv").exists() and (path / "body.csv").exists():
+        return _plan_run(path, summary, robot)
+    raise _bad(path, "neither log.csv (simulate) nor joints.csv and body.csv (plan)", "re-run to regenerate it")
+
+
+def _bad(path: Path, problem: str, fix: str) -> SpecError:
+    from shc_cli.errors import Issue
+
+    return SpecError([Issue(path, None, "", problem, fix)])
+
+
+def _robot(path: Path, summary: dict[str, Any]) -> Robot:
+    """The run's own expanded robot, or the bundled robot it names (runs written before robot.toml existed)."""
+    from shc_cli.spec.loading import load_robot
+
+    source: str | Path = path / ROBOT_FILE if (path / ROBOT_FILE).exists() else str(summary.get("robot", ""))
+    loaded = load_robot(source)
+    if loaded.robot is None:
+        raise _bad(path, f"robot '{source}' cannot be loaded", "keep robot.toml in the run directory")
+    return loaded.robot
+
+
+def _table(file: Path) -> dict[str, np.ndarray]:
+    """A CSV table as columns: numbers as float arrays, other columns as string arrays."""
+    try:
+        with file.open(encoding="utf-8", newline="") as handle:
+            reader = csv.reader(handle)
+            header = next(reader)
+            rows = list(reader)
+    except (OSError, StopIteration) as error:
+        raise OutputError(f"{file}: cannot read the table ({error or 'empty'})") from None
+    if not rows:
+        raise _bad(file, "no rows", "re-run to regenerate it")
+    columns = list(zip(*rows, strict=False))
+    out: dict[str, np.ndarray] = {}
+    for name, values in zip(header, columns, strict=False):
+        try:
+            out[name] = np.array(values, dtype=float)
+        except ValueError:
+            out[name] = np.array(values, dtype=str)
+    return out
+
+
+def _joint_array(columns: dict[str, np.ndarray], robot: Robot, rows: int, suffix: str = "") -> np.ndarray:
+    width = max(len(leg.joints) for leg in robot.legs.values())
+    out = np.zeros((rows, len(robot.legs), width))
+    for i, (leg_id, leg) in enumerate(robot.legs.items()):
+        for k, joint in enumerate(leg.joints):
+            out[:, i, k] = columns[f"{leg_id}_{joint}{suffix}"]
+    return out
+
+
+def _stack(columns: dict[str, np.ndarray], names: list[str]) -> np.ndarray:
+    return np.stack([columns[name] for name in names], axis=1)
+
+
+def _simulate_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
+    c = _table(path / "log.csv")
+    rows = len(c["t"])
+    legs = list(robot.legs)
+    zeros = np.zeros((rows, 3))
+    has_velocity = "vel_x" in c  # runs logged before the velocity columns existed
+    return RunLog(
+        path=path, kind="simulate", summary=summary, robot=robot, t=c["t"],
+        running=c["robot_state"] == "RUNNING", walk_state=c["walk_state"],
+        command=_stack(c, ["cmd_vx", "cmd_vy", "cmd_wz"]) if has_velocity else zeros,
+        desired=_stack(c, ["vel_x", "vel_y", "vel_wz"]) if has_velocity else zeros,
+        position=_stack(c, ["x", "y", "z"]), rpy=_stack(c, ["roll", "pitch", "yaw"]),
+        joints=_joint_array(c, robot, rows),
+        contact=_stack(c, [f"{leg}_contact" for leg in legs]) > 0.5,
+        power=c["power_w"], foot_force=_stack(c, [f"{leg}_force" for leg in legs]),
+        body_rate=_stack(c, ["gyro_x", "gyro_y", "gyro_z"]), height=c["height"],
+    )
+
+
+def _plan_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
+    joints = _table(path / "joints.csv")
+    body = _table(path / "body.csv")
+    tips = _table(path / "tips.csv") if (path / "tips.csv").exists() else None
+    rows = len(joints["t"])
+    dt = float(robot.time_delta)
+    desired = _stack(body, ["vel_x", "vel_y", "vel_wz"])
+    # The ideal body path: the commanded body-frame velocity integrated in the world (what a robot without
+    # slip would do); yaw first, so each cycle moves along the heading it had.
+    yaw = np.concatenate([[0.0], np.cumsum(desired[:-1, 2] * dt)])
+    step = np.stack([desired[:, 0] * np.cos(yaw) - desired[:, 1] * np.sin(yaw),
+                     desired[:, 0] * np.sin(yaw) + desired[:, 1] * np.cos(yaw)], axis=1) * dt
+    xy = np.concatenate([np.zeros((1, 2)), np.cumsum(step[:-1], axis=0)])
+    z = body["pose_z"]  # the body pose in the walk plane: its z is the height above the ground plane
+    position = np.column_stack([xy, z])
+    rpy = np.column_stack([body["pose_roll"], body["pose_pitch"], yaw + body["pose_yaw"]])
+    legs = list(robot.legs)
+    contact = (_stack(tips, [f"{leg}_stance_progress" for leg in legs]) >= 0.0 if tips is not None
+               else np.ones((rows, len(legs)), dtype=bool))
+    return RunLog(
+        path=path, kind="plan", summary=summary, robot=robot, t=joints["t"],
+        running=body["robot_state"] == "RUNNING", walk_state=body["walk_state"],
+        command=_stack(body, ["cmd_vx", "cmd_vy", "cmd_wz"]), desired=desired, position=position, rpy=rpy,
+        joints=_joint_array(joints, robot, rows), contact=contact, height=z,
+    )
