@@ -19,7 +19,7 @@ from shc_cli.errors import ShcError
 app = typer.Typer(
     name="shc",
     help="OpenSHC's multilegged gait controller in Python: check robots, see workspaces, plan gaits, simulate, "
-    "analyse.",
+    "analyse, sweep.",
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
@@ -147,6 +147,21 @@ def analyze(
     from shc_cli.commands.analyze import run_analyze
 
     run_analyze(runs, json_output, out, skip, steady)
+
+
+@app.command()
+def sweep(
+    file: Annotated[Path, typer.Argument(help="Sweep file (TOML): a grid of simulations.")],
+    workers: Annotated[int | None, typer.Option(help="Parallel runs (default: all cores).")] = None,
+    executor: Annotated[str, typer.Option(help="local (worker processes) or dask.")] = "local",
+    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address (default: a LocalCluster).")] = None,
+    out: Annotated[Path | None, typer.Option(help="Output directory (default runs/<sweep name>).")] = None,
+    resume: Annotated[bool, typer.Option(help="Continue a sweep: finished runs are read, not re-run.")] = False,
+) -> None:
+    """Run a grid of simulations in parallel and tabulate CoT, power, speed and stability per run."""
+    from shc_cli.commands.sweep import run_sweep
+
+    run_sweep(file, workers, executor, scheduler, out, resume)
 
 
 export_app = typer.Typer(help="Export robots and runs to other formats.", no_args_is_help=True)

@@ -32,7 +32,24 @@ def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration
                  commands: Path | None, out: Path | None, plots: bool, terrain_text: str, scenario: str,
                  physics_rate: float, friction: float, restitution: float, seed: int, imu_noise: float,
                  start_pose: str, gui: bool, stand: bool | None = None) -> Path:
-    """Load, simulate, log; returns the run directory."""
+    """Load, simulate, log, print one line; returns the run directory."""
+    path, summary = simulate_to(robot_name, gait_name, velocity, duration, commands, out, plots, terrain_text,
+                                scenario, physics_rate, friction, restitution, seed, imu_noise, start_pose, gui,
+                                stand)
+    typer.echo(f"{summary['robot']} / {summary['gait']} / {summary['scenario']} on {terrain_text}: "
+               f"{summary['sim_time_s']:.1f} s simulated in {summary['wall_time_s']:.1f} s, distance "
+               f"{summary['distance_m']:.3f} m, mean speed {summary['mean_speed_mps']:.4f} m/s, mean power "
+               f"{summary['mean_power_w']:.1f} W, "
+               f"CoT {summary['cot'] if summary['cot'] is None else round(summary['cot'], 3)}"
+               f"{', FELL' if summary['fell'] else ''} → {path}")
+    return path
+
+
+def simulate_to(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
+                commands: Path | None, out: Path | None, plots: bool, terrain_text: str, scenario: str,
+                physics_rate: float, friction: float, restitution: float, seed: int, imu_noise: float,
+                start_pose: str, gui: bool = False, stand: bool | None = None) -> tuple[Path, dict[str, Any]]:
+    """Load, simulate, log (silently); returns the run directory and its summary."""
     from shc_cli.backends.pybullet_.terrain import parse_terrain
     from shc_cli.spec.checks import load_checked
 
@@ -73,13 +90,7 @@ def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration
         from shc_cli.plots import plot_simulation
 
         plot_simulation(robot, series, log.partial)
-    path = log.finish(summary)
-    typer.echo(f"{robot.name} / {gait.name} / {scenario} on {terrain_text}: {summary['sim_time_s']:.1f} s simulated "
-               f"in {summary['wall_time_s']:.1f} s, distance {summary['distance_m']:.3f} m, mean speed "
-               f"{summary['mean_speed_mps']:.4f} m/s, mean power {summary['mean_power_w']:.1f} W, "
-               f"CoT {summary['cot'] if summary['cot'] is None else round(summary['cot'], 3)}"
-               f"{', FELL' if summary['fell'] else ''} → {path}")
-    return path
+    return log.finish(summary), summary
 
 
 class Simulation:

@@ -1,0 +1,301 @@
+"""``shc sweep``: a grid of simulations in parallel processes (or on a Dask cluster), analysed into one table.
+
+Layout of the output directory::
+
+    OUT/sweep.toml            the sweep file, as run
+    OUT/variants/SLUG.toml    robot files of points that change robot parameters (extends + overrides)
+    OUT/runs/SLUG/            one simulate run directory per point (log.csv, summary.json, robot.toml)
+    OUT/results.csv           one row per point, grid order: its values, status, error and the analyze metrics
+    OUT/results.partial.csv   rows as runs finish (kept if the sweep is interrupted)
+    OUT/cot.png               CoT and speed vs step frequency (OpenSHC paper Fig. 14–16 style)
+
+Every point runs in a worker process through :func:`run_point`, which never raises: a failing run becomes a row
+with ``status = failed`` and its error. ``--resume`` re-reads finished run directories instead of simulating.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+import shutil
+import sys
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import typer
+
+from shc_cli.errors import Issue, OutputError, ShcError, SpecError
+from shc_cli.spec.sweep import Point, Sweep, load_sweep, variant_text
+
+METRICS = ("cot", "mean_power_w", "mean_speed_mps", "steady_speed_mps", "commanded_speed_mps", "speed_ratio",
+           "distance_m", "duty_factor", "foot_slip_m", "stability_margin_median_m", "zmp_margin_median_m",
+           "height_median_m", "height_iqr_m", "roll_rate_median_rps", "pitch_rate_median_rps", "step_frequency_hz")
+"""Analysis keys copied into the results table."""
+RUN_KEYS = ("fell", "sim_time_s", "wall_time_s", "physics_time_s")
+"""Summary keys copied into the results table (the timings differ from run to run; compare the others)."""
+
+
+def run_point(point: Point, out: str) -> dict[str, Any]:
+    """Simulate one grid point into ``out/runs/<slug>`` (or re-read it if finished) and analyse it; never raises.
+
+    Returns the results row: index, slug, the grid values, ``status`` (``ok``/``failed``), ``error`` and the
+    metrics.
+    """
+    row: dict[str, Any] = {"index": point.index, "slug": point.slug, **point.values, "status": "ok", "error": ""}
+    directory = Path(out) / "runs" / point.slug
+    try:
+        if not (directory / "summary.json").exists():
+            partial = directory.with_name(directory.name + ".partial")
+            if partial.exists():
+                shutil.rmtree(partial)  # a crashed earlier attempt
+            _simulate(point, Path(out), directory)
+        from shc_cli.analysis.metrics import analyze_run
+        from shc_cli.runread import read_run
+
+        log = read_run(directory)
+        result = analyze_run(log)
+        row.update({key: log.summary.get(key) for key in RUN_KEYS})
+        row.update({key: result.get(key) for key in METRICS})
+    except Exception as error:  # a failing run is a row, not the end of the sweep
+        row.update(status="failed", error=_one_line(error))
+    return row
+
+
+def _one_line(error: BaseException) -> str:
+    if isinstance(error, SpecError):
+        return "; ".join(str(issue) for issue in error.issues)
+    text = str(error).strip().splitlines()
+    return f"{type(error).__name__}: {text[0] if text else ''}"
+
+
+def _simulate(point: Point, out: Path, directory: Path) -> None:
+    from shc_cli.commands.simulate import simulate_to
+
+    options = point.options
+    robot = _robot_for(point, out)
+    velocity = options["velocity"]
+    if options["stride_percent"] is not None:
+        velocity = f"{float(options['stride_percent']) / 100.0:g},0,0"
+    simulate_to(robot, options["gait"] or None, velocity, float(options["duration"]), None, directory, False,
+                options["terrain"], options["scenario"], float(options["physics_rate"]), float(options["friction"]),
+                float(options["restitution"]), int(options["seed"]), float(options["imu_noise"]), options["start"],
+                False, options["stand"])
+
+
+def _robot_for(point: Point, out: Path) -> str:
+    """The robot to load: the named one, or a variant file extending it with the point's overrides."""
+    from shc_cli.spec.loading import load_robot, resolve
+
+    name = str(point.options["robot"])
+    if not point.overrides:
+        return name
+    base = resolve("robots", name)
+    robot = load_robot(base).robot
+    adjustable = {path for path in point.overrides if _is_adjustable(robot, path)}
+    path = out / "variants" / f"{point.slug}.toml"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(variant_text(base, point.overrides, adjustable), encoding="utf-8")
+    return str(path)
+
+
+def _is_adjustable(robot: Any, dotted: str) -> bool:
+    from shc_cli.spec.robot import Adjustable
+
+    node = robot
+    for part in dotted.split("."):
+        node = node.get(part) if isinstance(node, dict) else getattr(node, part, None)
+        if node is None:
+            return False
+    return isinstance(node, Adjustable)
+
+
+def check_points(sweep: Sweep) -> None:
+    """Fail early, with the sweep file's line, on robot-file paths that do not exist and robots/gaits that do not
+    load — before any simulation starts."""
+    from shc_cli.spec.checks import load_checked
+    from shc_cli.spec.loading import load_robot, resolve
+
+    document_lines = _key_lines(sweep)
+    robots = {str(p.options["robot"]) for p in sweep.points}
+    for name in sorted(robots):
+        try:
+            robot = load_robot(resolve("robots", name)).robot
+        except ShcError as error:
+            raise SpecError([Issue(sweep.path, document_lines.get("robot"), "robot", str(error).splitlines()[0],
+                                   "name a bundled robot or a robot file")]) from None
+        for dotted in {k for p in sweep.points for k in p.overrides}:
+            node: Any = robot
+            for part in dotted.split("."):
+                node = node.get(part) if isinstance(node, dict) else getattr(node, part, None)
+                if node is None:
+                    raise SpecError([Issue(sweep.path, document_lines.get(dotted), dotted,
+                                           f"robot '{name}' has no field '{dotted}'",
+                                           "use a dotted path of `shc validate --show ROBOT`")])
+    seen: set[tuple[str, str]] = set()
+    for point in sweep.points:
+        key = (str(point.options["robot"]), str(point.options["gait"]))
+        if key in seen:
+            continue
+        seen.add(key)
+        try:
+            load_checked(key[0], key[1] or None)
+        except SpecError as error:
+            issue = error.issues[0]
+            raise SpecError([Issue(sweep.path, document_lines.get("gait"), "gait",
+                                   f"{key[0]} / {key[1] or 'own gait'}: {issue.problem}", issue.fix)]) from None
+
+
+def _key_lines(sweep: Sweep) -> dict[str, int | None]:
+    from shc_cli.spec.source import Document
+
+    document = Document(sweep.path)
+    out: dict[str, int | None] = {}
+    for key in [*sweep.grid, *sweep.fixed]:
+        out[key] = document.line(("grid", key)) or document.line(("fixed", key))
+    return out
+
+
+def result_columns(sweep: Sweep) -> list[str]:
+    return ["index", "slug", *sweep.grid, "status", "error", *RUN_KEYS, *METRICS]
+
+
+def _format(value: Any) -> str:
+    if value is None:
+        return ""
+    if isinstance(value, float):
+        return "" if math.isnan(value) else f"{value:.6g}"
+    return str(value)
+
+
+def write_results(path: Path, columns: list[str], rows: list[dict[str, Any]]) -> None:
+    """The results table, atomically."""
+    from shc_cli.outputs import write_text
+
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(columns)
+    for row in sorted(rows, key=lambda r: int(r["index"])):
+        writer.writerow([_format(row.get(c)) for c in columns])
+    write_text(path, buffer.getvalue())
+
+
+def local_results(points: list[Point], out: Path, workers: int) -> Iterator[dict[str, Any]]:
+    """Rows as the runs finish, from a pool of worker processes (one run per process at a time)."""
+    if workers <= 1:
+        for point in points:
+            yield run_point(point, str(out))
+        return
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    with ProcessPoolExecutor(max_workers=workers) as pool:
+        futures = {pool.submit(run_point, point, str(out)): point for point in points}
+        for future in as_completed(futures):
+            point = futures[future]
+            error = future.exception()
+            if error is not None:  # the worker process itself died
+                yield {"index": point.index, "slug": point.slug, **point.values, "status": "failed",
+                       "error": _one_line(error)}
+            else:
+                yield future.result()
+
+
+def dask_results(points: list[Point], out: Path, workers: int, scheduler: str | None) -> Iterator[dict[str, Any]]:
+    """Rows as the runs finish on a Dask cluster: the scheduler at ``scheduler``, or a LocalCluster of ``workers``
+    single-threaded worker processes. Workers need shc installed and must see ``out`` (a shared file system)."""
+    try:
+        from dask import distributed
+    except ImportError:
+        raise SpecError([Issue(None, None, "--executor", "dask is not installed",
+                               "pip install 'shc[dask]' (dask[distributed]) or use --executor local")]) from None
+    dask: Any = distributed  # untyped library
+    cluster = None
+    if scheduler is None:
+        cluster = dask.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+    client = dask.Client(cluster if cluster is not None else scheduler)
+    try:
+        futures = client.map(run_point, points, out=str(out.resolve()), pure=False)
+        for future in dask.as_completed(futures):
+            yield future.result()
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | None, out: Path | None,
+              resume: bool) -> Path:
+    """Check the sweep, run every point, write the results table and plots; returns the output directory."""
+    sweep = load_sweep(file)
+    if executor not in ("local", "dask"):
+        raise SpecError([Issue(None, None, "--executor", f"'{executor}' is not an executor", "use local or dask")])
+    if scheduler is not None and executor != "dask":
+        raise SpecError([Issue(None, None, "--scheduler", "only the dask executor has a scheduler",
+                               "add --executor dask")])
+    check_points(sweep)
+    out = out or Path("runs") / sweep.name
+    if out.exists() and any(out.iterdir()) and not resume:
+        raise OutputError(f"{out}: already exists (add --resume to continue it, or choose another --out)")
+    (out / "runs").mkdir(parents=True, exist_ok=True)
+    shutil.copyfile(sweep.path, out / "sweep.toml") if sweep.path.resolve() != (out / "sweep.toml").resolve() \
+        else None
+    count = workers or os.cpu_count() or 1
+    columns = result_columns(sweep)
+    started = time.perf_counter()
+    if executor == "dask":
+        rows_iter = dask_results(sweep.points, out, count, scheduler)
+    else:
+        rows_iter = local_results(sweep.points, out, count)
+    rows: list[dict[str, Any]] = []
+    progress = _progress(len(sweep.points))
+    partial = out / "results.partial.csv"
+    with partial.open("w", encoding="utf-8", newline="") as handle:
+        writer = csv.writer(handle, lineterminator="\n")
+        writer.writerow(columns)
+        try:
+            for row in rows_iter:
+                rows.append(row)
+                writer.writerow([_format(row.get(c)) for c in columns])
+                handle.flush()
+                if progress is not None:
+                    progress(len(rows), row)
+        except KeyboardInterrupt:
+            raise ShcError(f"interrupted: {len(rows)} runs finished, their rows are in {partial}; "
+                           "continue with --resume") from None
+    write_results(out / "results.csv", columns, rows)
+    partial.unlink()
+    from shc_cli.plots import plot_cot
+
+    done = [r for r in rows if r["status"] == "ok"]
+    if len({r.get("step_frequency_hz") for r in done}) > 1:
+        group_keys = [k for k in sweep.grid if k not in ("robot", "gait") and not k.endswith("step_frequency")]
+        for row in done:
+            row["group"] = ", ".join(f"{k} {row[k]}" for k in group_keys)
+        plot_cot(done, out / "cot.png")
+    failed = len(rows) - len(done)
+    fell = sum(1 for r in done if str(r.get("fell")) == "True")
+    typer.echo(f"{sweep.name}: {len(rows)} runs in {time.perf_counter() - started:.1f} s with {count} "
+               f"{executor} worker{'s' if count != 1 else ''}: {len(done)} ok ({fell} fell), {failed} failed "
+               f"→ {out / 'results.csv'}")
+    return out
+
+
+def _progress(total: int) -> Callable[[int, dict[str, Any]], None] | None:
+    """A rich progress bar on a terminal; ``None`` (quiet) in pipes and CI."""
+    if not sys.stderr.isatty() or os.environ.get("CI"):
+        return None
+    from rich.progress import Progress
+
+    bar = Progress(transient=True)
+    task = bar.add_task("sweep", total=total)
+    bar.start()
+
+    def update(done: int, row: dict[str, Any]) -> None:
+        bar.update(task, completed=done, description=f"sweep ({row['slug'][:40]})")
+        if done >= total:
+            bar.stop()
+
+    return update

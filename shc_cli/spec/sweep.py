@@ -1,0 +1,180 @@
+"""Sweep files: a grid of simulations (OpenSHC paper eq. 21, Π = C × A × G × L_s × F_s) in TOML.
+
+```toml
+name = "bullet_cot"              # optional; default: the file name
+duration = 20.0                  # seconds of walking after start-up (default 20)
+
+[grid]                           # every combination of these lists, in this order
+robot = ["bullet", "bullet_mammalian"]
+gait = ["tripod", "bipod"]
+stride_percent = [60, 75, 90, 100]
+"walker.step_frequency" = [0.4, 0.6, 0.8]
+
+[fixed]                          # one value for every run
+terrain = "flat"
+```
+
+A key is either a simulation option (:data:`OPTIONS`) or a dotted robot-file path (``walker.body_clearance``,
+``servo.stall_torque``); a number given for an adjustable parameter (``{ default, min, max, step }``) sets its
+``default``. ``stride_percent`` is the stride as a percentage of the largest the walkspace allows: the forward
+velocity input in throttle mode (100 % = input 1).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from shc_cli.errors import Issue, SpecError
+from shc_cli.spec.source import Document
+
+OPTIONS: dict[str, tuple[type | tuple[type, ...], Any]] = {
+    "robot": (str, "bullet"),
+    "gait": (str, ""),
+    "terrain": (str, "flat"),
+    "scenario": (str, "WG"),
+    "velocity": (str, "1,0,0"),
+    "stride_percent": ((int, float), None),
+    "duration": ((int, float), 20.0),
+    "physics_rate": ((int, float), 400.0),
+    "friction": ((int, float), 0.9),
+    "restitution": ((int, float), 0.0),
+    "seed": (int, 0),
+    "imu_noise": ((int, float), 0.0),
+    "start": (str, "unpacked"),
+    "stand": (bool, None),
+}
+"""Simulation options a sweep can set: type and default (as ``shc simulate``; ``gait`` "" = the robot's own)."""
+TOP_LEVEL = {"name", "description", "duration", "grid", "fixed"}
+
+
+@dataclass(frozen=True)
+class Point:
+    """One simulation of a sweep.
+
+    Attributes:
+        index: position in the grid (row order of the results).
+        slug: directory name of its run, built from its grid values.
+        values: its grid values, by key (for the results table).
+        options: every simulation option (:data:`OPTIONS`), filled in.
+        overrides: robot-file values by dotted path.
+    """
+
+    index: int
+    slug: str
+    values: dict[str, Any]
+    options: dict[str, Any]
+    overrides: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """A loaded sweep file."""
+
+    path: Path
+    name: str
+    description: str
+    grid: dict[str, list[Any]]
+    fixed: dict[str, Any]
+    points: list[Point]
+
+
+def _slug_value(value: Any) -> str:
+    text = f"{value:g}" if isinstance(value, float) else str(value)
+    return re.sub(r"[^A-Za-z0-9._+-]", "_", Path(text).stem if text.endswith(".toml") else text)
+
+
+def _check_value(document: Document, where: tuple[str, ...], key: str, value: Any) -> None:
+    if key not in OPTIONS:
+        if "." not in key:
+            close = [k for k in OPTIONS if k.startswith(key[:3])]
+            hint = f" (did you mean '{close[0]}'?)" if close else ""
+            raise SpecError([Issue(document.path, document.line(where), ".".join(where),
+                                   f"'{key}' is not a simulation option{hint}",
+                                   f"use one of {', '.join(OPTIONS)} or a dotted robot-file path such as "
+                                   "walker.step_frequency")])
+        if not isinstance(value, (int, float, str, bool)) or (isinstance(value, float) and not math.isfinite(value)):
+            raise SpecError([Issue(document.path, document.line(where), ".".join(where),
+                                   f"{value!r} is not a single finite number, string or boolean",
+                                   "give plain values")])
+        return
+    kind, _ = OPTIONS[key]
+    ok = isinstance(value, kind) and not (isinstance(value, bool) and kind is not bool)
+    if not ok:
+        names = " or ".join(t.__name__ for t in (kind if isinstance(kind, tuple) else (kind,)))
+        raise SpecError([Issue(document.path, document.line(where), ".".join(where),
+                               f"{value!r} is not a {names}", f"give {key} as a {names}")])
+    if key == "stride_percent" and not 0.0 < float(value) <= 100.0:
+        raise SpecError([Issue(document.path, document.line(where), ".".join(where),
+                               f"stride {value}% is outside (0, 100]", "give a percentage of the maximum stride")])
+
+
+def load_sweep(path: Path) -> Sweep:
+    """Read and check a sweep file; one-line :class:`SpecError` (file, line, key) on any mistake."""
+    document = Document(Path(path))
+    data = document.data
+    for key in data:
+        if key not in TOP_LEVEL:
+            raise SpecError([Issue(document.path, document.line((key,)), key, f"unknown key '{key}'",
+                                   f"top-level keys: {', '.join(sorted(TOP_LEVEL))}")])
+    grid_data = data.get("grid", {})
+    fixed = dict(data.get("fixed", {}))
+    if not isinstance(grid_data, dict) or not isinstance(fixed, dict):
+        bad = "grid" if not isinstance(grid_data, dict) else "fixed"
+        raise SpecError([Issue(document.path, document.line((bad,)), bad, "must be a table", f"write [{bad}]")])
+    if "duration" in data:
+        _check_value(document, ("duration",), "duration", data["duration"])
+        fixed.setdefault("duration", data["duration"])
+    grid: dict[str, list[Any]] = {}
+    for key, values in grid_data.items():
+        where = ("grid", key)
+        if not isinstance(values, list) or not values:
+            raise SpecError([Issue(document.path, document.line(where), ".".join(where),
+                                   "must be a non-empty list of values", f'e.g. {key} = [...]')])
+        for value in values:
+            _check_value(document, where, key, value)
+        if key in fixed:
+            raise SpecError([Issue(document.path, document.line(where), ".".join(where),
+                                   f"'{key}' is both in [grid] and in [fixed]", "keep one")])
+        grid[key] = values
+    for key, value in fixed.items():
+        _check_value(document, ("fixed", key), key, value)
+    if "stride_percent" in {**grid, **fixed} and ("velocity" in grid or "velocity" in fixed):
+        table = "grid" if "stride_percent" in grid else "fixed"
+        raise SpecError([Issue(document.path, document.line((table, "stride_percent")), f"{table}.stride_percent",
+                               "stride_percent and velocity both set the velocity input", "keep one")])
+    points = []
+    keys = list(grid)
+    for index, combination in enumerate(itertools.product(*grid.values())):
+        values = dict(zip(keys, combination, strict=True))
+        merged = {**fixed, **values}
+        options = {key: merged.get(key, default) for key, (_, default) in OPTIONS.items()}
+        overrides = {key: value for key, value in merged.items() if key not in OPTIONS}
+        slug = "-".join(f"{_slug_value(v)}" if k in ("robot", "gait") else f"{k}={_slug_value(v)}"
+                        for k, v in values.items()) or "run"
+        points.append(Point(index, slug, values, options, overrides))
+    slugs = [p.slug for p in points]
+    if len(set(slugs)) != len(slugs):
+        raise SpecError([Issue(document.path, document.line(("grid",)), "grid",
+                               "two grid points have the same name", "make the grid values distinct")])
+    name = str(data.get("name") or document.path.stem)
+    return Sweep(document.path, name, str(data.get("description", "")), grid, fixed, points)
+
+
+def variant_text(base: Path, overrides: dict[str, Any], adjustable: set[str]) -> str:
+    """A robot file that ``extends`` ``base`` with ``overrides`` (dotted paths); paths in ``adjustable`` are
+    ``{ default, min, max, step }`` tables, whose ``default`` a plain number sets."""
+    from shc_cli.spec.toml_out import dump_toml
+
+    tree: dict[str, Any] = {}
+    for dotted, value in overrides.items():
+        parts = dotted.split(".")
+        node = tree
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+        node[parts[-1]] = {"default": value} if dotted in adjustable and not isinstance(value, dict) else value
+    return f'extends = "{base.resolve().as_posix()}"\n\n' + dump_toml(tree)

@@ -1,0 +1,170 @@
+"""``shc sweep``: sweep files, the grid, robot variants, failures, resume, Dask = local, and the golden CI sweep."""
+
+from __future__ import annotations
+
+import csv
+import shutil
+from pathlib import Path
+
+import pytest
+
+from shc_cli.spec.sweep import load_sweep
+
+from .conftest import GOLDEN, ROOT
+from .test_cli import run
+
+GOLDEN_SWEEP = GOLDEN / "sweeps" / "ci_smoke.csv"
+TOLERANCES = {"cot": 0.05, "mean_speed_mps": 0.05, "mean_power_w": 0.05}
+"""Relative tolerances of the golden CI sweep: PyBullet is deterministic on one machine; these leave room for other
+CPUs and library builds while catching real changes of the controller, the physics model or the analysis."""
+TIMING = {"wall_time_s", "physics_time_s"}
+
+
+def _write(tmp_path: Path, text: str, name: str = "sweep.toml") -> Path:
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    with path.open(newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+# -- the file ----------------------------------------------------------------------------------------------------
+
+
+def test_grid_is_the_product_in_file_order(tmp_path: Path) -> None:
+    sweep = load_sweep(_write(tmp_path, """
+duration = 2.0
+[grid]
+gait = ["tripod", "bipod"]
+stride_percent = [60, 100]
+"walker.step_frequency" = [0.8, 1.0, 1.2]
+[fixed]
+robot = "bullet_mammalian"
+"""))
+    assert len(sweep.points) == 12
+    first, last = sweep.points[0], sweep.points[-1]
+    assert first.values == {"gait": "tripod", "stride_percent": 60, "walker.step_frequency": 0.8}
+    assert last.values == {"gait": "bipod", "stride_percent": 100, "walker.step_frequency": 1.2}
+    assert first.slug == "tripod-stride_percent=60-walker.step_frequency=0.8"
+    assert first.options["robot"] == "bullet_mammalian" and first.options["duration"] == 2.0
+    assert first.overrides == {"walker.step_frequency": 0.8}
+    assert len({p.slug for p in sweep.points}) == 12
+
+
+def test_shipped_sweeps_load_and_bullet_cot_is_the_papers_grid() -> None:
+    sweep = load_sweep(ROOT / "sweeps" / "bullet_cot.toml")
+    assert sweep.grid["stride_percent"] == [60, 75, 90, 100]  # paper eq. 21 L_s
+    assert sweep.grid["walker.step_frequency"] == [0.4, 0.6, 0.8, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0, 2.2]  # F_s
+    assert len(sweep.points) == 2 * 2 * 4 * 10
+    assert len(load_sweep(ROOT / "sweeps" / "ci_smoke.toml").points) <= 8
+
+
+def test_a_variant_changes_only_the_swept_default(tmp_path: Path) -> None:
+    from shc_cli.commands.sweep import _robot_for
+    from shc_cli.spec.loading import load_robot
+
+    sweep = load_sweep(_write(tmp_path, '[grid]\n"walker.step_frequency" = [0.6]\n"walker.body_clearance" = [0.2]\n'))
+    variant = load_robot(_robot_for(sweep.points[0], tmp_path)).robot
+    base = load_robot("bullet").robot
+    assert variant is not None and base is not None
+    assert variant.walker.step_frequency.default == 0.6
+    assert (variant.walker.step_frequency.min, variant.walker.step_frequency.max) == (
+        base.walker.step_frequency.min, base.walker.step_frequency.max)
+    assert variant.walker.body_clearance == 0.2
+    assert variant.model_copy(update={"walker": base.walker}) == base
+
+
+@pytest.mark.parametrize(("text", "line", "message"), [
+    ('[grid]\nrobot = ["bullet"]\nspeed = [1]\n', 3, "'speed' is not a simulation option"),
+    ('[grid]\nrobot = "bullet"\n', 2, "must be a non-empty list"),
+    ('[grid]\nstride_percent = [50, 120]\n', 2, "outside (0, 100]"),
+    ('[grid]\nseed = [1.5]\n', 2, "is not a int"),
+    ('[fixed]\nstride_percent = 50\n[grid]\nvelocity = ["1,0,0"]\n', 2, "both set the velocity input"),
+    ('[grid]\n"walker.step_freq" = [1.0]\n', 2, "has no field 'walker.step_freq'"),
+    ('[grid]\ngait = ["tripod", "trot"]\n', 2, "trot"),
+    ('colour = "red"\n', 1, "unknown key 'colour'"),
+])
+def test_bad_sweep_files_are_one_line_with_the_line(tmp_path: Path, text: str, line: int, message: str, capsys,  # type: ignore[no-untyped-def]
+                                                     monkeypatch) -> None:
+    path = _write(tmp_path, text)
+    code, _, err = run(["sweep", str(path), "--out", str(tmp_path / "out")], capsys, monkeypatch)
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1, err
+    assert f"{path}:{line}:" in err and message in err
+    assert not (tmp_path / "out" / "runs").exists()  # nothing ran
+
+
+# -- running -----------------------------------------------------------------------------------------------------
+
+
+TWO = """
+duration = 0.3
+[grid]
+terrain = ["flat", "heightfield:{missing}"]
+[fixed]
+robot = "bullet"
+gait = "tripod"
+"""
+
+
+def test_local_and_dask_give_the_same_results_and_a_failure_is_a_row(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """A point whose terrain file is missing fails without stopping the sweep; a Dask LocalCluster gives the same
+    table as the local worker processes (timings aside)."""
+    path = _write(tmp_path, TWO.format(missing=tmp_path / "missing.csv"))
+    tables = {}
+    for executor in ("local", "dask"):
+        out = tmp_path / executor
+        code, stdout, err = run(["sweep", str(path), "--out", str(out), "--workers", "2", "--executor", executor],
+                                capsys, monkeypatch)
+        assert code == 0, err
+        assert "2 runs" in stdout and "1 ok" in stdout and "1 failed" in stdout
+        rows = _rows(out / "results.csv")
+        assert [r["status"] for r in rows] == ["ok", "failed"]
+        assert "missing.csv" in rows[1]["error"] and "\n" not in rows[1]["error"]
+        assert float(rows[0]["mean_power_w"]) > 0.0
+        tables[executor] = [{k: v for k, v in r.items() if k not in TIMING} for r in rows]
+    assert tables["local"] == tables["dask"]
+
+
+def test_ci_smoke_sweep_matches_its_golden_results(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The reviewed CoT, speed and power of sweeps/ci_smoke.toml (regenerate deliberately: docs/commands.md)."""
+    out = tmp_path / "ci_smoke"
+    code, _, err = run(["sweep", str(ROOT / "sweeps" / "ci_smoke.toml"), "--out", str(out), "--workers", "2"],
+                       capsys, monkeypatch)
+    assert code == 0, err
+    golden = {r["slug"]: r for r in _rows(GOLDEN_SWEEP)}
+    now = {r["slug"]: r for r in _rows(out / "results.csv")}
+    assert set(now) == set(golden)
+    problems = []
+    for slug, want in golden.items():
+        got = now[slug]
+        if (got["status"], got["fell"]) != (want["status"], want["fell"]):
+            problems.append(f"{slug}: status/fell {got['status']}/{got['fell']} (golden {want['status']}/"
+                            f"{want['fell']})")
+        for key, tolerance in TOLERANCES.items():
+            a, b = float(got[key]), float(want[key])
+            if abs(a - b) > tolerance * abs(b):
+                problems.append(f"{slug}: {key} {a:.6g} vs golden {b:.6g} ({(a - b) / b:+.1%}, tolerance "
+                                f"±{tolerance:.0%})")
+    assert not problems, "ci_smoke moved beyond the golden tolerances:\n" + "\n".join(problems)
+
+    # --resume with every run finished re-reads them: same table, no simulation
+    logs = sorted((out / "runs").glob("*/log.csv"))
+    stamps = [p.stat().st_mtime_ns for p in logs]
+    shutil.move(out / "results.csv", tmp_path / "first.csv")
+    code, _, err = run(["sweep", str(ROOT / "sweeps" / "ci_smoke.toml"), "--out", str(out), "--resume"],
+                       capsys, monkeypatch)
+    assert code == 0, err
+    assert [p.stat().st_mtime_ns for p in logs] == stamps
+    assert _rows(out / "results.csv") == _rows(tmp_path / "first.csv")
+
+
+def test_an_existing_output_needs_resume(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "results.csv").write_text("x\n")
+    code, _, err = run(["sweep", str(ROOT / "sweeps" / "ci_smoke.toml"), "--out", str(tmp_path / "out")], capsys,
+                       monkeypatch)
+    assert code == 2 and "--resume" in err
