@@ -183,6 +183,7 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
     * ``power.png`` — total electrical power over time, one line per run (runs with power only);
     * ``cycles.png`` — boxplots of the per-gait-cycle RMS of body height, roll rate and pitch rate, one box per run
       (ATHENA Fig. 10 style);
+    * ``stability.png`` — static (CoM) and ZMP margins to the support polygon over time;
     * ``zmp_<run>.png`` — the ZMP (ATHENA eq. 32) and the centre of mass over the support polygons, top view;
     * ``cot.png`` — cost of transport and speed vs step frequency, one line per robot / gait / velocity input
       (OpenSHC paper Fig. 14–16 style), when the runs differ in step frequency.
@@ -247,6 +248,26 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
         path = folder / f"zmp_{_label(result)}.png"
         _save(figure, path)
         written.append(path)
+
+    margined = [(r, run) for r, run in zip(results, runs, strict=True)
+                if "_series" in r and np.isfinite(r["_series"]["margin"]).any()]
+    if margined:
+        figure, axes = plt.subplots(figsize=(8, 3.5), dpi=110)
+        for result, run in margined:
+            series = result["_series"]
+            t = run.t[series["rows"]]
+            line = axes.plot(t, series["margin"], lw=0.7, label=f"{_label(result)}: CoM")[0]
+            if np.isfinite(series["zmp_margin"]).any():
+                axes.plot(t, series["zmp_margin"], lw=0.5, ls="--", color=line.get_color(),
+                          label=f"{_label(result)}: ZMP")
+        axes.axhline(0.0, color="0.3", lw=0.6)
+        axes.set_xlabel("time [s]")
+        axes.set_ylabel("margin to the support polygon [m]")
+        axes.grid(True, lw=0.3)
+        axes.legend(fontsize=7)
+        figure.tight_layout()
+        _save(figure, folder / "stability.png")
+        written.append(folder / "stability.png")
 
     frequencies = {r["step_frequency_hz"] for r in results}
     if len(frequencies) > 1:

@@ -232,7 +232,7 @@ def test_several_runs_make_a_table_and_plots(walked: Path, planned: Path, tmp_pa
     assert lines[0].split()[:3] == ["run", "scen", "f_s"]
     assert lines[1].startswith("walk") and lines[2].startswith("plan")
     assert "–" in lines[2]  # a plan has no power
-    for name in ("analysis.json", "cycles.png", "power.png", "zmp_walk.png", "zmp_plan.png"):
+    for name in ("analysis.json", "cycles.png", "power.png", "stability.png", "zmp_walk.png", "zmp_plan.png"):
         assert (tmp_path / "an" / name).stat().st_size > 0
     code, out, _ = run(["analyze", str(walked), str(planned), "--json"], capsys, monkeypatch)
     data = json.loads(out)
