@@ -122,15 +122,25 @@ def simulate(
                      "launch) that is removed when the robot runs, or on the ground [default: start_up.simulation].",
                      show_default=False),
     ] = None,
+    posture: Annotated[
+        str | None, typer.Option(help="ATHENA posture control with gains, e.g. kz=0.8,ka=0.6,kb=0 (plane=...).")
+    ] = None,
+    imu_posing: Annotated[
+        bool | None, typer.Option("--imu-posing/--no-imu-posing", help="OpenSHC IMU levelling [default: robot file].",
+                                  show_default=False)
+    ] = None,
+    inclination: Annotated[
+        str | None, typer.Option(help="Inclination posing: off, openshc or support_centroid [default: robot file].")
+    ] = None,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-simulate).")] = None,
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
 ) -> None:
     """Run the controller on the robot in PyBullet physics: terrains, servos, sensors, power, CoT."""
-    from shc_cli.commands.simulate import run_simulate
+    from shc_cli.commands.simulate import Feedback, run_simulate
 
     run_simulate(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate, friction,
-                 restitution, seed, imu_noise, start, gui, stand)
+                 restitution, seed, imu_noise, start, gui, stand, Feedback(posture, imu_posing, inclination))
 
 
 @app.command()

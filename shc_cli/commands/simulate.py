@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 import time
+from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
 from typing import Any
@@ -14,6 +16,7 @@ import typer
 
 from shc_cli.commands.plan import parse_velocity, pose_sets_for, walk_cycles
 from shc_cli.control.controller import Command, Controller, RobotState
+from shc_cli.control.sensing import Sensors
 from shc_cli.errors import Issue, ShcError, SpecError
 from shc_cli.runlog import RunDirectory, joint_columns
 from shc_cli.spec.robot import Robot
@@ -28,14 +31,68 @@ FALL_HEIGHT_SHARE = 0.3
 START_UP_MARGIN_S = 2.0
 
 
+@dataclass(frozen=True)
+class Feedback:
+    """Per-run switches of the sensor-driven features, over the robot file (``None`` = as the file says).
+
+    Attributes:
+        posture: ATHENA gains, e.g. ``"kz=0.8,ka=0.6,kb=0"`` (also ``plane=least_squares``); enables it.
+        imu_posing: OpenSHC IMU posing on or off.
+        inclination: ``"off"``, ``"openshc"`` or ``"support_centroid"``.
+    """
+
+    posture: str | None = None
+    imu_posing: bool | None = None
+    inclination: str | None = None
+
+    def apply(self, robot: Robot) -> Robot:
+        """The robot with these switches applied (one-line SpecError on a bad value)."""
+        pose, posture = robot.pose, robot.posture
+        if self.imu_posing is not None:
+            pose = pose.model_copy(update={"imu": self.imu_posing})
+        if self.inclination is not None:
+            if self.inclination not in ("off", "openshc", "support_centroid"):
+                raise SpecError([Issue(None, None, "--inclination", f"'{self.inclination}' is not a mode",
+                                       "use off, openshc or support_centroid")])
+            on = self.inclination != "off"
+            pose = pose.model_copy(update={"inclination": on, **({"inclination_mode": self.inclination} if on
+                                                                   else {})})
+        if self.posture is not None:
+            posture = posture.model_copy(update={"enabled": True, **parse_posture(self.posture)})
+        return robot.model_copy(update={"pose": pose, "posture": posture})
+
+
+def parse_posture(text: str) -> dict[str, Any]:
+    """``kz=0.8,ka=0.6,kb=0[,plane=least_squares]`` → fields of ``[posture]``; one-line SpecError if bad."""
+    out: dict[str, Any] = {}
+    for part in filter(None, (p.strip() for p in text.split(","))):
+        key, _, value = part.partition("=")
+        key = key.strip()
+        if key in ("kz", "ka", "kb"):
+            try:
+                number = float(value)
+            except ValueError:
+                number = math.nan
+            if not 0.0 <= number <= 1.0:
+                raise SpecError([Issue(None, None, "--posture", f"{key}={value!r} is not a gain in [0, 1]",
+                                       "e.g. --posture kz=0.8,ka=0.6,kb=0")])
+            out[key] = number
+        elif key == "plane" and value in ("random_three", "least_squares"):
+            out[key] = value
+        else:
+            raise SpecError([Issue(None, None, "--posture", f"'{part}' is not kz=, ka=, kb= or plane=",
+                                   "e.g. --posture kz=0.8,ka=0.6,kb=0 (plane=random_three|least_squares)")])
+    return out
+
+
 def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
                  commands: Path | None, out: Path | None, plots: bool, terrain_text: str, scenario: str,
                  physics_rate: float, friction: float, restitution: float, seed: int, imu_noise: float,
-                 start_pose: str, gui: bool, stand: bool | None = None) -> Path:
+                 start_pose: str, gui: bool, stand: bool | None = None, feedback: Feedback | None = None) -> Path:
     """Load, simulate, log, print one line; returns the run directory."""
     path, summary = simulate_to(robot_name, gait_name, velocity, duration, commands, out, plots, terrain_text,
                                 scenario, physics_rate, friction, restitution, seed, imu_noise, start_pose, gui,
-                                stand)
+                                stand, feedback)
     typer.echo(f"{summary['robot']} / {summary['gait']} / {summary['scenario']} on {terrain_text}: "
                f"{summary['sim_time_s']:.1f} s simulated in {summary['wall_time_s']:.1f} s, distance "
                f"{summary['distance_m']:.3f} m, mean speed {summary['mean_speed_mps']:.4f} m/s, mean power "
@@ -48,12 +105,15 @@ def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration
 def simulate_to(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
                 commands: Path | None, out: Path | None, plots: bool, terrain_text: str, scenario: str,
                 physics_rate: float, friction: float, restitution: float, seed: int, imu_noise: float,
-                start_pose: str, gui: bool = False, stand: bool | None = None) -> tuple[Path, dict[str, Any]]:
+                start_pose: str, gui: bool = False, stand: bool | None = None,
+                feedback: Feedback | None = None) -> tuple[Path, dict[str, Any]]:
     """Load, simulate, log (silently); returns the run directory and its summary."""
     from shc_cli.backends.pybullet_.terrain import parse_terrain
     from shc_cli.spec.checks import load_checked
 
     robot, gait, loaded = load_checked(robot_name, gait_name)
+    if feedback is not None:
+        robot = feedback.apply(robot)
     terrain = parse_terrain(terrain_text)
     scenario = scenario.upper()
     if scenario not in SCENARIOS:
@@ -137,6 +197,8 @@ class Simulation:
         cycle, walked, fell, max_tilt = 0, 0, False, 0.0
         window_start: np.ndarray | None = None
         progress = _progress(walk_cycles)
+        sensors: Sensors | None = None
+        feedback_on = controller.uses_sensors
         while walked < walk_cycles:
             if controller.state != RobotState.RUNNING:
                 if cycle > limit:
@@ -147,10 +209,13 @@ class Simulation:
                 walked += 1
                 if progress is not None and walked % 50 == 0:
                     progress(walked)
-            out = controller.step(command)
+            out = controller.step(command, sensors)
             world.command(out.joints)
             world.step()
             reading = world.read()
+            if feedback_on:  # what the controller sees next cycle
+                sensors = Sensors(reading.orientation, reading.angular_rate, reading.joints, reading.joint_efforts,
+                                  reading.foot_forces, reading.foot_contact, reading.body_height)
             power = reading.servo_power[rows, cols]
             total = float(power.sum())
             running = out.robot_state == RobotState.RUNNING

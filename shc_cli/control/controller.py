@@ -21,6 +21,13 @@ from shc_cli.control.bezier import cubic
 from shc_cli.control.gait import StepCycle, step_cycle
 from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.pose import Pose, PoseController, PoseReset
+from shc_cli.control.sensing import (
+    ImuPoser,
+    PostureController,
+    Sensors,
+    inclination_pose,
+    support_centroid_pose,
+)
 from shc_cli.control.startup import iterations, plan_direct_startup
 from shc_cli.control.walk import WalkController, WalkState
 from shc_cli.model import kernels
@@ -256,6 +263,19 @@ class Controller:
         self.cruise_velocity = (np.zeros(2), 0.0)
         self.cruise_end = math.inf
         walker_spec, admittance = robot.walker, robot.admittance
+        self.sensors: Sensors | None = None
+        pose_spec, posture_spec = robot.pose, robot.posture
+        self.imu_poser = ImuPoser((pose_spec.rotation_pid_gains.p, pose_spec.rotation_pid_gains.i,
+                                   pose_spec.rotation_pid_gains.d),
+                                  (pose_spec.max_rotation.roll, pose_spec.max_rotation.pitch), self.dt) \
+            if pose_spec.imu else None
+        self.posture: PostureController | None = None
+        if posture_spec.enabled:
+            self.posture = PostureController(
+                posture_spec.kz, posture_spec.ka, posture_spec.kb,
+                posture_spec.reference_height or robot.walker.body_clearance, self.cycle.period, posture_spec.plane,
+                max_z=posture_spec.max_height_correction, max_angle=posture_spec.max_angle_correction)
+        self.uses_sensors = pose_spec.imu or pose_spec.inclination or posture_spec.enabled
         self.parameters = {name: getattr(walker_spec, name).default for name in ADJUSTABLE[:5]}
         self.parameters.update({name: getattr(admittance, name).default for name in ADJUSTABLE[5:]})
 
@@ -313,9 +333,14 @@ class Controller:
             self.cruise_end = self.cycles * self.dt + limit if limit > 0.0 else math.inf
         self.cruise_on = on
 
-    def step(self, command: Command | None = None) -> CycleOutput:
-        """Advance one control period and return this cycle's outputs."""
+    def step(self, command: Command | None = None, sensors: Sensors | None = None) -> CycleOutput:
+        """Advance one control period and return this cycle's outputs.
+
+        ``sensors``: what the backend measured during the last period (IMU, joints, foot forces, body height);
+        only the feedback features (IMU and inclination posing, ATHENA posture control) read it.
+        """
         self.cycles += 1
+        self.sensors = sensors
         self._receive(command or Command())
         if self.state != _UNKNOWN:
             self._update_pose()
@@ -341,8 +366,39 @@ class Controller:
         if self.autoposer is not None:
             self._update_auto_pose(self.autoposer)
             auto = self.autoposer.body_pose
+        feedback: tuple[Pose | None, ...] = ()
+        if self.uses_sensors:
+            auto, feedback = self._feedback_poses(auto)
         self.poser.update_current_pose(progress, self.gait.swing_phase, self.gait.phase_offset, planes, normals,
-                                       auto)
+                                       auto, feedback)
+
+    def _feedback_poses(self, auto: Pose | None) -> tuple[Pose | None, tuple[Pose | None, ...]]:
+        """The sensor-driven pose terms of this cycle: ATHENA posture, inclination, IMU (replacing auto)."""
+        sensors = self.sensors or Sensors()
+        spec = self.robot.pose
+        posture = None
+        if self.posture is not None:
+            walking = self.state == _RUNNING and self.walker is not None and self.walker.state != _STOPPED
+            feet = self.model.chains.tips(sensors.joints) if sensors.joints is not None else self.model.tips
+            posture = self.posture.update(walking, feet, sensors.foot_contact, sensors.body_height)
+        manual = self.poser.manual_pose() if self.poser.manual_enabled else Pose()
+        inclination = None
+        if spec.inclination and sensors.orientation is not None:
+            limits = (spec.max_translation.x, spec.max_translation.y)
+            clearance = self.robot.walker.body_clearance
+            if spec.inclination_mode == "openshc":
+                intended = manual.add(auto) if auto is not None else manual
+                inclination = inclination_pose(sensors.orientation, intended, clearance, limits)
+            elif self.walker is not None:
+                stance = self.walker.legs.floats[:, stepping.STANCE_PROGRESS] >= 0.0
+                tips = self.walker.legs.vectors[stance, stepping.CURRENT]
+                inclination = support_centroid_pose(sensors.orientation, tips, np.asarray(self.robot.body.com),
+                                                     clearance, limits)
+        if spec.imu and self.state == _RUNNING and sensors.orientation is not None \
+                and sensors.angular_rate is not None:
+            assert self.imu_poser is not None
+            auto = self.imu_poser.update(sensors.orientation, sensors.angular_rate, manual)
+        return auto, (posture, inclination)
 
     def _update_auto_pose(self, autoposer: AutoPoser) -> None:
         legs = len(self.stance)
@@ -599,6 +655,8 @@ class Controller:
         self.cycle = step_cycle(self.gait, self.parameters["step_frequency"], self.dt)
         self.walker.set_cycle(self.cycle, self._limits_for(self.cycle))
         self._reset_auto_pose()
+        if self.posture is not None:
+            self.posture.period = max(self.cycle.period, 2)
 
     def _reset_auto_pose(self) -> None:
         """New step cycle or gait: re-synchronise auto posing (OpenSHC does this on gait changes only; doing
@@ -632,6 +690,8 @@ class Controller:
             self.cycle = cycle
             self.walker.set_cycle(cycle, limits, rephase=True)
             self._reset_auto_pose()
+            if self.posture is not None:
+                self.posture.period = max(self.cycle.period, 2)
         elif name == "stance_span_modifier":
             self._set_stance_span(value)
         self.parameters[name] = value

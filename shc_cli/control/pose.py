@@ -1,7 +1,7 @@
 """Body posing: walk-plane alignment and manual 6-DOF posing, composed as OpenSHC does (study §7).
 
-The body pose (``walk_plane → base_link``) is ``walk_plane ∘ manual ∘ (inclination) ∘ (imu or auto)``;
-only the walk-plane and manual terms exist so far, the others are seams for the terrain issue. The tip
+The body pose (``walk_plane → base_link``) is ``walk_plane ∘ manual ∘ (posture) ∘ (inclination) ∘ (imu or
+auto)``; the sensor-driven terms come from :mod:`shc_cli.control.sensing`. The tip
 pose generator then expresses every walker tip in base_link under that pose (:meth:`PoseController.posed_tips`).
 """
 
@@ -219,12 +219,20 @@ class PoseController:
             self.walk_plane_origin = self.walk_plane_pose
 
     def update_current_pose(self, swing_progress: np.ndarray, swing_phase: int, phase_offset: int,
-                            planes: np.ndarray, normals: np.ndarray, auto: Pose | None = None) -> Pose:
-        """Compose this cycle's body pose: walk plane ∘ manual ∘ auto (study §7.1)."""
+                            planes: np.ndarray, normals: np.ndarray, auto: Pose | None = None,
+                            feedback: tuple[Pose | None, ...] = ()) -> Pose:
+        """Compose this cycle's body pose: walk plane ∘ manual ∘ feedback terms ∘ auto (study §7.1).
+
+        ``feedback``: the sensor-driven terms in order (ATHENA posture, inclination); ``auto`` is the IMU pose
+        instead of the auto pose while IMU posing runs (OpenSHC ignores auto posing then).
+        """
         self.update_walk_plane_pose(swing_progress, swing_phase, phase_offset, planes, normals)
         pose = self.walk_plane_pose  # = Identity ∘ walk-plane pose, exactly
         if self.manual_enabled and self.manual.any():  # adding a zero manual pose changes nothing
             pose = pose.add(self.manual_pose())
+        for term in feedback:
+            if term is not None:
+                pose = pose.add(term)
         if auto is not None:
             pose = pose.add(auto)
         self.current = pose

@@ -205,12 +205,33 @@ class Pose(Strict):
     auto: bool = Field(False, description="cyclic auto posing [OpenSHC: auto_posing]")
     auto_pose_type: str = Field("auto", description="auto-pose set; 'auto' = the set named after the gait")
     inclination: bool = Field(False, description="shift the body against tilt [OpenSHC: inclination_posing]")
+    inclination_mode: Literal["openshc", "support_centroid"] = Field(
+        "openshc", description="'openshc': x = −h·tan(pitch), y = h·tan(roll) (study §7.5); 'support_centroid': "
+        "put the gravity projection of the CoM on the stance feet's centroid (the paper's intent)")
     imu: bool = Field(False, description="roll/pitch PID levelling [OpenSHC: imu_posing]")
     rotation_pid_gains: PID = Field(PID(p=0.0, i=0.0, d=0.0), description="IMU posing PID gains")
     max_translation: XYZ = Field(XYZ(x=0.025, y=0.025, z=0.025), description="posing translation limits [m]")
     max_rotation: RPY = Field(RPY(roll=0.25, pitch=0.25, yaw=0.25), description="posing rotation limits [rad]")
     max_translation_velocity: Positive = Field(0.05, description="manual posing speed at input 1 [m/s]")
     max_rotation_velocity: Positive = Field(0.2, description="manual rotation speed at input 1 [rad/s]")
+
+
+class Posture(Strict):
+    """ATHENA posture control (seed 003 §4.2): ground plane from the feet in contact, height/pitch/roll corrections.
+
+    Not part of OpenSHC; composed into the body pose after manual posing (``docs/terrain-adaptation.md``).
+    """
+
+    enabled: bool = Field(False, description="run the ATHENA posture controller")
+    kz: Annotated[float, Field(ge=0.0, le=1.0)] = Field(0.0, description="height gain k_z (eq. 27) [ratio]")
+    ka: Annotated[float, Field(ge=0.0, le=1.0)] = Field(0.0, description="pitch gain k_α (eq. 29) [ratio]")
+    kb: Annotated[float, Field(ge=0.0, le=1.0)] = Field(0.0, description="roll gain k_β (eq. 29) [ratio]")
+    plane: Literal["random_three", "least_squares"] = Field(
+        "random_three", description="more than three feet down: a seeded random three (the paper) or all of them")
+    reference_height: NonNegative = Field(
+        0.0, description="standing body height the height sensor is compared with [m]; 0 = walker.body_clearance")
+    max_height_correction: Positive = Field(0.1, description="clamp of the accumulated height correction [m]")
+    max_angle_correction: Positive = Field(0.5, description="clamp of the accumulated roll/pitch correction [rad]")
 
 
 class StartUp(Strict):
@@ -283,6 +304,7 @@ class Robot(Strict):
     ik: InverseKinematics = Field(default_factory=InverseKinematics)
     pose: Pose = Field(default_factory=Pose)
     start_up: StartUp = Field(default_factory=StartUp)
+    posture: Posture = Field(default_factory=Posture)
     manipulation: Manipulation = Field(default_factory=Manipulation)
     admittance: Admittance = Field(default_factory=Admittance)
     servo: Servo = Field(default_factory=Servo)
