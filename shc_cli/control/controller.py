@@ -273,7 +273,7 @@ class Controller:
         if posture_spec.enabled:
             self.posture = PostureController(
                 posture_spec.kz, posture_spec.ka, posture_spec.kb,
-                posture_spec.reference_height or robot.walker.body_clearance, self.cycle.period, posture_spec.plane,
+                posture_spec.reference_height, self.cycle.period, posture_spec.plane,
                 max_z=posture_spec.max_height_correction, max_angle=posture_spec.max_angle_correction)
         self.uses_sensors = pose_spec.imu or pose_spec.inclination or posture_spec.enabled
         self.parameters = {name: getattr(walker_spec, name).default for name in ADJUSTABLE[:5]}

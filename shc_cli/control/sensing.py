@@ -187,7 +187,8 @@ class PostureController:
 
     Args:
         kz, ka, kb: gains in [0, 1].
-        reference_height: standing body height [m].
+        reference_height: the height sensor's reading in the standing posture [m]; 0 = take the first reading
+            once walking starts (the robot stands at its body clearance then).
         period: gait cycle [control cycles].
         plane: ``"random_three"`` or ``"least_squares"``.
         seed: seed of the random choice of three feet.
@@ -218,13 +219,15 @@ class PostureController:
         if len(down) > 3 and self.plane == "random_three":
             down = np.sort(self.rng.choice(down, size=3, replace=False))
         normal = plane_normal(feet_body[down])
-        dz = 0.0 if height is None else height - self.reference_height
+        dz = 0.0 if height is None or self.reference_height <= 0.0 else height - self.reference_height
         return PostureEstimate(normal, math.atan2(normal[0], normal[2]), math.atan2(normal[1], normal[2]), dz,
                                len(down))
 
     def update(self, walking: bool, feet_body: np.ndarray, contact: np.ndarray | None,
                height: float | None) -> Pose:
         """Advance one control cycle; returns the posture pose of this cycle."""
+        if walking and self.reference_height <= 0.0 and height is not None:
+            self.reference_height = height  # the standing posture's reading, as ATHENA's reference
         if walking:
             self._count += 1
             if self._count >= self.period and contact is not None:

@@ -229,7 +229,8 @@ class Posture(Strict):
     plane: Literal["random_three", "least_squares"] = Field(
         "random_three", description="more than three feet down: a seeded random three (the paper) or all of them")
     reference_height: NonNegative = Field(
-        0.0, description="standing body height the height sensor is compared with [m]; 0 = walker.body_clearance")
+        0.0, description="height-sensor reading of the standing posture [m]; 0 = the first reading when walking "
+        "starts (the sensor measures to the ground, the body clearance to the foot tips)")
     max_height_correction: Positive = Field(0.1, description="clamp of the accumulated height correction [m]")
     max_angle_correction: Positive = Field(0.5, description="clamp of the accumulated roll/pitch correction [rad]")
 

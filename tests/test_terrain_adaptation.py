@@ -1,0 +1,59 @@
+"""Terrain adaptation in physics: IMU levelling on a ramp (OpenSHC) and ATHENA posture control on a ramp."""
+
+from __future__ import annotations
+
+import csv
+import statistics
+from pathlib import Path
+
+import pytest
+
+from shc_cli.commands.simulate import Feedback, simulate_to
+
+
+def _log(path: Path) -> list[dict[str, str]]:
+    with (path / "log.csv").open() as handle:
+        return list(csv.DictReader(handle))
+
+
+def _walk(tmp: Path, name: str, robot: str, seconds: float, feedback: Feedback) -> list[dict[str, str]]:
+    path, summary = simulate_to(robot, None, "1,0,0", seconds, None, tmp / name, False, "ramp:10", "WG", 400.0, 0.9,
+                                0.0, 0, 0.0, "unpacked", False, None, feedback)
+    assert summary["fell"] is False
+    return _log(path)
+
+
+def test_imu_posing_levels_the_body_on_a_ramp(tmp_path: Path) -> None:
+    """Bullet up the 10° ramp: without IMU posing the body pitches with the slope (−0.175 rad); with OpenSHC's IMU
+    PID (Bullet gains p 1.0, i 0.01, d −0.05) the steady error halves — a proportional gain of 1 takes half the
+    tilt out, the small integral gain adds little within seconds (measured −0.176 vs −0.083 rad over 20 s)."""
+    pitch = {}
+    for name, on in (("off", False), ("imu", True)):
+        rows = _walk(tmp_path, name, "bullet", 8.0, Feedback(imu_posing=on))
+        on_slope = [float(r["pitch"]) for r in rows if float(r["x"]) > 1.1]  # all feet on the slope
+        assert len(on_slope) > 100
+        pitch[name] = statistics.median(on_slope)
+    assert pitch["off"] == pytest.approx(-0.1745, abs=0.01)  # 10°, nose up is negative pitch
+    assert abs(pitch["imu"]) < 0.6 * abs(pitch["off"])
+
+
+def test_athena_posture_control_steadies_the_height_on_the_ramp(tmp_path: Path) -> None:
+    """ATHENA up the 10° ramp, simple control (0, 0, 0) vs posture control (0.8, 0.6, 0): a smaller body-height
+    IQR and a median nearer the standing height. (The paper's simple control sags to 65 % of the standing height,
+    so there posture control also raises the median; our servos do not sag — docs/terrain-adaptation.md.)"""
+    heights, reference = {}, {}
+    for name, gains in (("simple", "kz=0,ka=0,kb=0"), ("posture", "kz=0.8,ka=0.6,kb=0")):
+        rows = _walk(tmp_path, name, "athena", 30.0, Feedback(posture=gains))
+        running = [r for r in rows if r["robot_state"] == "RUNNING"]
+        reference[name] = float(running[0]["height"])
+        heights[name] = [float(r["height"]) for r in running if float(r["x"]) > 0.45]  # at and on the slope
+        assert len(heights[name]) > 500
+    assert reference["simple"] == pytest.approx(reference["posture"], abs=1e-9)
+
+    def iqr(values: list[float]) -> float:
+        q = statistics.quantiles(values, n=4)
+        return q[2] - q[0]
+
+    assert iqr(heights["posture"]) < 0.8 * iqr(heights["simple"])
+    assert abs(statistics.median(heights["posture"]) - reference["posture"]) < abs(
+        statistics.median(heights["simple"]) - reference["simple"])
