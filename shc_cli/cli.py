@@ -132,6 +132,10 @@ def simulate(
     inclination: Annotated[
         str | None, typer.Option(help="Inclination posing: off, openshc or support_centroid [default: robot file].")
     ] = None,
+    admittance: Annotated[
+        bool | None, typer.Option("--admittance/--no-admittance", help="Admittance control [default: robot file].",
+                                  show_default=False)
+    ] = None,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-simulate).")] = None,
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
@@ -140,7 +144,8 @@ def simulate(
     from shc_cli.commands.simulate import Feedback, run_simulate
 
     run_simulate(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate, friction,
-                 restitution, seed, imu_noise, start, gui, stand, Feedback(posture, imu_posing, inclination))
+                 restitution, seed, imu_noise, start, gui, stand,
+                 Feedback(posture, imu_posing, inclination, admittance))
 
 
 @app.command()

@@ -57,3 +57,33 @@ def test_athena_posture_control_steadies_the_height_on_the_ramp(tmp_path: Path) 
     assert iqr(heights["posture"]) < 0.8 * iqr(heights["simple"])
     assert abs(statistics.median(heights["posture"]) - reference["posture"]) < abs(
         statistics.median(heights["simple"]) - reference["simple"])
+
+
+ADMITTANCE_ROBOT = """
+extends = "bullet"
+name = "bullet_admittance"
+[admittance]
+use_joint_effort = false   # foot force sensors
+# Bullet's OpenSHC values (k = 20 N/m, gain 0.5) would fold a leg carrying 22 N by 0.55 m (clamped at 0.2):
+# a gain of 0.02 makes a leg yield 2 cm under its share of the weight.
+force_gain = { default = 0.02 }
+"""
+
+
+def test_admittance_keeps_more_feet_on_the_ground_over_a_step(tmp_path: Path) -> None:
+    """Bullet walks up a 6 cm step (stairs:0.06,1.0): with admittance on, the loaded legs yield and the others keep
+    their feet down — fewer cycles with fewer than three feet in contact, more feet in contact on average."""
+    robot = tmp_path / "bullet_admittance.toml"
+    robot.write_text(ADMITTANCE_ROBOT, encoding="utf-8")
+    legs = ["AR", "BR", "CR", "CL", "BL", "AL"]
+    counts = {}
+    for name, on in (("off", False), ("on", True)):
+        path, summary = simulate_to(str(robot), None, "1,0,0", 8.0, None, tmp_path / name, False, "stairs:0.06,1.0",
+                                    "WG", 400.0, 0.9, 0.0, 0, 0.0, "unpacked", False, None, Feedback(admittance=on))
+        assert summary["fell"] is False
+        rows = [r for r in _log(path) if r["robot_state"] == "RUNNING" and 0.2 < float(r["x"]) < 1.4]
+        assert len(rows) > 300
+        counts[name] = [sum(int(float(r[f"{leg}_contact"])) for leg in legs) for r in rows]
+    few = {name: sum(1 for c in values if c < 3) / len(values) for name, values in counts.items()}
+    assert few["on"] < 0.75 * few["off"]
+    assert statistics.mean(counts["on"]) > statistics.mean(counts["off"])

@@ -39,11 +39,13 @@ class Feedback:
         posture: ATHENA gains, e.g. ``"kz=0.8,ka=0.6,kb=0"`` (also ``plane=least_squares``); enables it.
         imu_posing: OpenSHC IMU posing on or off.
         inclination: ``"off"``, ``"openshc"`` or ``"support_centroid"``.
+        admittance: admittance control on or off.
     """
 
     posture: str | None = None
     imu_posing: bool | None = None
     inclination: str | None = None
+    admittance: bool | None = None
 
     def apply(self, robot: Robot) -> Robot:
         """The robot with these switches applied (one-line SpecError on a bad value)."""
@@ -59,7 +61,10 @@ class Feedback:
                                                                    else {})})
         if self.posture is not None:
             posture = posture.model_copy(update={"enabled": True, **parse_posture(self.posture)})
-        return robot.model_copy(update={"pose": pose, "posture": posture})
+        admittance = robot.admittance
+        if self.admittance is not None:
+            admittance = admittance.model_copy(update={"enabled": self.admittance})
+        return robot.model_copy(update={"pose": pose, "posture": posture, "admittance": admittance})
 
 
 def parse_posture(text: str) -> dict[str, Any]:

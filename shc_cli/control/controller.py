@@ -16,6 +16,7 @@ from enum import IntEnum
 import numpy as np
 
 from shc_cli.control import sequence, stepping
+from shc_cli.control.admittance import AdmittanceController, tip_forces_from_efforts
 from shc_cli.control.autopose import AutoPoser
 from shc_cli.control.bezier import cubic
 from shc_cli.control.gait import StepCycle, step_cycle
@@ -275,7 +276,14 @@ class Controller:
                 posture_spec.kz, posture_spec.ka, posture_spec.kb,
                 posture_spec.reference_height, self.cycle.period, posture_spec.plane,
                 max_z=posture_spec.max_height_correction, max_angle=posture_spec.max_angle_correction)
-        self.uses_sensors = pose_spec.imu or pose_spec.inclination or posture_spec.enabled
+        adm = robot.admittance
+        self.admittance: AdmittanceController | None = None
+        if adm.enabled:
+            self.admittance = AdmittanceController(
+                len(robot.legs), adm.virtual_mass.default, adm.virtual_stiffness.default,
+                adm.virtual_damping_ratio.default, adm.force_gain.default, adm.integrator_step_time,
+                adm.swing_stiffness_scaler, adm.load_stiffness_scaler, adm.dynamic_stiffness)
+        self.uses_sensors = pose_spec.imu or pose_spec.inclination or posture_spec.enabled or adm.enabled
         self.parameters = {name: getattr(walker_spec, name).default for name in ADJUSTABLE[:5]}
         self.parameters.update({name: getattr(admittance, name).default for name in ADJUSTABLE[5:]})
 
@@ -554,8 +562,39 @@ class Controller:
         if not walking:  # manipulated legs take their walker tip as it is (already in base_link)
             manual = (self.leg_modes == LegMode.MANUAL) | (self.leg_modes == LegMode.WALKING_TO_MANUAL)
             self.poser_tips[manual] = self.walker.legs.vectors[manual, stepping.CURRENT]
+        if self.admittance is not None:
+            self._apply_admittance(self.admittance)
         ik = self.robot.ik
         return self.model.step_ik(self.poser_tips, self.dt, ik.clamp_joint_positions, ik.clamp_joint_velocities)
+
+    def _apply_admittance(self, admittance: AdmittanceController) -> None:
+        """Raise each walking leg's tip target by its admittance offset (paper eq. 20, z_d = z_r − Δz)."""
+        assert self.walker is not None
+        sensors = self.sensors or Sensors()
+        spec = self.robot.admittance
+        if spec.use_joint_effort and sensors.joint_efforts is not None:
+            joints = sensors.joints if sensors.joints is not None else self.model.joints
+            chains = self.model.chains
+            leg_forces = tip_forces_from_efforts(chains.jacobians(joints), sensors.joint_efforts)
+            # τ_motor = −Jᵀ·G holds a ground force G on the foot: G = −F, in base_link through the leg frames.
+            force_z = -np.einsum("lj,lj->l", chains.base[:, 2, :3], leg_forces)
+        elif sensors.foot_forces is not None:
+            force_z = np.asarray(sensors.foot_forces, dtype=float)
+        else:
+            force_z = np.zeros(len(self.stance))
+        legs = self.walker.legs
+        swinging = legs.floats[:, stepping.SWING_PROGRESS] >= 0.0
+        height = max(self.parameters["swing_height"], 1e-6)
+        reach = np.where(swinging, np.clip(np.abs(legs.vectors[:, stepping.CURRENT, 2]
+                                                  - legs.vectors[:, stepping.DEFAULT, 2]) / height, 0.0, 1.0), -1.0)
+        admittance.mass = self.parameters["virtual_mass"]
+        admittance.stiffness = self.parameters["virtual_stiffness"]
+        admittance.damping_ratio = self.parameters["virtual_damping_ratio"]
+        admittance.force_gain = self.parameters["force_gain"]
+        delta = admittance.update(force_z, reach, self.walker.state != _STOPPED)
+        walking = self.leg_modes == _WALKING_LEG
+        self.poser_tips = self.poser_tips.copy()
+        self.poser_tips[walking, 2] += delta[walking]
 
     def _toggle_leg(self, leg: int) -> None:
         """Walking ↔ manual for one leg, once stopped (OpenSHC ``legStateToggle``, study §9.5)."""

@@ -14,6 +14,8 @@ stride_percent = [60, 75, 90, 100]
 terrain = "flat"
 ```
 
+Several ``[[grid]]`` tables instead of one ``[grid]`` run each product in turn (e.g. one gain at a time).
+
 A key is either a simulation option (:data:`OPTIONS`) or a dotted robot-file path (``walker.body_clearance``,
 ``servo.stall_torque``); a number given for an adjustable parameter (``{ default, min, max, step }``) sets its
 ``default``. ``stride_percent`` is the stride as a percentage of the largest the walkspace allows: the forward
@@ -123,40 +125,45 @@ def load_sweep(path: Path) -> Sweep:
                                    f"top-level keys: {', '.join(sorted(TOP_LEVEL))}")])
     grid_data = data.get("grid", {})
     fixed = dict(data.get("fixed", {}))
-    if not isinstance(grid_data, dict) or not isinstance(fixed, dict):
-        bad = "grid" if not isinstance(grid_data, dict) else "fixed"
-        raise SpecError([Issue(document.path, document.line((bad,)), bad, "must be a table", f"write [{bad}]")])
+    grids = grid_data if isinstance(grid_data, list) else [grid_data]
+    if not all(isinstance(g, dict) for g in grids) or not isinstance(fixed, dict):
+        bad = "fixed" if not isinstance(fixed, dict) else "grid"
+        raise SpecError([Issue(document.path, document.line((bad,)), bad, "must be a table",
+                               f"write [{bad}]" + (" or [[grid]] tables" if bad == "grid" else ""))])
     if "duration" in data:
         _check_value(document, ("duration",), "duration", data["duration"])
         fixed.setdefault("duration", data["duration"])
-    grid: dict[str, list[Any]] = {}
-    for key, values in grid_data.items():
-        where = ("grid", key)
-        if not isinstance(values, list) or not values:
-            raise SpecError([Issue(document.path, document.line(where), ".".join(where),
-                                   "must be a non-empty list of values", f'e.g. {key} = [...]')])
-        for value in values:
-            _check_value(document, where, key, value)
-        if key in fixed:
-            raise SpecError([Issue(document.path, document.line(where), ".".join(where),
-                                   f"'{key}' is both in [grid] and in [fixed]", "keep one")])
-        grid[key] = values
     for key, value in fixed.items():
         _check_value(document, ("fixed", key), key, value)
-    if "stride_percent" in {**grid, **fixed} and ("velocity" in grid or "velocity" in fixed):
-        table = "grid" if "stride_percent" in grid else "fixed"
-        raise SpecError([Issue(document.path, document.line((table, "stride_percent")), f"{table}.stride_percent",
-                               "stride_percent and velocity both set the velocity input", "keep one")])
-    points = []
-    keys = list(grid)
-    for index, combination in enumerate(itertools.product(*grid.values())):
-        values = dict(zip(keys, combination, strict=True))
-        merged = {**fixed, **values}
-        options = {key: merged.get(key, default) for key, (_, default) in OPTIONS.items()}
-        overrides = {key: value for key, value in merged.items() if key not in OPTIONS}
-        slug = "-".join(f"{_slug_value(v)}" if k in ("robot", "gait") else f"{k}={_slug_value(v)}"
-                        for k, v in values.items()) or "run"
-        points.append(Point(index, slug, values, options, overrides))
+    grid: dict[str, list[Any]] = {}  # every key of every grid, with its values in order of first appearance
+    points: list[Point] = []
+    for one in grids:
+        for key, values in one.items():
+            where = ("grid", key)
+            if not isinstance(values, list) or not values:
+                raise SpecError([Issue(document.path, document.line(where), ".".join(where),
+                                       "must be a non-empty list of values", f'e.g. {key} = [...]')])
+            for value in values:
+                _check_value(document, where, key, value)
+            if key in fixed:
+                raise SpecError([Issue(document.path, document.line(where), ".".join(where),
+                                       f"'{key}' is both in [grid] and in [fixed]", "keep one")])
+            grid.setdefault(key, [])
+            grid[key] += [v for v in values if v not in grid[key]]
+        if "stride_percent" in {**one, **fixed} and ("velocity" in one or "velocity" in fixed):
+            table = "grid" if "stride_percent" in one else "fixed"
+            raise SpecError([Issue(document.path, document.line((table, "stride_percent")),
+                                   f"{table}.stride_percent", "stride_percent and velocity both set the velocity "
+                                   "input", "keep one")])
+        keys = list(one)
+        for combination in itertools.product(*one.values()):
+            values = dict(zip(keys, combination, strict=True))
+            merged = {**fixed, **values}
+            options = {key: merged.get(key, default) for key, (_, default) in OPTIONS.items()}
+            overrides = {key: value for key, value in merged.items() if key not in OPTIONS}
+            slug = "-".join(f"{_slug_value(v)}" if k in ("robot", "gait") else f"{k}={_slug_value(v)}"
+                            for k, v in values.items()) or "run"
+            points.append(Point(len(points), slug, values, options, overrides))
     slugs = [p.slug for p in points]
     if len(set(slugs)) != len(slugs):
         raise SpecError([Issue(document.path, document.line(("grid",)), "grid",
