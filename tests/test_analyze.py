@@ -251,3 +251,17 @@ def test_bad_run_directory_is_one_line(tmp_path: Path, make, message: str, capsy
     code, _, err = run(["analyze", str(path)], capsys, monkeypatch)
     assert code == 2
     assert len(err.strip().splitlines()) == 1 and message in err
+
+
+def test_atomic_outputs_get_the_usual_permissions(tmp_path: Path) -> None:
+    """Files written through a temporary name keep the umask's permissions, not mkstemp's 0600."""
+    import os
+
+    from shc_cli.outputs import write_text
+
+    mask = os.umask(0o022)
+    try:
+        write_text(tmp_path / "a.txt", "x")
+    finally:
+        os.umask(mask)
+    assert (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644
