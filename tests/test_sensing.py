@@ -123,3 +123,12 @@ def test_posture_corrections_accumulate_per_cycle_and_blend_over_half_a_cycle() 
     assert final.euler()[0] == pytest.approx(0.0)
     still = PostureController(0.8, 0.6, 0.0, 0.25, period)
     assert all(still.update(False, _feet(pitch=0.1), contact, 0.2).position[2] == 0.0 for _ in range(3 * period))
+
+
+def test_touchdown_and_liftoff_have_hysteresis() -> None:
+    """Study §8.4: down above the touchdown threshold, up again only below the lift-off threshold."""
+    from shc_cli.control.sensing import ContactDetector
+
+    detector = ContactDetector(1, touchdown=0.9, liftoff=0.1)
+    states = [bool(detector.update(np.array([force]))[0]) for force in (0.0, 0.5, 0.95, 0.5, 0.1, 0.05, 0.5, 1.0)]
+    assert states == [False, False, True, True, True, False, False, True]

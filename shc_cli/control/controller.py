@@ -23,6 +23,7 @@ from shc_cli.control.gait import StepCycle, step_cycle
 from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.pose import Pose, PoseController, PoseReset
 from shc_cli.control.sensing import (
+    ContactDetector,
     ImuPoser,
     PostureController,
     Sensors,
@@ -284,6 +285,9 @@ class Controller:
                 adm.virtual_damping_ratio.default, adm.force_gain.default, adm.integrator_step_time,
                 adm.swing_stiffness_scaler, adm.load_stiffness_scaler, adm.dynamic_stiffness)
         self.uses_sensors = pose_spec.imu or pose_spec.inclination or posture_spec.enabled or adm.enabled
+        self.contact_detector = ContactDetector(len(robot.legs), adm.touchdown_threshold, adm.liftoff_threshold)
+        self.contacts = np.zeros(len(robot.legs), dtype=bool)
+        """Feet on the ground by the force thresholds (touchdown/lift-off), updated when sensors report forces."""
         self.parameters = {name: getattr(walker_spec, name).default for name in ADJUSTABLE[:5]}
         self.parameters.update({name: getattr(admittance, name).default for name in ADJUSTABLE[5:]})
 
@@ -385,10 +389,15 @@ class Controller:
         sensors = self.sensors or Sensors()
         spec = self.robot.pose
         posture = None
+        if sensors.foot_forces is not None:
+            self.contacts = self.contact_detector.update(sensors.foot_forces)
+        elif sensors.foot_contact is not None:
+            self.contacts = np.asarray(sensors.foot_contact, dtype=bool)
         if self.posture is not None:
             walking = self.state == _RUNNING and self.walker is not None and self.walker.state != _STOPPED
             feet = self.model.chains.tips(sensors.joints) if sensors.joints is not None else self.model.tips
-            posture = self.posture.update(walking, feet, sensors.foot_contact, sensors.body_height)
+            contacts = self.contacts if sensors.foot_forces is not None or sensors.foot_contact is not None else None
+            posture = self.posture.update(walking, feet, contacts, sensors.body_height)
         manual = self.poser.manual_pose() if self.poser.manual_enabled else Pose()
         inclination = None
         if spec.inclination and sensors.orientation is not None:

@@ -1,6 +1,7 @@
 """Sensor feedback for the controller, and the posing terms driven by it.
 
 * :class:`Sensors` — what a backend measured during the last control period (all optional: ``plan`` has none).
+* :class:`ContactDetector` — touchdown/lift-off of each foot from its force, with hysteresis.
 * :class:`ImuPoser` — OpenSHC IMU posing (study §7.4): roll/pitch PID levelling against the IMU.
 * :func:`inclination_pose` — OpenSHC inclination posing (study §7.5): a body shift against the tilt,
   ``x = −h·tan(pitch)``, ``y = h·tan(roll)``; or, as an option, the paper's intent: shift the body so the
@@ -50,6 +51,27 @@ class Sensors:
     foot_forces: np.ndarray | None = None
     foot_contact: np.ndarray | None = None
     body_height: float | None = None
+
+
+class ContactDetector:
+    """Touchdown and lift-off from foot forces with hysteresis (OpenSHC study §8.4): a foot touches down when its
+    force rises above ``touchdown`` and lifts off when it falls below ``liftoff``.
+
+    Args:
+        legs: number of legs.
+        touchdown: force above which a foot is down [N].
+        liftoff: force below which a foot is up [N] (≤ ``touchdown``).
+    """
+
+    def __init__(self, legs: int, touchdown: float, liftoff: float) -> None:
+        self.touchdown, self.liftoff = touchdown, min(liftoff, touchdown)
+        self.down = np.zeros(legs, dtype=bool)
+
+    def update(self, forces: np.ndarray) -> np.ndarray:
+        """This cycle's contact state from the feet's force magnitudes [N]."""
+        forces = np.asarray(forces, dtype=float)
+        self.down = np.where(self.down, forces >= self.liftoff, forces > self.touchdown)
+        return self.down
 
 
 def quaternion_matrix(q: np.ndarray) -> np.ndarray:
