@@ -284,7 +284,8 @@ class Controller:
                 len(robot.legs), adm.virtual_mass.default, adm.virtual_stiffness.default,
                 adm.virtual_damping_ratio.default, adm.force_gain.default, adm.integrator_step_time,
                 adm.swing_stiffness_scaler, adm.load_stiffness_scaler, adm.dynamic_stiffness)
-        self.uses_sensors = pose_spec.imu or pose_spec.inclination or posture_spec.enabled or adm.enabled
+        self.uses_sensors = (pose_spec.imu or pose_spec.inclination or posture_spec.enabled or adm.enabled
+                             or robot.walker.rough_terrain_mode)
         self.contact_detector = ContactDetector(len(robot.legs), adm.touchdown_threshold, adm.liftoff_threshold)
         self.contacts = np.zeros(len(robot.legs), dtype=bool)
         """Feet on the ground by the force thresholds (touchdown/lift-off), updated when sensors report forces."""
@@ -530,7 +531,8 @@ class Controller:
         walker_spec = self.robot.walker
         if self.walker is None:
             self.walker = WalkController(self.stance, self.cycle, limits, self.dt, walker_spec.swing_height.default,
-                                         walker_spec.swing_width.default, walker_spec.velocity_input_mode)
+                                         walker_spec.swing_width.default, walker_spec.velocity_input_mode,
+                                         walker_spec.rough_terrain_mode)
         else:
             self.walker.set_cycle(self.cycle, limits)
 
@@ -560,8 +562,11 @@ class Controller:
         self.walker.swing_width = self.parameters["swing_width"]
         auto = self.autoposer
         walking = self._manual_legs == 0
+        sensing = self.sensors is not None and (self.sensors.foot_forces is not None
+                                                or self.sensors.foot_contact is not None)
         self.walker.update(self.velocity_input, self.angular_input, self.poser.walk_plane_pose.position,
-                           legs_walking=walking, posing_complete=auto is None or auto.posing_complete)
+                           legs_walking=walking, posing_complete=auto is None or auto.posing_complete,
+                           contacts=self.contacts if sensing else None, step_depth=self.parameters["step_depth"])
         if not walking:
             self._update_manual_legs()
         if auto is None:

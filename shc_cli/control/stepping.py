@@ -145,8 +145,16 @@ def _update_stride(vectors, leg, vx, vy, omega, scale, swing_height, plane, norm
 def update_tip_position(  # type: ignore[no-untyped-def]
     vectors, nodes, floats, integers, leg, period, swing_start, swing_end, stance_start, stance_end,
     swing_period, stance_period_full, frequency, dt, vx, vy, omega, swing_height, swing_width, plane, normal,
+    rough, step_depth, sensing, contact, body_position,
 ):
-    """Move one leg's walker tip one control cycle along its swing or stance curve (study §5)."""
+    """Move one leg's walker tip one control cycle along its swing or stance curve (study §5).
+
+    Rough-terrain mode (study §5.5, §5.7): the default tip is updated at every swing and stance start (its height
+    through where the foot last landed); with foot sensing, the swing target is lowered by ``step_depth`` along
+    the walk-plane normal (reactive) and, once the foot touches down in the second half of the swing, the tip
+    stops moving towards the ground. Returns whether the default tip moved.
+    """
+    moved = False
     state = integers[leg, STATE]
     standard = state == SWING or integers[leg, COMPLETED_FIRST_STEP] != 0
     this_stance_start = stance_start if standard else integers[leg, OFFSET]
@@ -163,6 +171,10 @@ def update_tip_position(  # type: ignore[no-untyped-def]
     floats[leg, STANCE_DELTA_T] = stance_dt
     for i in range(3):  # the target uses the previous cycle's stride, as in OpenSHC
         vectors[leg, TARGET, i] = vectors[leg, DEFAULT, i] + 0.5 * vectors[leg, STRIDE, i]
+    if rough and sensing and step_depth != 0.0:
+        size = math.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
+        for i in range(3):
+            vectors[leg, TARGET, i] -= step_depth * (normal[i] / size)
     scale = (stance_period_full / period) / frequency
     delta = np.empty(3)
     if state == SWING:
@@ -172,12 +184,21 @@ def update_tip_position(  # type: ignore[no-untyped-def]
             for i in range(3):
                 vectors[leg, SWING_ORIGIN, i] = vectors[leg, CURRENT, i]
                 vectors[leg, SWING_ORIGIN_VELOCITY, i] = vectors[leg, VELOCITY, i]
+            if rough:
+                update_default_tip(vectors, floats, leg, body_position)
+                moved = True
         _swing_nodes(vectors, nodes, leg, swing_dt, stance_dt, dt, swing_width, integers[leg, IS_LEFT] != 0)
         half = swing_iterations // 2
         if iteration <= half:
             _quartic_dot(nodes[leg, PRIMARY], swing_dt * iteration, delta)
         else:
             _quartic_dot(nodes[leg, SECONDARY], swing_dt * (iteration - half), delta)
+            if rough and sensing and contact:  # touched down: no further motion towards the ground
+                size = math.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
+                down = (delta[0] * normal[0] + delta[1] * normal[1] + delta[2] * normal[2]) / size
+                if down < 0.0:
+                    for i in range(3):
+                        delta[i] -= down * (normal[i] / size)
         for i in range(3):
             step = swing_dt * delta[i]
             vectors[leg, CURRENT, i] = vectors[leg, CURRENT, i] + step
@@ -188,6 +209,9 @@ def update_tip_position(  # type: ignore[no-untyped-def]
         if iteration == 1:
             for i in range(3):
                 vectors[leg, STANCE_ORIGIN, i] = vectors[leg, CURRENT, i]
+            if rough:
+                update_default_tip(vectors, floats, leg, body_position)
+                moved = True
         scaler = stance_period / ((stance_end - stance_start) % period)
         for i in range(3):
             step = ((-vectors[leg, STRIDE, i]) * scaler) * 0.25
@@ -198,6 +222,7 @@ def update_tip_position(  # type: ignore[no-untyped-def]
             step = stance_dt * delta[i]
             vectors[leg, CURRENT, i] = vectors[leg, CURRENT, i] + step
             vectors[leg, VELOCITY, i] = step / dt
+    return moved
 
 
 @njit(cache=True)
@@ -263,7 +288,7 @@ def update_default_tip(vectors, floats, leg, body_position):  # type: ignore[no-
 def walk_legs(  # type: ignore[no-untyped-def]
     vectors, nodes, floats, integers, counters, walk_state, period, swing_start, swing_end, stance_start,
     stance_end, swing_period, stance_period, frequency, dt, vx, vy, omega, swing_height, swing_width, plane,
-    normal, body_position,
+    normal, body_position, rough, step_depth, sensing, contacts,
 ):
     """OpenSHC's per-leg block of ``updateWalk`` for every leg in id order (counters change during the loop).
 
@@ -304,9 +329,11 @@ def walk_legs(  # type: ignore[no-untyped-def]
         elif walk_state == STOPPED:
             integers[leg, STATE] = FORCE_STOP
             integers[leg, PHASE] = 0
-        update_tip_position(vectors, nodes, floats, integers, leg, period, swing_start, swing_end, stance_start,
-                            stance_end, swing_period, stance_period, frequency, dt, vx, vy, omega, swing_height,
-                            swing_width, plane, normal)
+        if update_tip_position(vectors, nodes, floats, integers, leg, period, swing_start, swing_end, stance_start,
+                               stance_end, swing_period, stance_period, frequency, dt, vx, vy, omega, swing_height,
+                               swing_width, plane, normal, rough, step_depth, sensing, contacts[leg],
+                               body_position):
+            moved += 1
         iterate_phase(integers, floats, leg, period, swing_start, swing_end, stance_start, stance_end)
     return moved
 
@@ -367,6 +394,7 @@ def walk_update(  # type: ignore[no-untyped-def]
     vectors, nodes, floats, integers, counters, walk, walk_state, table, bearing_step, period, swing_start,
     swing_end, stance_start, stance_end, swing_period, stance_period, frequency, dt, linear_x, linear_y, angular,
     throttle, swing_height, swing_width, plane, normal, body_position, legs_walking, posing_complete, limits_out,
+    rough, step_depth, sensing, contacts,
 ):
     """One cycle of OpenSHC's ``updateWalk`` (study §4.4, §6; exact notes §2): limits for the input at the
     current tips, new target velocity, acceleration ramp, walk-state transition, the legs, ideal odometry.
@@ -429,7 +457,7 @@ def walk_update(  # type: ignore[no-untyped-def]
     moved = walk_legs(vectors, nodes, floats, integers, counters, walk_state, period, swing_start, swing_end,
                       stance_start, stance_end, swing_period, stance_period, frequency, dt, walk[DESIRED_X],
                       walk[DESIRED_Y], walk[DESIRED_YAW_RATE], swing_height, swing_width, plane, normal,
-                      body_position)
+                      body_position, rough, step_depth, sensing, contacts)
     # Ideal odometry: compose this cycle's commanded motion.
     sx, sy = walk[DESIRED_X] * dt, walk[DESIRED_Y] * dt
     c, s = math.cos(walk[ODOMETRY_YAW]), math.sin(walk[ODOMETRY_YAW])

@@ -48,6 +48,7 @@ class WalkController:
         swing_height: swing apex height [m].
         swing_width: outward apex shift [m].
         velocity_input_mode: 'throttle' (inputs −1..1 of the maximum) or 'real' (m/s, rad/s).
+        rough_terrain: OpenSHC's rough-terrain mode (study §5.5, §5.7).
     """
 
     def __init__(
@@ -59,8 +60,11 @@ class WalkController:
         swing_height: float,
         swing_width: float,
         velocity_input_mode: str = "throttle",
+        rough_terrain: bool = False,
     ) -> None:
         self.cycle = cycle
+        self.rough_terrain = rough_terrain
+        """OpenSHC ``rough_terrain_mode``: default tips follow the footholds; step depth and touchdown with sensing."""
         self._install_limits(limits)
         self.time_delta = time_delta
         self.swing_height = swing_height
@@ -77,6 +81,7 @@ class WalkController:
         self.walk_plane = np.zeros(3)
         self.walk_plane_normal = np.array([0.0, 0.0, 1.0])
         self._plane_tips: np.ndarray | None = None
+        self._no_contacts = np.zeros(len(self.leg_ids), dtype=np.bool_)
 
     # -- limits -----------------------------------------------------------------------------------------------
 
@@ -100,7 +105,8 @@ class WalkController:
     # -- the cycle ---------------------------------------------------------------------------------------------
 
     def update(self, linear_input: Vector, angular_input: float, default_body_position: Vector,
-               legs_walking: bool = True, posing_complete: bool = True) -> None:
+               legs_walking: bool = True, posing_complete: bool = True, contacts: Vector | None = None,
+               step_depth: float = 0.0) -> None:
         """One control cycle of walking (OpenSHC ``updateWalk``; compiled in :func:`stepping.walk_update`).
 
         Args:
@@ -109,6 +115,8 @@ class WalkController:
             default_body_position: position of the walk-plane body pose (for default-tip updates) [m].
             legs_walking: False while any leg is manually manipulated (walking is then suspended).
             posing_complete: the auto poser has finished its cycles (STOPPING → STOPPED waits for it).
+            contacts: feet on the ground by their force sensors (rough-terrain mode), ``None`` without sensing.
+            step_depth: reactive target lowering in rough-terrain mode [m].
         """
         cycle = self.cycle
         state, moved = stepping.walk_update(
@@ -118,6 +126,8 @@ class WalkController:
             self.time_delta, float(linear_input[0]), float(linear_input[1]), float(angular_input),
             self._throttle, self.swing_height, self.swing_width, self.walk_plane, self.walk_plane_normal,
             np.asarray(default_body_position, dtype=float), legs_walking, posing_complete, self._limit_out,
+            self.rough_terrain, float(step_depth), contacts is not None,
+            self._no_contacts if contacts is None else np.asarray(contacts, dtype=np.bool_),
         )
         if state != self.state:
             self.state = WalkState(state)
