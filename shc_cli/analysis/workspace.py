@@ -17,7 +17,14 @@ from shc_cli.control.gait import StepCycle, step_cycle
 from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.startup import plan_direct_startup
 from shc_cli.model.chains import Chains, FloatArray
-from shc_cli.model.workspace import Workplane, polygon_area, search_workspaces, volumetric_workspaces, walkspace
+from shc_cli.model.workspace import (
+    Workplane,
+    plane_at,
+    polygon_area,
+    search_workspaces,
+    volumetric_workspaces,
+    walkspace,
+)
 from shc_cli.spec.gait import Gait
 from shc_cli.spec.robot import Robot
 
@@ -95,7 +102,7 @@ def analyse_workspace(
     layers = None
     if volumetric:
         layers = volumetric_workspaces(chains, default_joints, identity, robot.time_delta, bearing_count)
-        planes = {leg: _plane_at(stack, 0.0) for leg, stack in layers.items()}
+        planes = {leg: plane_at(stack, 0.0) for leg, stack in layers.items()}
     else:
         planes = search_workspaces(chains, default_joints, identity, robot.time_delta, bearing_count).planes
     stance = {leg: (spec.stance.x, spec.stance.y) for leg, spec in robot.legs.items()}
@@ -105,18 +112,3 @@ def analyse_workspace(
     first = next(iter(robot.legs.values())).stance
     limits = generate_limits(common, cycle, robot.time_delta, math.hypot(first.x, first.y))
     return WorkspaceReport(robot, gait, frequency, cycle, default_joints, identity, planes, layers, common, limits)
-
-
-def _plane_at(stack: dict[float, Workplane], height: float) -> Workplane:
-    """Workplane at ``height`` by linear interpolation between the bounding layers."""
-    heights = sorted(stack)
-    if height <= heights[0]:
-        return stack[heights[0]]
-    if height >= heights[-1]:
-        return stack[heights[-1]]
-    upper = next(h for h in heights if h >= height)
-    lower = max(h for h in heights if h <= height)
-    if upper == lower:
-        return stack[upper]
-    share = (height - lower) / (upper - lower)
-    return {b: stack[lower][b] * (1.0 - share) + stack[upper][b] * share for b in stack[lower]}

@@ -35,7 +35,7 @@ from shc_cli.control.walk import WalkController, WalkState
 from shc_cli.model import kernels
 from shc_cli.model.chains import Chains, FloatArray
 from shc_cli.model.ik import IK_TOLERANCE
-from shc_cli.model.workspace import Workplane, search_workspaces, walkspace
+from shc_cli.model.workspace import Workplane, plane_at, search_workspaces, volumetric_workspaces, walkspace
 from shc_cli.spec.autopose import AutoPoseSet
 from shc_cli.spec.gait import Gait
 from shc_cli.spec.robot import Robot
@@ -525,7 +525,11 @@ class Controller:
         """Workspaces, walkspace and limits from the default configuration; (re)create the walker."""
         clearance = self.robot.walker.body_clearance
         identity = np.array([[x, y, -clearance] for x, y in self.stance.values()])
-        self.planes = search_workspaces(self.model.chains, self.default_joints, identity, self.dt).planes
+        if self.robot.walker.rough_terrain_mode:  # OpenSHC: the volumetric workspace, its layer at the stance
+            layers = volumetric_workspaces(self.model.chains, self.default_joints, identity, self.dt)
+            self.planes = {leg: plane_at(stack, 0.0) for leg, stack in layers.items()}
+        else:
+            self.planes = search_workspaces(self.model.chains, self.default_joints, identity, self.dt).planes
         self.walkspace = walkspace(self.planes, self.stance, self.robot.walker.overlapping_walkspaces)
         limits = self._limits_for(self.cycle)
         walker_spec = self.robot.walker

@@ -224,3 +224,19 @@ def polygon_area(plane: Workplane) -> float:
     points = [(plane[b] * math.cos(math.radians(b)), plane[b] * math.sin(math.radians(b))) for b in keys]
     twice = sum(x0 * y1 - x1 * y0 for (x0, y0), (x1, y1) in zip(points, points[1:] + points[:1], strict=True))
     return abs(twice) / 2.0
+
+
+def plane_at(stack: dict[float, Workplane], height: float) -> Workplane:
+    """Workplane at ``height`` [m] of a volumetric stack, by linear interpolation between the bounding layers."""
+    heights = sorted(stack)
+    if height <= heights[0]:
+        return stack[heights[0]]
+    if height >= heights[-1]:
+        return stack[heights[-1]]
+    upper = next(h for h in heights if h >= height)
+    lower = max(h for h in heights if h <= height)
+    if upper == lower:
+        return stack[upper]
+    share = (height - lower) / (upper - lower)
+    return {b: stack[lower][b] * (1.0 - share) + stack[upper][b] * share for b in stack[lower]}
+
