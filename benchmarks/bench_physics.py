@@ -34,18 +34,23 @@ from shc_cli.spec.timeline import constant
 LAYERS = ("physics", "+ joint-state samples", "+ servo commands", "+ controller", "+ sensor read")
 
 
-def walk(iterations: int, cycles: int, rate: float) -> dict[str, float]:
-    """One walk with ``iterations`` solver iterations at ``rate`` [Hz]; returns its figures."""
-    world_module.SOLVER_ITERATIONS = iterations
+def started_bullet(rate: float) -> tuple[Simulation, Command]:
+    """The Bullet insectoid on flat ground at ``rate`` [Hz], started up to RUNNING; and the full-speed command."""
     robot, gait, _ = load_checked("bullet", "tripod")
     substeps = round(rate * robot.time_delta)
     sim = Simulation(robot, gait, {}, parse_terrain("flat"), "WG", substeps, 0.9, 0.0, 0, 0.0, "unpacked", False)
-    world, controller, p = sim.world, sim.controller, sim.world.p
     start = Command(state_request=RobotState.RUNNING)
-    while controller.state != RobotState.RUNNING:
-        world.command(controller.step(start).joints)
-        world.step()
-    go = Command(velocity=(1.0, 0.0, 0.0), state_request=RobotState.RUNNING)
+    while sim.controller.state != RobotState.RUNNING:
+        sim.world.command(sim.controller.step(start).joints)
+        sim.world.step()
+    return sim, Command(velocity=(1.0, 0.0, 0.0), state_request=RobotState.RUNNING)
+
+
+def walk(iterations: int, cycles: int, rate: float) -> dict[str, float]:
+    """One walk with ``iterations`` solver iterations at ``rate`` [Hz]; returns its figures."""
+    world_module.SOLVER_ITERATIONS = iterations
+    sim, go = started_bullet(rate)
+    world, controller, p = sim.world, sim.controller, sim.world.p
     x0 = p.getBasePositionAndOrientation(world.body, physicsClientId=world.client)[0][0]
     physics0 = world.physics_time
     control, sampling, read = [], [], []
@@ -78,14 +83,8 @@ def walk(iterations: int, cycles: int, rate: float) -> dict[str, float]:
 
 def floor(cycles: int) -> None:
     """Print wall ÷ physics for each layer of the loop, then for the whole logged loop."""
-    robot, gait, _ = load_checked("bullet", "tripod")
-    sim = Simulation(robot, gait, {}, parse_terrain("flat"), "WG", 4, 0.9, 0.0, 0, 0.0, "unpacked", False)
+    sim, go = started_bullet(400.0)
     world, controller, p = sim.world, sim.controller, sim.world.p
-    start = Command(state_request=RobotState.RUNNING)
-    while controller.state != RobotState.RUNNING:
-        world.command(controller.step(start).joints)
-        world.step()
-    go = Command(velocity=(1.0, 0.0, 0.0), state_request=RobotState.RUNNING)
     body, joints, client, clock = world.body, world.flat_joints, world.client, time.perf_counter
     out = controller.step(go)
     for level, name in enumerate(LAYERS):
@@ -106,7 +105,7 @@ def floor(cycles: int) -> None:
                 world.read()
         print(f"{name:24s} wall/physics {(clock() - began) / physics:.3f}", flush=True)
     world.close()
-    sim = Simulation(robot, gait, {}, parse_terrain("flat"), "WG", 4, 0.9, 0.0, 0, 0.0, "unpacked", False)
+    sim = Simulation(sim.robot, sim.gait, {}, parse_terrain("flat"), "WG", 4, 0.9, 0.0, 0, 0.0, "unpacked", False)
     with tempfile.TemporaryDirectory() as directory:
         sim.execute(constant((1.0, 0.0, 0.0)), cycles, RunDirectory(Path(directory) / "run"))
     sim.world.close()

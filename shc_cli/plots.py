@@ -173,6 +173,17 @@ def _save(figure: Any, path: Path) -> None:
     plt.close(figure)
 
 
+def _finish_time_plot(figure: Any, axes: Any, ylabel: str, path: Path) -> Path:
+    """Label a plot over time, add its grid and legend, save it atomically; returns ``path``."""
+    axes.set_xlabel("time [s]")
+    axes.set_ylabel(ylabel)
+    axes.grid(True, lw=0.3)
+    axes.legend(fontsize=7)
+    figure.tight_layout()
+    _save(figure, path)
+    return path
+
+
 def _label(result: dict[str, Any]) -> str:
     return Path(str(result["run"])).name
 
@@ -200,13 +211,7 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
         figure, axes = plt.subplots(figsize=(8, 3.5), dpi=110)
         for result, run in powered:
             axes.plot(run.t, run.power, lw=0.7, label=_label(result))
-        axes.set_xlabel("time [s]")
-        axes.set_ylabel("electrical power [W]")
-        axes.grid(True, lw=0.3)
-        axes.legend(fontsize=7)
-        figure.tight_layout()
-        _save(figure, folder / "power.png")
-        written.append(folder / "power.png")
+        written.append(_finish_time_plot(figure, axes, "electrical power [W]", folder / "power.png"))
 
     figure, axes = plt.subplots(1, 3, figsize=(10, 3.6), dpi=110)
     names = [_label(r) for r in results]
@@ -261,13 +266,8 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
                 axes.plot(t, series["zmp_margin"], lw=0.5, ls="--", color=line.get_color(),
                           label=f"{_label(result)}: ZMP")
         axes.axhline(0.0, color="0.3", lw=0.6)
-        axes.set_xlabel("time [s]")
-        axes.set_ylabel("margin to the support polygon [m]")
-        axes.grid(True, lw=0.3)
-        axes.legend(fontsize=7)
-        figure.tight_layout()
-        _save(figure, folder / "stability.png")
-        written.append(folder / "stability.png")
+        written.append(_finish_time_plot(figure, axes, "margin to the support polygon [m]",
+                                         folder / "stability.png"))
 
     frequencies = {r["step_frequency_hz"] for r in results}
     if len(frequencies) > 1:
