@@ -203,6 +203,21 @@ def export_urdf(
         typer.echo(f"wrote {out}")
 
 
+@export_app.command("bag")
+def export_bag(
+    run: Annotated[Path, typer.Argument(help="Run directory from plan or simulate.")],
+    format: Annotated[str, typer.Option("--format", help="mcap, sqlite3 (ROS 2) or ros1.")] = "mcap",
+    out: Annotated[Path | None, typer.Option(help="Bag path (default: RUN_bag, or RUN.bag for ros1).")] = None,
+) -> None:
+    """Write a run as a ROS bag: joint states, tf, URDF, IMU, odometry, foot forces, OpenSHC LegState."""
+    from shc_cli.interop.bag import export_bag as write_bag
+    from shc_cli.runread import read_run
+
+    target = out or run.with_name(run.name + (".bag" if format == "ros1" else "_bag"))
+    path = write_bag(read_run(run), target, format)
+    typer.echo(f"wrote {path}")
+
+
 @app.command()
 def schema(
     kind: Annotated[str, typer.Argument(help="'robot' or 'gait'.")],

@@ -7,7 +7,6 @@ run gives the ideal body path (its desired velocity integrated) and the commande
 
 from __future__ import annotations
 
-import csv
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -42,6 +41,13 @@ class RunLog:
         foot_force: contact normal force per foot [N], ``(N, L)``, or ``None``.
         body_rate: body-frame angular rate (roll, pitch, yaw rate) [rad/s], ``(N, 3)``, or ``None``.
         height: body height above the terrain [m], ``(N,)``, or ``None``.
+        commanded: commanded joint positions ``(N, L, n)`` [rad].
+        efforts: measured joint torques ``(N, L, n)`` [N·m], or ``None``.
+        twist: body velocity in the world (vx, vy, vz [m/s], wx, wy, wz [rad/s]) ``(N, 6)``, or ``None``.
+        imu: IMU quaternion (x, y, z, w), body rate [rad/s], specific force [m/s²] ``(N, 10)``, or ``None``.
+        progress: stance and swing progress per leg ``(N, L, 2)`` (−1 outside the phase), or ``None``.
+        tips: walker, poser and model tips per leg ``(N, L, 3, 3)`` [m] (plan), or ``None``.
+        states: robot and walk state names ``(N, 2)``.
     """
 
     path: Path
@@ -61,6 +67,13 @@ class RunLog:
     foot_force: np.ndarray | None = None
     body_rate: np.ndarray | None = None
     height: np.ndarray | None = None
+    commanded: np.ndarray | None = None
+    efforts: np.ndarray | None = None
+    twist: np.ndarray | None = None
+    imu: np.ndarray | None = None
+    progress: np.ndarray | None = None
+    tips: np.ndarray | None = None
+    states: np.ndarray | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
     @property
@@ -112,24 +125,37 @@ def _robot(path: Path, summary: dict[str, Any]) -> Robot:
 
 
 def _table(file: Path) -> dict[str, np.ndarray]:
-    """A CSV table as columns: numbers as float arrays, other columns as string arrays."""
+    """A CSV table as columns: numbers as float arrays, other columns as string arrays (numpy's C parser)."""
     try:
-        with file.open(encoding="utf-8", newline="") as handle:
-            reader = csv.reader(handle)
-            header = next(reader)
-            rows = list(reader)
-    except (OSError, StopIteration) as error:
-        raise OutputError(f"{file}: cannot read the table ({error or 'empty'})") from None
-    if not rows:
+        lines = file.read_text(encoding="utf-8").splitlines()
+    except OSError as error:
+        raise OutputError(f"{file}: cannot read the table ({error})") from None
+    if len(lines) < 2:
         raise _bad(file, "no rows", "re-run to regenerate it")
-    columns = list(zip(*rows, strict=False))
+    header = lines[0].split(",")
+    first = lines[1].split(",")
+    text = [index for index, cell in enumerate(first) if not _is_number(cell)]
+    numeric = [index for index in range(len(header)) if index not in text]
     out: dict[str, np.ndarray] = {}
-    for name, values in zip(header, columns, strict=False):
-        try:
-            out[name] = np.array(values, dtype=float)
-        except ValueError:
-            out[name] = np.array(values, dtype=str)
+    try:
+        numbers = np.loadtxt(lines[1:], delimiter=",", usecols=numeric, ndmin=2)
+        strings = np.loadtxt(lines[1:], delimiter=",", usecols=text, dtype=str, ndmin=2) if text else None
+    except ValueError as error:
+        raise _bad(file, f"malformed row ({error})", "re-run to regenerate it") from None
+    for column, index in enumerate(numeric):
+        out[header[index]] = numbers[:, column]
+    for column, index in enumerate(text):
+        assert strings is not None
+        out[header[index]] = strings[:, column]
     return out
+
+
+def _is_number(cell: str) -> bool:
+    try:
+        float(cell)
+    except ValueError:
+        return False
+    return True
 
 
 def _joint_array(columns: dict[str, np.ndarray], robot: Robot, rows: int, suffix: str = "") -> np.ndarray:
@@ -161,6 +187,11 @@ def _simulate_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
         contact=_stack(c, [f"{leg}_contact" for leg in legs]) > 0.5,
         power=c["power_w"], foot_force=_stack(c, [f"{leg}_force" for leg in legs]),
         body_rate=_stack(c, ["gyro_x", "gyro_y", "gyro_z"]), height=c["height"],
+        commanded=_joint_array(c, robot, rows, "_cmd"), efforts=_joint_array(c, robot, rows, "_torque"),
+        twist=_stack(c, ["vx", "vy", "vz", "wx", "wy", "wz"]),
+        imu=_stack(c, ["imu_qx", "imu_qy", "imu_qz", "imu_qw", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y",
+                       "acc_z"]),
+        states=np.column_stack([c["robot_state"], c["walk_state"]]),
     )
 
 
@@ -183,9 +214,17 @@ def _plan_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
     legs = list(robot.legs)
     contact = (_stack(tips, [f"{leg}_stance_progress" for leg in legs]) >= 0.0 if tips is not None
                else np.ones((rows, len(legs)), dtype=bool))
+    planned = _joint_array(joints, robot, rows)
+    progress = tip_stages = None
+    if tips is not None:
+        progress = np.stack([_stack(tips, [f"{leg}_stance_progress", f"{leg}_swing_progress"]) for leg in legs],
+                            axis=1)
+        tip_stages = np.stack([np.stack([_stack(tips, [f"{leg}_{stage}_{axis}" for axis in "xyz"])
+                                         for stage in ("walker", "poser", "model")], axis=1) for leg in legs], axis=1)
     return RunLog(
         path=path, kind="plan", summary=summary, robot=robot, t=joints["t"],
         running=body["robot_state"] == "RUNNING", walk_state=body["walk_state"],
         command=_stack(body, ["cmd_vx", "cmd_vy", "cmd_wz"]), desired=desired, position=position, rpy=rpy,
-        joints=_joint_array(joints, robot, rows), contact=contact, height=z,
+        joints=planned, contact=contact, height=z, commanded=planned, progress=progress, tips=tip_stages,
+        states=np.column_stack([body["robot_state"], body["walk_state"]]),
     )

@@ -1,0 +1,336 @@
+"""A run directory as a ROS bag (ROS 2 mcap or sqlite3, or ROS 1), written with ``rosbags`` — no ROS install.
+
+Topics (stamps = run time from 0; frames as in the generated URDF, ``shc export urdf``):
+
+| topic | type | content |
+|---|---|---|
+| ``/robot_description`` | std_msgs/String | the generated URDF, once at the start |
+| ``/tf_static`` | tf2_msgs/TFMessage | ``base_link → LEG_base`` (the legs' DH base frames), once |
+| ``/tf`` | tf2_msgs/TFMessage | ``odom → base_link`` (body pose); ``base_link →`` each ``LEG_J_link``, ``LEG_foot`` |
+| ``/joint_states`` | sensor_msgs/JointState | measured positions, velocity by differences, efforts; plan: commanded |
+| ``/desired_joint_states`` | sensor_msgs/JointState | commanded positions and their differences |
+| ``/cmd_vel`` | geometry_msgs/Twist | the velocity input (x, y, yaw) |
+| ``/odom`` | nav_msgs/Odometry | body pose in ``odom``, body velocity in ``base_link`` |
+| ``/imu/data`` | sensor_msgs/Imu | orientation, angular rate, specific force (simulate) |
+| ``/LEG/foot_force`` | geometry_msgs/WrenchStamped | contact normal force along z of ``LEG_foot`` (simulate) |
+| ``/shc/LEG/state`` | syropod_highlevel_controller/LegState | OpenSHC's per-leg record (fields below) |
+| ``/shc/power`` | std_msgs/Float64 | total electrical power [W] (simulate) |
+
+LegState (OpenSHC's ``LegState.msg``, registered in the bag): ``walker_tip_pose``, ``poser_tip_pose`` (plan),
+``model_tip_pose`` (forward kinematics of the commanded joints), ``actual_tip_pose`` (of the measured joints),
+joint positions/velocities/efforts, stance and swing progress (plan; −1 otherwise); the other fields are zero.
+"""
+
+from __future__ import annotations
+
+import shutil
+from collections.abc import Callable
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from shc_cli.errors import Issue, OutputError, SpecError
+from shc_cli.interop.batch import BatchSerializer
+from shc_cli.runread import RunLog
+
+FORMATS = ("mcap", "sqlite3", "ros1")
+LEG_STATE_TYPE = "syropod_highlevel_controller/msg/LegState"
+LEG_STATE_MSG = """std_msgs/Header header
+string name
+geometry_msgs/PoseStamped walker_tip_pose
+geometry_msgs/PoseStamped target_tip_pose
+geometry_msgs/PoseStamped poser_tip_pose
+geometry_msgs/PoseStamped model_tip_pose
+geometry_msgs/PoseStamped actual_tip_pose
+geometry_msgs/TwistStamped model_tip_velocity
+float64[] joint_positions
+float64[] joint_velocities
+float64[] joint_efforts
+float64 stance_progress
+float64 swing_progress
+float64 time_to_swing_end
+geometry_msgs/Pose pose_delta
+geometry_msgs/Pose auto_pose
+geometry_msgs/Vector3 tip_force
+geometry_msgs/Vector3 admittance_delta
+float64 virtual_stiffness
+"""
+"""OpenSHC's LegState.msg (``shared/reference/openshc/LegState.msg``), field for field."""
+
+
+def typestore_for(fmt: str) -> Any:
+    """The rosbags typestore of the format (ROS 2 Humble or ROS 1 Noetic) with LegState registered."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    store = get_typestore(Stores.ROS1_NOETIC if fmt == "ros1" else Stores.ROS2_HUMBLE)
+    types = get_types_from_msg(LEG_STATE_MSG, LEG_STATE_TYPE)
+    if "tf2_msgs/msg/TFMessage" not in store.types:  # rosbags' Noetic store has no tf2_msgs
+        types.update(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
+    store.register(types)
+    return store
+
+
+def quaternions(rotations: np.ndarray) -> np.ndarray:
+    """Unit quaternions (x, y, z, w) of rotation matrices ``(..., 3, 3)``."""
+    from scipy.spatial.transform import Rotation
+
+    shape = rotations.shape[:-2]
+    return np.asarray(Rotation.from_matrix(rotations.reshape(-1, 3, 3)).as_quat().reshape(*shape, 4))
+
+
+class _Messages:
+    """Message constructors of one typestore (ROS 1 headers carry a ``seq``)."""
+
+    def __init__(self, store: Any) -> None:
+        self.T = store.types
+        self.ros1 = "seq" in self.T["std_msgs/msg/Header"].__dataclass_fields__
+
+    def header(self, sec: int, nanosec: int, frame: str) -> Any:
+        T = self.T
+        stamp = T["builtin_interfaces/msg/Time"](sec=sec, nanosec=nanosec)
+        if self.ros1:
+            return T["std_msgs/msg/Header"](seq=0, stamp=stamp, frame_id=frame)
+        return T["std_msgs/msg/Header"](stamp=stamp, frame_id=frame)
+
+    def vector(self, v: np.ndarray) -> Any:
+        return self.T["geometry_msgs/msg/Vector3"](x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+    def point(self, v: np.ndarray) -> Any:
+        return self.T["geometry_msgs/msg/Point"](x=float(v[0]), y=float(v[1]), z=float(v[2]))
+
+    def quaternion(self, q: np.ndarray) -> Any:
+        return self.T["geometry_msgs/msg/Quaternion"](x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3]))
+
+    def pose(self, v: np.ndarray) -> Any:
+        """Pose from 7 numbers (position, quaternion x y z w)."""
+        return self.T["geometry_msgs/msg/Pose"](position=self.point(v[:3]), orientation=self.quaternion(v[3:7]))
+
+    def transform(self, sec: int, nanosec: int, parent: str, child: str, v: np.ndarray) -> Any:
+        T = self.T
+        return T["geometry_msgs/msg/TransformStamped"](
+            header=self.header(sec, nanosec, parent), child_frame_id=child,
+            transform=T["geometry_msgs/msg/Transform"](translation=self.vector(v[:3]),
+                                                       rotation=self.quaternion(v[3:7])))
+
+
+def _serialize_as(serialize: Callable[[Any, str], bytes], msgtype: str, message: Any) -> bytes:
+    return serialize(message, msgtype)
+
+
+def _differences(values: np.ndarray, dt: float) -> np.ndarray:
+    """Backward differences per cycle (0 for the first) [unit/s]."""
+    out = np.zeros_like(values)
+    out[1:] = (values[1:] - values[:-1]) / dt
+    return out
+
+
+def _rpy_matrices(rpy: np.ndarray) -> np.ndarray:
+    from shc_cli.analysis.metrics import rotation_rpy
+
+    return rotation_rpy(rpy)
+
+
+def export_bag(run: RunLog, out: Path, fmt: str) -> Path:
+    """Write ``run`` as a bag at ``out`` (a directory for ROS 2 formats, a ``.bag`` file for ROS 1), atomically."""
+    if fmt not in FORMATS:
+        raise SpecError([Issue(None, None, "--format", f"'{fmt}' is not a bag format", "use mcap, sqlite3 or ros1")])
+    if out.exists():
+        raise OutputError(f"{out}: already exists (choose another --out or remove it)")
+    temporary = out.with_name(out.name + ".partial")
+    if temporary.exists():
+        shutil.rmtree(temporary) if temporary.is_dir() else temporary.unlink()
+    store = typestore_for(fmt)
+    serialize: Callable[[Any, str], bytes] = store.serialize_ros1 if fmt == "ros1" else store.serialize_cdr
+    topics = _topics(run, _Messages(store))
+    if fmt == "ros1":
+        from rosbags.rosbag1 import Writer as Writer1
+
+        writer: Any = Writer1(temporary)
+    else:
+        from rosbags.rosbag2 import StoragePlugin, Writer
+
+        plugin = StoragePlugin.MCAP if fmt == "mcap" else StoragePlugin.SQLITE3
+        writer = Writer(temporary, version=9, storage_plugin=plugin)
+    stamps = np.round(run.t * 1e9).astype(np.int64)
+    with writer:
+        streams = []
+        for topic, msgtype, build, width, values, once in topics:
+            connection = writer.add_connection(topic, msgtype, typestore=store)
+            if once:
+                writer.write(connection, int(stamps[0]), bytes(serialize(build(0, 0, np.zeros(0)), msgtype)))
+                continue
+            batch = BatchSerializer(partial(_serialize_as, serialize, msgtype), build, width)
+            streams.append((connection, batch.serialize(stamps, values)))
+        for row, stamp in enumerate(stamps.tolist()):  # time order, as a recorder writes
+            for connection, data in streams:
+                writer.write(connection, stamp, data[row].tobytes())
+    temporary.rename(out)
+    return out
+
+
+Topic = tuple[str, str, Callable[[int, int, np.ndarray], Any], int, np.ndarray, bool]
+
+
+def _topics(run: RunLog, m: _Messages) -> list[Topic]:
+    """Every topic: (name, type, builder, numbers per message, numbers ``(N, width)``, written once)."""
+    from shc_cli.backends.pybullet_.urdf import leg_names, robot_urdf
+    from shc_cli.model.chains import Chains
+
+    T = m.T
+    robot = run.robot
+    n = len(run.t)
+    dt = run.dt
+    legs = list(robot.legs)
+    names = leg_names(robot)
+    chains = Chains.from_robot(robot)
+    slots = [(i, k) for i, leg in enumerate(robot.legs.values()) for k in range(len(leg.joints))]
+    rows_, cols_ = np.array([s[0] for s in slots]), np.array([s[1] for s in slots])
+    joint_ids = [joint for leg in names.values() for joint in leg.joints]
+    measured = run.joints[:, rows_, cols_]
+    commanded = (run.commanded if run.commanded is not None else run.joints)[:, rows_, cols_]
+    efforts = run.efforts[:, rows_, cols_] if run.efforts is not None else np.zeros_like(measured)
+    count = len(joint_ids)
+    topics: list[Topic] = []
+
+    def joint_state(sec: int, nanosec: int, v: np.ndarray) -> Any:
+        return T["sensor_msgs/msg/JointState"](header=m.header(sec, nanosec, ""), name=joint_ids,
+                                               position=v[:count].copy(), velocity=v[count:2 * count].copy(),
+                                               effort=v[2 * count:].copy())
+
+    topics.append(("/joint_states", "sensor_msgs/msg/JointState", joint_state, 3 * count,
+                   np.hstack([measured, _differences(measured, dt), efforts]), False))
+    topics.append(("/desired_joint_states", "sensor_msgs/msg/JointState", joint_state, 3 * count,
+                   np.hstack([commanded, _differences(commanded, dt), np.zeros_like(commanded)]), False))
+
+    urdf = robot_urdf(robot)
+    def description(sec: int, nanosec: int, v: np.ndarray) -> Any:
+        return T["std_msgs/msg/String"](data=urdf)
+
+    topics.append(("/robot_description", "std_msgs/msg/String", description, 0, np.zeros((n, 0)), True))
+    base_q = quaternions(chains.base[:, :3, :3])
+    static = [np.concatenate([chains.base[i, :3, 3], base_q[i]]) for i in range(len(legs))]
+    topics.append(("/tf_static", "tf2_msgs/msg/TFMessage",
+                   lambda s, ns, v: T["tf2_msgs/msg/TFMessage"](transforms=[
+                       m.transform(0, 0, "base_link", names[leg].base, static[i]) for i, leg in enumerate(legs)]),
+                   0, np.zeros((n, 0)), True))
+
+    # /tf: odom → base_link, base_link → every joint link (DH frame k turned by q_k) and foot (the DH tip).
+    body_rotation = _rpy_matrices(run.rpy)
+    body = np.hstack([run.position, quaternions(body_rotation)])
+    frames = chains.take(np.tile(np.arange(len(legs)), n)).frames(run.joints.reshape(n * len(legs), -1))
+    frames = frames.reshape(n, len(legs), chains.joints + 1, 4, 4)
+    links: list[tuple[str, np.ndarray]] = []
+    for i, leg in enumerate(legs):
+        for k, link in enumerate(names[leg].links):
+            q = run.joints[:, i, k]
+            turn = np.zeros((n, 4, 4))
+            turn[:, 0, 0], turn[:, 0, 1], turn[:, 1, 0], turn[:, 1, 1] = np.cos(q), -np.sin(q), np.sin(q), np.cos(q)
+            turn[:, 2, 2] = turn[:, 3, 3] = 1.0
+            links.append((link, chains.base[i] @ frames[:, i, k] @ turn))
+        links.append((names[leg].foot, chains.base[i] @ frames[:, i, len(names[leg].links)]))
+    tf_values = [body] + [np.hstack([matrix[:, :3, 3], quaternions(matrix[:, :3, :3])]) for _, matrix in links]
+    child_names = ["base_link"] + [name for name, _ in links]
+
+    def tf(sec: int, nanosec: int, v: np.ndarray) -> Any:
+        return T["tf2_msgs/msg/TFMessage"](transforms=[
+            m.transform(sec, nanosec, "odom" if j == 0 else "base_link", child, v[7 * j:7 * j + 7])
+            for j, child in enumerate(child_names)])
+
+    topics.append(("/tf", "tf2_msgs/msg/TFMessage", tf, 7 * len(child_names), np.hstack(tf_values), False))
+
+    def twist(s: int, ns: int, v: np.ndarray) -> Any:
+        return T["geometry_msgs/msg/Twist"](linear=m.vector(np.array([v[0], v[1], 0.0])),
+                                            angular=m.vector(np.array([0.0, 0.0, v[2]])))
+
+    topics.append(("/cmd_vel", "geometry_msgs/msg/Twist", twist, 3, run.command, False))
+
+    world_twist = run.twist if run.twist is not None else np.hstack([
+        _differences(run.position, dt), np.zeros((n, 2)), _differences(np.unwrap(run.rpy[:, 2]), dt)[:, None]])
+    body_linear = np.einsum("nji,nj->ni", body_rotation, world_twist[:, :3])  # Rᵀ·v: base_link axes
+    body_angular = np.einsum("nji,nj->ni", body_rotation, world_twist[:, 3:])
+
+    def odometry(sec: int, nanosec: int, v: np.ndarray) -> Any:
+        return T["nav_msgs/msg/Odometry"](
+            header=m.header(sec, nanosec, "odom"), child_frame_id="base_link",
+            pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=m.pose(v[:7]), covariance=np.zeros(36)),
+            twist=T["geometry_msgs/msg/TwistWithCovariance"](
+                twist=T["geometry_msgs/msg/Twist"](linear=m.vector(v[7:10]), angular=m.vector(v[10:13])),
+                covariance=np.zeros(36)))
+
+    topics.append(("/odom", "nav_msgs/msg/Odometry", odometry, 13, np.hstack([body, body_linear, body_angular]),
+                   False))
+
+    if run.imu is not None:
+        def imu(sec: int, nanosec: int, v: np.ndarray) -> Any:
+            return T["sensor_msgs/msg/Imu"](
+                header=m.header(sec, nanosec, "base_link"), orientation=m.quaternion(v[:4]),
+                orientation_covariance=np.zeros(9), angular_velocity=m.vector(v[4:7]),
+                angular_velocity_covariance=np.zeros(9), linear_acceleration=m.vector(v[7:10]),
+                linear_acceleration_covariance=np.zeros(9))
+
+        topics.append(("/imu/data", "sensor_msgs/msg/Imu", imu, 10, run.imu, False))
+    if run.foot_force is not None:
+        for i, leg in enumerate(legs):
+            def wrench(sec: int, nanosec: int, v: np.ndarray, frame: str = names[leg].foot) -> Any:
+                return T["geometry_msgs/msg/WrenchStamped"](
+                    header=m.header(sec, nanosec, frame),
+                    wrench=T["geometry_msgs/msg/Wrench"](force=m.vector(np.array([0.0, 0.0, v[0]])),
+                                                         torque=m.vector(np.zeros(3))))
+
+            topics.append((f"/{leg}/foot_force", "geometry_msgs/msg/WrenchStamped", wrench, 1,
+                           run.foot_force[:, i:i + 1], False))
+    if run.power is not None:
+        topics.append(("/shc/power", "std_msgs/msg/Float64", lambda s, ns, v: T["std_msgs/msg/Float64"](
+            data=float(v[0])), 1, run.power[:, None], False))
+    topics += _leg_states(run, m, chains, legs, measured, commanded, efforts, rows_)
+    return topics
+
+
+def _leg_states(run: RunLog, m: _Messages, chains: Any, legs: list[str], measured: np.ndarray,
+                commanded: np.ndarray, efforts: np.ndarray, leg_of_slot: np.ndarray) -> list[Topic]:
+    """One LegState topic per leg (``/shc/LEG/state``)."""
+    T = m.T
+    n = len(run.t)
+    identity_q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
+    model_tips = chains.tips  # (L, n) joints → (L, 3)
+    commanded_full = run.commanded if run.commanded is not None else run.joints
+    model = np.stack([model_tips(commanded_full[c]) for c in range(n)])
+    actual = np.stack([model_tips(run.joints[c]) for c in range(n)])
+    zeros3 = np.zeros((n, 3))
+    dt = run.dt
+    out: list[Topic] = []
+    for i, leg in enumerate(legs):
+        slots = np.flatnonzero(leg_of_slot == i)
+        joints = len(slots)
+        walker = run.tips[:, i, 0] if run.tips is not None else zeros3
+        poser = run.tips[:, i, 1] if run.tips is not None else zeros3
+        progress = run.progress[:, i] if run.progress is not None else np.full((n, 2), -1.0)
+        values = np.hstack([walker, identity_q, zeros3, identity_q, poser, identity_q, model[:, i], identity_q,
+                            actual[:, i], identity_q, measured[:, slots], _differences(measured[:, slots], dt),
+                            efforts[:, slots], progress])
+
+        def leg_state(sec: int, nanosec: int, v: np.ndarray, name: str = leg, count: int = joints) -> Any:
+            def stamped(j: int, frame: str) -> Any:
+                return T["geometry_msgs/msg/PoseStamped"](header=m.header(sec, nanosec, frame),
+                                                          pose=m.pose(v[7 * j:7 * j + 7]))
+
+            at = 35
+            zero = T["geometry_msgs/msg/Pose"](position=m.point(np.zeros(3)), orientation=m.quaternion(
+                np.array([0.0, 0.0, 0.0, 1.0])))
+            return T[LEG_STATE_TYPE](
+                header=m.header(sec, nanosec, "base_link"), name=name,
+                walker_tip_pose=stamped(0, "walk_plane"), target_tip_pose=stamped(1, "walk_plane"),
+                poser_tip_pose=stamped(2, "base_link"), model_tip_pose=stamped(3, "base_link"),
+                actual_tip_pose=stamped(4, "base_link"),
+                model_tip_velocity=T["geometry_msgs/msg/TwistStamped"](
+                    header=m.header(sec, nanosec, "base_link"),
+                    twist=T["geometry_msgs/msg/Twist"](linear=m.vector(np.zeros(3)), angular=m.vector(np.zeros(3)))),
+                joint_positions=v[at:at + count].copy(), joint_velocities=v[at + count:at + 2 * count].copy(),
+                joint_efforts=v[at + 2 * count:at + 3 * count].copy(), stance_progress=float(v[at + 3 * count]),
+                swing_progress=float(v[at + 3 * count + 1]), time_to_swing_end=0.0, pose_delta=zero, auto_pose=zero,
+                tip_force=m.vector(np.zeros(3)), admittance_delta=m.vector(np.zeros(3)), virtual_stiffness=0.0)
+
+        out.append((f"/shc/{leg}/state", LEG_STATE_TYPE, leg_state, values.shape[1], values, False))
+    return out

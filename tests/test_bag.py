@@ -1,0 +1,158 @@
+"""``shc export bag``: every format written and read back, the batch serialiser against the library's, and the
+mcap file read by an independent reader."""
+
+from __future__ import annotations
+
+from functools import partial
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from shc_cli.interop.bag import _Messages, _serialize_as, _topics, typestore_for
+from shc_cli.interop.batch import BatchSerializer
+from shc_cli.runread import RunLog, read_run
+
+from .test_cli import run
+
+
+@pytest.fixture(scope="module")
+def walked(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from shc_cli.commands.simulate import simulate_to
+
+    out = tmp_path_factory.mktemp("bag") / "walk"
+    path, _ = simulate_to("bullet", "tripod", "1,0,0", 1.0, None, out, False, "flat", "WG", 400.0, 0.9, 0.0, 0, 0.0,
+                          "unpacked")
+    return path
+
+
+@pytest.fixture(scope="module")
+def planned(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from shc_cli.commands.plan import run_plan
+
+    return run_plan("bullet", "tripod", "1,0,-0.2", 1.0, None, tmp_path_factory.mktemp("bag") / "plan", False)
+
+
+@pytest.mark.parametrize("fmt", ["mcap", "ros1"])
+def test_batch_bytes_equal_the_librarys_serialiser(walked: Path, fmt: str) -> None:
+    """For every topic, rows written by the sentinel template equal serialising the message directly."""
+    log = read_run(walked)
+    store = typestore_for(fmt)
+    serialize = store.serialize_ros1 if fmt == "ros1" else store.serialize_cdr
+    stamps = np.round(log.t * 1e9).astype(np.int64)
+    for topic, msgtype, build, width, values, once in _topics(log, _Messages(store)):
+        if once:
+            continue
+        rows = BatchSerializer(partial(_serialize_as, serialize, msgtype), build, width).serialize(stamps, values)
+        for row in (0, len(stamps) // 2, len(stamps) - 1):
+            sec, nanosec = divmod(int(stamps[row]), 1_000_000_000)
+            direct = bytes(serialize(build(sec, nanosec, values[row].copy()), msgtype))
+            assert rows[row].tobytes() == direct, topic
+
+
+def _read(path: Path, fmt: str) -> dict[str, list[tuple[int, object]]]:
+    store = typestore_for(fmt)
+    out: dict[str, list[tuple[int, object]]] = {}
+    if fmt == "ros1":
+        from rosbags.rosbag1 import Reader as Reader1
+
+        with Reader1(path) as reader:
+            for connection, stamp, raw in reader.messages():
+                out.setdefault(connection.topic, []).append((stamp, store.deserialize_ros1(raw, connection.msgtype)))
+    else:
+        from rosbags.rosbag2 import Reader
+
+        with Reader(path) as reader:
+            for connection, stamp, raw in reader.messages():
+                out.setdefault(connection.topic, []).append((stamp, store.deserialize_cdr(raw, connection.msgtype)))
+    return out
+
+
+def _check_fields(log: RunLog, topics: dict[str, list[tuple[int, object]]]) -> None:
+    from shc_cli.backends.pybullet_.urdf import robot_urdf
+
+    n = len(log.t)
+    stamps = np.round(log.t * 1e9).astype(np.int64)
+    joint_states = topics["/joint_states"]
+    assert len(joint_states) == n and [s for s, _ in joint_states] == stamps.tolist()
+    positions = np.array([m.position for _, m in joint_states])  # type: ignore[attr-defined]
+    np.testing.assert_array_equal(positions, log.joints.reshape(n, -1))
+    assert joint_states[0][1].name[:2] == ["AR_coxa_joint", "AR_coxat_joint"]  # type: ignore[attr-defined]
+    odom = np.array([[m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z]  # type: ignore[attr-defined]
+                     for _, m in topics["/odom"]])
+    np.testing.assert_array_equal(odom, log.position)
+    assert topics["/robot_description"][0][1].data == robot_urdf(log.robot)  # type: ignore[attr-defined]
+    tf = topics["/tf"][n // 2][1]
+    assert len(tf.transforms) == 1 + 6 * (5 + 1)  # type: ignore[attr-defined]
+    assert tf.transforms[0].header.frame_id == "odom"  # type: ignore[attr-defined]
+    foot = next(t for t in tf.transforms if t.child_frame_id == "AR_foot")  # type: ignore[attr-defined]
+    state = topics["/shc/AR/state"][n // 2][1]
+    assert state.name == "AR"  # type: ignore[attr-defined]
+    actual = state.actual_tip_pose.pose.position  # type: ignore[attr-defined]
+    # the foot frame in /tf is the tip of the measured joints, as LegState's actual tip
+    assert (foot.transform.translation.x, foot.transform.translation.y, foot.transform.translation.z) == \
+        pytest.approx((actual.x, actual.y, actual.z), abs=1e-12)
+    np.testing.assert_array_equal(state.joint_positions, log.joints[n // 2, 0])  # type: ignore[attr-defined]
+
+
+@pytest.mark.parametrize("fmt", ["mcap", "sqlite3", "ros1"])
+def test_every_format_reads_back(walked: Path, tmp_path: Path, fmt: str, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    out = tmp_path / ("walk.bag" if fmt == "ros1" else "walk_bag")
+    code, stdout, err = run(["export", "bag", str(walked), "--format", fmt, "--out", str(out)], capsys, monkeypatch)
+    assert code == 0 and str(out) in stdout, err
+    log = read_run(walked)
+    topics = _read(out, fmt)
+    _check_fields(log, topics)
+    power = np.array([m.data for _, m in topics["/shc/power"]])  # type: ignore[attr-defined]
+    np.testing.assert_array_equal(power, log.power)
+    assert log.foot_force is not None
+    forces = np.array([m.wrench.force.z for _, m in topics["/CL/foot_force"]])  # type: ignore[attr-defined]
+    np.testing.assert_array_equal(forces, log.foot_force[:, 3])
+
+
+def test_a_plan_run_exports_its_tip_stages(planned: Path, tmp_path: Path) -> None:
+    from shc_cli.interop.bag import export_bag
+
+    log = read_run(planned)
+    out = export_bag(log, tmp_path / "plan_bag", "mcap")
+    topics = _read(out, "mcap")
+    _check_fields(log, topics)
+    assert log.tips is not None and log.progress is not None
+    last = topics["/shc/BL/state"][-1][1]
+    walker = last.walker_tip_pose.pose.position  # type: ignore[attr-defined]
+    np.testing.assert_array_equal([walker.x, walker.y, walker.z], log.tips[-1, 4, 0])
+    assert last.stance_progress == log.progress[-1, 4, 0]  # type: ignore[attr-defined]
+
+
+def test_mcap_is_readable_by_the_mcap_library(walked: Path, tmp_path: Path) -> None:
+    """An independent reader (mcap + mcap-ros2-support) decodes our bag with the schemas in it."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    from shc_cli.interop.bag import export_bag
+
+    log = read_run(walked)
+    out = export_bag(log, tmp_path / "walk_bag", "mcap")
+    files = sorted(out.glob("*.mcap"))
+    assert len(files) == 1
+    seen: dict[str, int] = {}
+    with files[0].open("rb") as handle:
+        reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+        for _, channel, message, decoded in reader.iter_decoded_messages(topics=["/joint_states", "/shc/AR/state"]):
+            row = seen.get(channel.topic, 0)
+            if channel.topic == "/joint_states":
+                np.testing.assert_array_equal(decoded.position, log.joints[row].reshape(-1))
+                assert message.log_time == round(log.t[row] * 1e9)
+            else:
+                np.testing.assert_array_equal(decoded.joint_positions, log.joints[row, 0])
+            seen[channel.topic] = row + 1
+    assert seen == {"/joint_states": len(log.t), "/shc/AR/state": len(log.t)}
+
+
+def test_bad_export_requests_are_one_line(walked: Path, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    code, _, err = run(["export", "bag", str(walked), "--format", "zip", "--out", str(tmp_path / "x")], capsys,
+                       monkeypatch)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "'zip' is not a bag format" in err
+    (tmp_path / "taken").mkdir()
+    code, _, err = run(["export", "bag", str(walked), "--out", str(tmp_path / "taken")], capsys, monkeypatch)
+    assert code == 2 and "already exists" in err
