@@ -19,13 +19,15 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 import numpy as np
 
-from shc_cli.control.controller import CycleOutput
 from shc_cli.errors import OutputError
 from shc_cli.spec.robot import Robot
+
+if TYPE_CHECKING:  # the controller (and numba) only for the annotation: readers of runs stay light
+    from shc_cli.control.controller import CycleOutput
 
 PARTIAL_SUFFIX = ".partial"
 ROBOT_FILE = "robot.toml"

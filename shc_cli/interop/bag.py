@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from shc_cli.errors import Issue, OutputError, SpecError
+from shc_cli.interop import mcap_chunks
 from shc_cli.interop.batch import BatchSerializer
 from shc_cli.runread import RunLog
 
@@ -73,11 +74,39 @@ def typestore_for(fmt: str) -> Any:
 
 
 def quaternions(rotations: np.ndarray) -> np.ndarray:
-    """Unit quaternions (x, y, z, w) of rotation matrices ``(..., 3, 3)``."""
-    from scipy.spatial.transform import Rotation
-
+    """Unit quaternions (x, y, z, w), w ≥ 0, of rotation matrices ``(..., 3, 3)`` (Shepperd's method: each row uses
+    the largest of the four possible denominators)."""
     shape = rotations.shape[:-2]
-    return np.asarray(Rotation.from_matrix(rotations.reshape(-1, 3, 3)).as_quat().reshape(*shape, 4))
+    m = rotations.reshape(-1, 3, 3)
+    m00, m11, m22 = m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]
+    trace = m00 + m11 + m22
+    candidates = np.stack([trace, m00, m11, m22], axis=1)
+    pick = np.argmax(candidates, axis=1)
+    out = np.empty((len(m), 4))
+    for case in range(4):
+        rows = pick == case
+        if not rows.any():
+            continue
+        r = m[rows]
+        if case == 0:
+            s = 2.0 * np.sqrt(1.0 + trace[rows])
+            out[rows] = np.stack([(r[:, 2, 1] - r[:, 1, 2]) / s, (r[:, 0, 2] - r[:, 2, 0]) / s,
+                                  (r[:, 1, 0] - r[:, 0, 1]) / s, 0.25 * s], axis=1)
+        elif case == 1:
+            s = 2.0 * np.sqrt(1.0 + r[:, 0, 0] - r[:, 1, 1] - r[:, 2, 2])
+            out[rows] = np.stack([0.25 * s, (r[:, 0, 1] + r[:, 1, 0]) / s, (r[:, 0, 2] + r[:, 2, 0]) / s,
+                                  (r[:, 2, 1] - r[:, 1, 2]) / s], axis=1)
+        elif case == 2:
+            s = 2.0 * np.sqrt(1.0 + r[:, 1, 1] - r[:, 0, 0] - r[:, 2, 2])
+            out[rows] = np.stack([(r[:, 0, 1] + r[:, 1, 0]) / s, 0.25 * s, (r[:, 1, 2] + r[:, 2, 1]) / s,
+                                  (r[:, 0, 2] - r[:, 2, 0]) / s], axis=1)
+        else:
+            s = 2.0 * np.sqrt(1.0 + r[:, 2, 2] - r[:, 0, 0] - r[:, 1, 1])
+            out[rows] = np.stack([(r[:, 0, 2] + r[:, 2, 0]) / s, (r[:, 1, 2] + r[:, 2, 1]) / s, 0.25 * s,
+                                  (r[:, 1, 0] - r[:, 0, 1]) / s], axis=1)
+    out /= np.linalg.norm(out, axis=1, keepdims=True)
+    out[out[:, 3] < 0.0] *= -1.0
+    return out.reshape(*shape, 4)
 
 
 class _Messages:
@@ -163,9 +192,14 @@ def export_bag(run: RunLog, out: Path, fmt: str) -> Path:
                 continue
             batch = BatchSerializer(partial(_serialize_as, serialize, msgtype), build, width)
             streams.append((connection, batch.serialize(stamps, values)))
-        for row, stamp in enumerate(stamps.tolist()):  # time order, as a recorder writes
-            for connection, data in streams:
-                writer.write(connection, stamp, data[row].tobytes())
+        if fmt == "mcap" and mcap_chunks.supports(writer):
+            if writer.storage.chunk.bio.tell():
+                writer.storage.close_chunk()  # channels and the once-only messages first
+            mcap_chunks.write_streams(writer, streams, stamps)
+        else:
+            for row, stamp in enumerate(stamps.tolist()):  # time order, as a recorder writes
+                for connection, data in streams:
+                    writer.write(connection, stamp, data[row].tobytes())
     temporary.rename(out)
     return out
 
@@ -284,20 +318,28 @@ def _topics(run: RunLog, m: _Messages) -> list[Topic]:
     if run.power is not None:
         topics.append(("/shc/power", "std_msgs/msg/Float64", lambda s, ns, v: T["std_msgs/msg/Float64"](
             data=float(v[0])), 1, run.power[:, None], False))
-    topics += _leg_states(run, m, chains, legs, measured, commanded, efforts, rows_)
+    tips = frames[:, :, -1, :3, 3]  # the measured joints' tips, leg frames
+    actual = np.einsum("lij,nlj->nli", chains.base[:, :3, :3], tips) + chains.base[None, :, :3, 3]
+    topics += _leg_states(run, m, chains, legs, measured, commanded, efforts, rows_, actual)
     return topics
 
 
+def tips_of(chains: Any, joints: np.ndarray) -> np.ndarray:
+    """Tip positions in base_link for joints ``(N, L, n)`` → ``(N, L, 3)`` [m] (vectorised forward kinematics)."""
+    n, legs = joints.shape[:2]
+    frames = chains.take(np.tile(np.arange(legs), n)).frames(joints.reshape(n * legs, -1))
+    tips = frames[:, -1, :3, 3].reshape(n, legs, 3)
+    return np.asarray(np.einsum("lij,nlj->nli", chains.base[:, :3, :3], tips) + chains.base[None, :, :3, 3])
+
+
 def _leg_states(run: RunLog, m: _Messages, chains: Any, legs: list[str], measured: np.ndarray,
-                commanded: np.ndarray, efforts: np.ndarray, leg_of_slot: np.ndarray) -> list[Topic]:
+                commanded: np.ndarray, efforts: np.ndarray, leg_of_slot: np.ndarray, actual: np.ndarray) -> list[Topic]:
     """One LegState topic per leg (``/shc/LEG/state``)."""
     T = m.T
     n = len(run.t)
     identity_q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
-    model_tips = chains.tips  # (L, n) joints → (L, 3)
     commanded_full = run.commanded if run.commanded is not None else run.joints
-    model = np.stack([model_tips(commanded_full[c]) for c in range(n)])
-    actual = np.stack([model_tips(run.joints[c]) for c in range(n)])
+    model = tips_of(chains, commanded_full) if run.commanded is not None else actual
     zeros3 = np.zeros((n, 3))
     dt = run.dt
     out: list[Topic] = []

@@ -11,11 +11,11 @@ identical to unpadded ones. Frames follow OpenSHC (study §1.3): the leg frame i
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from shc_cli.model import kernels
 from shc_cli.spec.robot import DH, Robot
 
 FloatArray = NDArray[np.float64]
@@ -49,6 +49,13 @@ def dh_matrix(d: FloatArray, theta: FloatArray, r: FloatArray, alpha: FloatArray
     out[..., 2, 3] = d
     out[..., 3, 3] = 1.0
     return out
+
+
+def _kernels() -> Any:
+    """The numba kernels, imported on first use: numpy-only users of chains (run readers, exporters) stay light."""
+    from shc_cli.model import kernels
+
+    return kernels
 
 
 def _base_matrix(base: DH) -> FloatArray:
@@ -132,7 +139,7 @@ class Chains:
     def tips(self, q: FloatArray) -> FloatArray:
         """Tip positions in base_link, ``(B, 3)`` [m]."""
         out = np.empty((self.size, 3))
-        kernels.tips_kernel(self.base, self.d, self.theta, self.r, self.alpha,
+        _kernels().tips_kernel(self.base, self.d, self.theta, self.r, self.alpha,
                             np.ascontiguousarray(q, dtype=float), out)
         return out
 
@@ -141,7 +148,7 @@ class Chains:
         frames = self.frames(q)
         out = np.empty((self.size, 3, self.joints))
         for b in range(self.size):
-            kernels.position_jacobian(frames[b], out[b])
+            _kernels().position_jacobian(frames[b], out[b])
         return out
 
     def tip_transforms(self, q: FloatArray) -> FloatArray:
