@@ -90,11 +90,14 @@ def plan(
     ] = None,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-plan).")] = None,
     plots: Annotated[bool, typer.Option(help="Write gait.png, tips.png and joints.png.")] = True,
+    bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
     from shc_cli.commands.plan import run_plan
 
-    run_plan(robot, gait, velocity, duration, commands, out, plots)
+    _bag_check(bag)
+    path = run_plan(robot, gait, velocity, duration, commands, out, plots)
+    _write_bag(path, bag)
 
 
 @app.command()
@@ -139,13 +142,35 @@ def simulate(
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-simulate).")] = None,
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
+    bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
 ) -> None:
     """Run the controller on the robot in PyBullet physics: terrains, servos, sensors, power, CoT."""
     from shc_cli.commands.simulate import Feedback, run_simulate
 
-    run_simulate(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate, friction,
-                 restitution, seed, imu_noise, start, gui, stand,
-                 Feedback(posture, imu_posing, inclination, admittance))
+    _bag_check(bag)
+    path = run_simulate(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate,
+                        friction, restitution, seed, imu_noise, start, gui, stand,
+                        Feedback(posture, imu_posing, inclination, admittance))
+    _write_bag(path, bag)
+
+
+def _bag_check(fmt: str | None) -> None:
+    """Refuse a bad --bag format before the run, not after it."""
+    if fmt is not None and fmt not in ("mcap", "sqlite3", "ros1"):
+        from shc_cli.errors import Issue, SpecError
+
+        raise SpecError([Issue(None, None, "--bag", f"'{fmt}' is not a bag format", "use mcap, sqlite3 or ros1")])
+
+
+def _write_bag(run: Path, fmt: str | None) -> None:
+    """``--bag``: the finished run as a bag inside its directory (``bag/``, or ``run.bag`` for ros1)."""
+    if fmt is None:
+        return
+    from shc_cli.interop.bag import export_bag
+    from shc_cli.runread import read_run
+
+    path = export_bag(read_run(run), run / ("run.bag" if fmt == "ros1" else "bag"), fmt)
+    typer.echo(f"wrote {path}")
 
 
 @app.command()

@@ -51,21 +51,11 @@ def test_batch_bytes_equal_the_librarys_serialiser(walked: Path, fmt: str) -> No
 
 
 def _read(path: Path, fmt: str) -> dict[str, list[tuple[int, object]]]:
-    store = typestore_for(fmt)
-    out: dict[str, list[tuple[int, object]]] = {}
-    if fmt == "ros1":
-        from rosbags.rosbag1 import Reader as Reader1
+    from shc_cli.interop.bag import read_topics
 
-        with Reader1(path) as reader:
-            for connection, stamp, raw in reader.messages():
-                out.setdefault(connection.topic, []).append((stamp, store.deserialize_ros1(raw, connection.msgtype)))
-    else:
-        from rosbags.rosbag2 import Reader
-
-        with Reader(path) as reader:
-            for connection, stamp, raw in reader.messages():
-                out.setdefault(connection.topic, []).append((stamp, store.deserialize_cdr(raw, connection.msgtype)))
-    return out
+    topics = read_topics(path)
+    assert path.is_file() == (fmt == "ros1")
+    return topics
 
 
 def _check_fields(log: RunLog, topics: dict[str, list[tuple[int, object]]]) -> None:
@@ -156,3 +146,46 @@ def test_bad_export_requests_are_one_line(walked: Path, tmp_path: Path, capsys, 
     (tmp_path / "taken").mkdir()
     code, _, err = run(["export", "bag", str(walked), "--out", str(tmp_path / "taken")], capsys, monkeypatch)
     assert code == 2 and "already exists" in err
+
+
+METRICS = ("cot", "mean_power_w", "mean_speed_mps", "steady_speed_mps", "commanded_speed_mps", "speed_ratio",
+           "distance_m", "duty_factor", "foot_slip_m", "stability_margin_median_m", "stability_margin_min_m",
+           "zmp_margin_median_m", "zmp_centre_distance_median_m", "height_median_m", "height_iqr_m",
+           "roll_rate_median_rps", "pitch_rate_median_rps", "gait_cycles", "window_s")
+
+
+@pytest.mark.parametrize(("fixture", "fmt"), [("walked", "mcap"), ("walked", "sqlite3"), ("walked", "ros1"),
+                                              ("planned", "mcap")])
+def test_analyze_reads_a_bag_as_the_run(fixture: str, fmt: str, tmp_path: Path, request: pytest.FixtureRequest,
+                                        capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    """Round trip: `shc analyze` of the exported bag gives the run directory's numbers."""
+    import json
+
+    from shc_cli.analysis.metrics import analyze_run
+    from shc_cli.interop.bag import export_bag
+
+    path: Path = request.getfixturevalue(fixture)
+    bag = export_bag(read_run(path), tmp_path / ("run.bag" if fmt == "ros1" else "run_bag"), fmt)
+    direct = analyze_run(read_run(path))
+    code, out, err = run(["analyze", str(bag), "--json"], capsys, monkeypatch)
+    assert code == 0, err
+    via_bag = json.loads(out)
+    assert via_bag["kind"] == direct["kind"]
+    for key in METRICS:
+        if direct[key] is None:
+            assert via_bag[key] is None, key
+        else:
+            assert via_bag[key] == pytest.approx(direct[key], rel=1e-9, abs=1e-12), key
+
+
+def test_plan_writes_its_bag_with_bag_option(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    out = tmp_path / "run"
+    code, stdout, err = run(["plan", "--duration", "1", "--no-plots", "--out", str(out), "--bag", "ros1"], capsys,
+                            monkeypatch)
+    assert code == 0, err
+    assert (out / "run.bag").is_file() and f"wrote {out / 'run.bag'}" in stdout
+    assert not list(tmp_path.glob(".*partial*")) and not list(out.glob(".*partial*"))
+    topics = _read(out / "run.bag", "ros1")
+    assert len(topics["/joint_states"]) == len(read_run(out).t)
+    code, _, err = run(["plan", "--out", str(tmp_path / "other"), "--bag", "zip"], capsys, monkeypatch)
+    assert code == 2 and "--bag: 'zip' is not a bag format" in err and not (tmp_path / "other").exists()

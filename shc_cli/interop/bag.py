@@ -15,6 +15,8 @@ Topics (stamps = run time from 0; frames as in the generated URDF, ``shc export 
 | ``/LEG/foot_force`` | geometry_msgs/WrenchStamped | contact normal force along z of ``LEG_foot`` (simulate) |
 | ``/shc/LEG/state`` | syropod_highlevel_controller/LegState | OpenSHC's per-leg record (fields below) |
 | ``/shc/power`` | std_msgs/Float64 | total electrical power [W] (simulate) |
+| ``/shc/state`` | std_msgs/Float64MultiArray | robot and walk state (OpenSHC values), height [m], desired velocity |
+| ``/shc/robot``, ``/shc/summary`` | std_msgs/String | the run's expanded robot TOML and summary JSON, once |
 
 LegState (OpenSHC's ``LegState.msg``, registered in the bag): ``walker_tip_pose``, ``poser_tip_pose`` (plan),
 ``model_tip_pose`` (forward kinematics of the commanded joints), ``actual_tip_pose`` (of the measured joints),
@@ -23,6 +25,7 @@ joint positions/velocities/efforts, stance and swing progress (plan; −1 otherw
 
 from __future__ import annotations
 
+import json
 import shutil
 from collections.abc import Callable
 from functools import partial
@@ -34,9 +37,14 @@ import numpy as np
 from shc_cli.errors import Issue, OutputError, SpecError
 from shc_cli.interop import mcap_chunks
 from shc_cli.interop.batch import BatchSerializer
+from shc_cli.runlog import ROBOT_FILE
 from shc_cli.runread import RunLog
 
 FORMATS = ("mcap", "sqlite3", "ros1")
+ROBOT_STATES = {"UNKNOWN": -1, "PACKED": 0, "READY": 1, "RUNNING": 2}
+"""OpenSHC's robot-state values (``/shc/state`` data[0])."""
+WALK_STATES = {"STARTING": 0, "MOVING": 1, "STOPPING": 2, "STOPPED": 3}
+"""OpenSHC's walk-state values (``/shc/state`` data[1])."""
 LEG_STATE_TYPE = "syropod_highlevel_controller/msg/LegState"
 LEG_STATE_MSG = """std_msgs/Header header
 string name
@@ -71,6 +79,26 @@ def typestore_for(fmt: str) -> Any:
         types.update(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
     store.register(types)
     return store
+
+
+def read_topics(path: Path) -> dict[str, list[tuple[int, Any]]]:
+    """Every message of a bag (ROS 2 directory or ROS 1 ``.bag`` file), deserialised, by topic, in time order."""
+    ros1 = path.is_file()
+    store = typestore_for("ros1" if ros1 else "mcap")
+    out: dict[str, list[tuple[int, Any]]] = {}
+    if ros1:
+        from rosbags.rosbag1 import Reader as Reader1
+
+        with Reader1(path) as reader:
+            for connection, stamp, raw in reader.messages():
+                out.setdefault(connection.topic, []).append((stamp, store.deserialize_ros1(raw, connection.msgtype)))
+    else:
+        from rosbags.rosbag2 import Reader
+
+        with Reader(path) as reader:
+            for connection, stamp, raw in reader.messages():
+                out.setdefault(connection.topic, []).append((stamp, store.deserialize_cdr(raw, connection.msgtype)))
+    return out
 
 
 def quaternions(rotations: np.ndarray) -> np.ndarray:
@@ -167,9 +195,13 @@ def export_bag(run: RunLog, out: Path, fmt: str) -> Path:
         raise SpecError([Issue(None, None, "--format", f"'{fmt}' is not a bag format", "use mcap, sqlite3 or ros1")])
     if out.exists():
         raise OutputError(f"{out}: already exists (choose another --out or remove it)")
-    temporary = out.with_name(out.name + ".partial")
-    if temporary.exists():
-        shutil.rmtree(temporary) if temporary.is_dir() else temporary.unlink()
+    # Written under a hidden .partial folder and moved into place when complete; inside it the bag keeps its final
+    # name, because rosbags names a ROS 2 bag's data file after its directory.
+    staging = out.with_name(f".{out.name}.partial")
+    if staging.exists():
+        shutil.rmtree(staging)
+    staging.mkdir(parents=True)
+    temporary = staging / out.name
     store = typestore_for(fmt)
     serialize: Callable[[Any, str], bytes] = store.serialize_ros1 if fmt == "ros1" else store.serialize_cdr
     topics = _topics(run, _Messages(store))
@@ -201,6 +233,7 @@ def export_bag(run: RunLog, out: Path, fmt: str) -> Path:
                 for connection, data in streams:
                     writer.write(connection, stamp, data[row].tobytes())
     temporary.rename(out)
+    staging.rmdir()
     return out
 
 
@@ -279,6 +312,25 @@ def _topics(run: RunLog, m: _Messages) -> list[Topic]:
                                             angular=m.vector(np.array([0.0, 0.0, v[2]])))
 
     topics.append(("/cmd_vel", "geometry_msgs/msg/Twist", twist, 3, run.command, False))
+
+    # shc's own records, so that `shc analyze` reads a bag as it reads the run directory.
+    robot_text = (run.path / ROBOT_FILE).read_text(encoding="utf-8") if (run.path / ROBOT_FILE).exists() else ""
+    summary_text = json.dumps(run.summary)
+    topics.append(("/shc/robot", "std_msgs/msg/String", lambda s, ns, v: T["std_msgs/msg/String"](data=robot_text),
+                   0, np.zeros((n, 0)), True))
+    topics.append(("/shc/summary", "std_msgs/msg/String",
+                   lambda s, ns, v: T["std_msgs/msg/String"](data=summary_text), 0, np.zeros((n, 0)), True))
+    states = run.states if run.states is not None else np.full((n, 2), "UNKNOWN")
+    robot_codes = np.array([ROBOT_STATES.get(str(x), -1) for x in states[:, 0]], dtype=float)
+    walk_codes = np.array([WALK_STATES.get(str(x), 3) for x in states[:, 1]], dtype=float)
+    height = run.height if run.height is not None else np.full(n, np.nan)
+
+    def state(sec: int, nanosec: int, v: np.ndarray) -> Any:
+        layout = T["std_msgs/msg/MultiArrayLayout"](dim=[], data_offset=0)
+        return T["std_msgs/msg/Float64MultiArray"](layout=layout, data=v.copy())
+
+    topics.append(("/shc/state", "std_msgs/msg/Float64MultiArray", state, 6,
+                   np.column_stack([robot_codes, walk_codes, height, run.desired]), False))
 
     world_twist = run.twist if run.twist is not None else np.hstack([
         _differences(run.position, dt), np.zeros((n, 2)), _differences(np.unwrap(run.rpy[:, 2]), dt)[:, None]])
