@@ -243,6 +243,24 @@ def export_bag(
     typer.echo(f"wrote {path}")
 
 
+import_app = typer.Typer(help="Import files of other tools.", no_args_is_help=True)
+app.add_typer(import_app, name="import")
+
+
+@import_app.command("openshc")
+def import_openshc(
+    robot: Annotated[Path, typer.Argument(help="OpenSHC robot parameters (e.g. bullet_insectoid.yaml).")],
+    gait: Annotated[Path | None, typer.Argument(help="OpenSHC gait.yaml.")] = None,
+    auto_pose: Annotated[Path | None, typer.Argument(help="OpenSHC auto_pose.yaml.")] = None,
+    out: Annotated[Path, typer.Option(help="Folder for robots/, gaits/ and poses/.")] = Path("imported"),
+) -> None:
+    """Turn OpenSHC YAML parameter files into shc robot, gait and auto-pose TOML files."""
+    from shc_cli.interop.openshc import import_openshc as convert
+
+    for path in convert(robot, gait, auto_pose, out):
+        typer.echo(f"wrote {path}")
+
+
 @app.command()
 def schema(
     kind: Annotated[str, typer.Argument(help="'robot' or 'gait'.")],

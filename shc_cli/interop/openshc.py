@@ -1,0 +1,249 @@
+"""OpenSHC parameter files (ROS YAML) → shc TOML robot, gait and auto-pose files.
+
+The robot file: every parameter shc supports, under its shc name (docs/robot-files.md §7 lists the pairs). Legs
+share one ``[templates.leg]`` holding each DH value, limit and packed pose that most legs have; a leg lists only
+what differs from it (OpenSHC's insectoid Bullet: the front-right coxa limit and the left legs' mirrored signs).
+Parameters shc has no use for (hardware interface switches, debug flags) are listed at the top of the file and
+printed. Physics-only fields (masses, servo model) are absent in OpenSHC and take shc's defaults.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+from shc_cli.errors import Issue, SpecError
+from shc_cli.spec.toml_out import dump_toml
+
+ADJUSTABLE_WALKER = ("step_frequency", "swing_height", "swing_width", "step_depth", "stance_span_modifier")
+ADJUSTABLE_ADMITTANCE = ("virtual_mass", "virtual_stiffness", "virtual_damping_ratio", "force_gain")
+SIMPLE = {
+    # OpenSHC name: (shc table, shc name)
+    "body_clearance": ("walker", "body_clearance"),
+    "velocity_input_mode": ("walker", "velocity_input_mode"),
+    "body_velocity_scaler": ("walker", "body_velocity_scaler"),
+    "overlapping_walkspaces": ("walker", "overlapping_walkspaces"),
+    "force_normal_touchdown": ("walker", "force_normal_touchdown"),
+    "gravity_aligned_tips": ("walker", "gravity_aligned_tips"),
+    "rough_terrain_mode": ("walker", "rough_terrain_mode"),
+    "force_cruise_velocity": ("cruise", "force_velocity"),
+    "angular_cruise_velocity": ("cruise", "angular"),
+    "cruise_control_time_limit": ("cruise", "time_limit"),
+    "clamp_joint_positions": ("ik", "clamp_joint_positions"),
+    "clamp_joint_velocities": ("ik", "clamp_joint_velocities"),
+    "ignore_IK_warnings": ("ik", "ignore_warnings"),
+    "manual_posing": ("pose", "manual"),
+    "auto_posing": ("pose", "auto"),
+    "auto_pose_type": ("pose", "auto_pose_type"),
+    "inclination_posing": ("pose", "inclination"),
+    "imu_posing": ("pose", "imu"),
+    "max_translation_velocity": ("pose", "max_translation_velocity"),
+    "max_rotation_velocity": ("pose", "max_rotation_velocity"),
+    "start_up_sequence": ("start_up", "sequence"),
+    "time_to_start": ("start_up", "time_to_start"),
+    "leg_manipulation_mode": ("manipulation", "mode"),
+    "admittance_control": ("admittance", "enabled"),
+    "dynamic_stiffness": ("admittance", "dynamic_stiffness"),
+    "use_joint_effort": ("admittance", "use_joint_effort"),
+    "integrator_step_time": ("admittance", "integrator_step_time"),
+    "load_stiffness_scaler": ("admittance", "load_stiffness_scaler"),
+    "swing_stiffness_scaler": ("admittance", "swing_stiffness_scaler"),
+    "touchdown_threshold": ("admittance", "touchdown_threshold"),
+    "liftoff_threshold": ("admittance", "liftoff_threshold"),
+}
+"""One-to-one parameters."""
+STRUCTURED = {"rotation_pid_gains", "max_translation", "max_rotation", "linear_cruise_velocity", "gait_type",
+              "leg_id", "joint_id", "link_id", "leg_DOF", "time_delta", "syropod_type",
+              *ADJUSTABLE_WALKER, *ADJUSTABLE_ADMITTANCE}
+"""Parameters mapped with some reshaping (below)."""
+
+
+def _read_yaml(path: Path, section: str) -> dict[str, Any]:
+    from ruamel.yaml import YAML
+    from ruamel.yaml.error import YAMLError
+
+    try:
+        data = YAML(typ="safe").load(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise SpecError([Issue(path, None, "", "file not found", "check the path")]) from None
+    except YAMLError as error:
+        mark = getattr(error, "problem_mark", None)
+        line = mark.line + 1 if mark is not None else None
+        raise SpecError([Issue(path, line, "", f"YAML syntax error: {getattr(error, 'problem', error)}",
+                               "fix the YAML")]) from None
+    node = data.get("syropod", {}) if isinstance(data, dict) else {}
+    if not isinstance(node, dict) or section not in node:
+        raise SpecError([Issue(path, None, "", f"no syropod.{section} in this file",
+                               f"give an OpenSHC {section.replace('_', ' ')} file")])
+    result: dict[str, Any] = node[section]
+    return result
+
+
+def _number(value: Any) -> Any:
+    """YAML integers where shc expects floats stay exact; keep ints for int fields by the caller."""
+    return float(value) if isinstance(value, int) and not isinstance(value, bool) else value
+
+
+def _dh(values: dict[str, Any]) -> dict[str, float]:
+    return {key: float(values[key]) for key in ("d", "theta", "r", "alpha")}
+
+
+def robot_from_openshc(params: dict[str, Any], name: str) -> tuple[dict[str, Any], list[str]]:
+    """The shc robot table tree of OpenSHC ``syropod.parameters``, and the parameters shc does not use."""
+    legs_out: dict[str, Any] = {}
+    joint_ids = list(params["joint_id"])
+    used = set(SIMPLE) | STRUCTURED
+    for leg in params["leg_id"]:
+        dof = int(params["leg_DOF"][leg])
+        joints: dict[str, Any] = {}
+        used.add(f"{leg}_base_link_parameters")
+        used.add(f"{leg}_stance_position")
+        for joint in joint_ids[:dof]:
+            link_key, joint_key = f"{leg}_{joint}_link_parameters", f"{leg}_{joint}_joint_parameters"
+            used |= {link_key, joint_key}
+            spec = params[joint_key]
+            numbered = [float(spec[k]) for k in sorted(spec) if k.startswith("packed_")]
+            packed = [float(spec["packed"])] if "packed" in spec else numbered
+            joints[joint] = {**_dh(params[link_key]), "min": float(spec["min"]), "max": float(spec["max"]),
+                             "offset": float(spec.get("offset", 0.0)), "packed": packed,
+                             "unpacked": float(spec.get("unpacked", 0.0)), "max_vel": float(spec["max_vel"])}
+        stance = params[f"{leg}_stance_position"]
+        legs_out[leg] = {"base": _dh(params[f"{leg}_base_link_parameters"]), "joints": joints,
+                         "stance": {"x": float(stance["x"]), "y": float(stance["y"])}}
+    tree: dict[str, Any] = {"name": name, "description": f"imported from OpenSHC parameters ({name})",
+                            "time_delta": float(params["time_delta"])}
+    for key, (table, field) in SIMPLE.items():
+        if key in params:
+            tree.setdefault(table, {})[field] = _number(params[key])
+    walker = tree.setdefault("walker", {})
+    walker["gait"] = str(params.get("gait_type", "tripod_gait")).removesuffix("_gait")
+    for key in ADJUSTABLE_WALKER:
+        if key in params:
+            walker[key] = {k: float(params[key][k]) for k in ("default", "min", "max", "step")}
+    admittance = tree.setdefault("admittance", {})
+    for key in ADJUSTABLE_ADMITTANCE:
+        if key in params:
+            admittance[key] = {k: float(params[key][k]) for k in ("default", "min", "max", "step")}
+    if "linear_cruise_velocity" in params:
+        tree.setdefault("cruise", {})["linear"] = [float(params["linear_cruise_velocity"]["x"]),
+                                                   float(params["linear_cruise_velocity"]["y"])]
+    pose = tree.setdefault("pose", {})
+    for key in ("rotation_pid_gains", "max_translation", "max_rotation"):
+        if key in params:
+            pose[key] = {k: float(v) for k, v in params[key].items()}
+    tree["templates"], tree["legs"] = _factor_legs(legs_out)
+    unused = sorted(k for k in params if k not in used)
+    return tree, unused
+
+
+def _flatten(node: Any, prefix: tuple[str, ...] = ()) -> dict[tuple[str, ...], Any]:
+    if isinstance(node, dict):
+        out: dict[tuple[str, ...], Any] = {}
+        for key, value in node.items():
+            out.update(_flatten(value, (*prefix, key)))
+        return out
+    return {prefix: node}
+
+
+def _nest(flat: dict[tuple[str, ...], Any]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for path, value in flat.items():
+        node = out
+        for key in path[:-1]:
+            node = node.setdefault(key, {})
+        node[path[-1]] = value
+    return out
+
+
+def _factor_legs(legs: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
+    """A ``leg`` template of the values most legs share; each leg keeps its stance and what differs."""
+    flats = {leg: _flatten({k: v for k, v in spec.items() if k != "stance"}) for leg, spec in legs.items()}
+    paths = [path for path in flats[next(iter(flats))] if all(path in f for f in flats.values())]
+    template: dict[tuple[str, ...], Any] = {}
+    for path in paths:
+        counts = Counter(repr(f[path]) for f in flats.values())
+        value, times = counts.most_common(1)[0]
+        if times > 1:
+            template[path] = next(f[path] for f in flats.values() if repr(f[path]) == value)
+    out: dict[str, Any] = {}
+    for leg, flat in flats.items():
+        own = {path: value for path, value in flat.items() if path not in template or template[path] != value}
+        out[leg] = {"template": "leg", **_nest(own), "stance": legs[leg]["stance"]}
+    return {"leg": _nest(template)}, out
+
+
+def gaits_from_openshc(params: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """OpenSHC ``syropod.gait_parameters`` → shc gait tables by name."""
+    out = {}
+    for key, gait in params.items():
+        name = key.removesuffix("_gait")
+        out[name] = {"name": name, "description": f"imported from OpenSHC gait parameters ({key})",
+                     "stance_phase": int(gait["stance_phase"]), "swing_phase": int(gait["swing_phase"]),
+                     "phase_offset": int(gait["phase_offset"]),
+                     "offset_multiplier": {leg: int(v) for leg, v in gait["offset_multiplier"].items()}}
+    return out
+
+
+def poses_from_openshc(params: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """OpenSHC ``syropod.auto_pose_parameters`` → shc auto-pose set tables by name."""
+    out = {}
+    for key, spec in params.items():
+        name = key.removesuffix("_pose").removesuffix("_gait")
+        posers = []
+        for i, (start, end) in enumerate(zip(spec["pose_phase_starts"], spec["pose_phase_ends"], strict=True)):
+            poser: dict[str, Any] = {"start": int(start), "end": int(end)}
+            for axis in ("x", "y", "z", "roll", "pitch", "yaw", "gravity"):
+                value = float(spec.get(f"{axis}_amplitudes", [0.0] * (i + 1))[i])
+                if value != 0.0:
+                    poser[axis] = value
+            posers.append(poser)
+        ratios = spec.get("negation_transition_ratio", {})
+        negation = {leg: {"start": int(start), "end": int(spec["pose_negation_phase_ends"][leg]),
+                          "transition_ratio": float(ratios.get(leg, 0.0))}
+                    for leg, start in spec["pose_negation_phase_starts"].items()}
+        out[name] = {"name": name, "description": f"imported from OpenSHC auto-pose parameters ({key})",
+                     "pose_frequency": float(spec["pose_frequency"]),
+                     "pose_phase_length": int(spec["pose_phase_length"]), "poser": posers, "negation": negation}
+    return out
+
+
+def import_openshc(robot_yaml: Path, gait_yaml: Path | None, pose_yaml: Path | None, out: Path) -> list[Path]:
+    """Write ``out/robots/NAME.toml`` (+ ``out/gaits/*.toml``, ``out/poses/*.toml``); returns the files, each
+    checked by loading it back. The robot is named after the YAML file."""
+    from shc_cli.outputs import write_text
+    from shc_cli.spec.checks import check_robot
+    from shc_cli.spec.loading import load_robot
+
+    params = _read_yaml(robot_yaml, "parameters")
+    name = robot_yaml.stem
+    try:
+        tree, unused = robot_from_openshc(params, name)
+    except (KeyError, TypeError, ValueError) as error:
+        raise SpecError([Issue(robot_yaml, None, "", f"missing or malformed OpenSHC parameter: {error}",
+                               "compare with bullet_syropod/config/bullet_insectoid.yaml")]) from None
+    written = []
+    header = [f"# Imported by `shc import openshc` from {robot_yaml.name}."]
+    if unused:
+        header.append(f"# OpenSHC parameters shc does not use: {', '.join(unused)}.")
+    if gait_yaml is not None:
+        gaits = gaits_from_openshc(_read_yaml(gait_yaml, "gait_parameters"))
+        for gait_name, gait in gaits.items():
+            path = out / "gaits" / f"{gait_name}.toml"
+            write_text(path, f"# Imported by `shc import openshc` from {gait_yaml.name}.\n{dump_toml(gait)}")
+            written.append(path)
+        if tree["walker"]["gait"] in gaits:  # the imported gait file, next to the robot's folder
+            tree["walker"]["gait"] = f"../gaits/{tree['walker']['gait']}.toml"
+    robot_path = out / "robots" / f"{name}.toml"
+    write_text(robot_path, "\n".join(header) + "\n" + dump_toml(tree))
+    loaded = load_robot(robot_path)
+    problems = check_robot(loaded)
+    if problems:
+        raise SpecError(problems)
+    written.insert(0, robot_path)
+    if pose_yaml is not None:
+        for set_name, pose_set in poses_from_openshc(_read_yaml(pose_yaml, "auto_pose_parameters")).items():
+            path = out / "poses" / f"{set_name}.toml"
+            write_text(path, f"# Imported by `shc import openshc` from {pose_yaml.name}.\n{dump_toml(pose_set)}")
+            written.append(path)
+    return written

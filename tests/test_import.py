@@ -1,0 +1,89 @@
+"""``shc import openshc``: OpenSHC's own YAML files become robots that compute exactly what ours do."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from shc_cli.spec.autopose import load_pose_set
+from shc_cli.spec.loading import load_gait, load_robot
+
+from .conftest import GOLDEN
+from .test_cli import run
+
+PAIRS = [("bullet", "bullet_insectoid"), ("bullet_mammalian", "bullet_mammalian"),
+         ("openshc_default", "openshc_default")]
+
+
+@pytest.mark.parametrize(("ours", "yaml_name"), PAIRS)
+def test_imported_robots_have_our_workspaces(ours: str, yaml_name: str, tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                             monkeypatch) -> None:
+    """`workspace --json` of the imported robot equals that of the hand-written TOML (the robot's name aside)."""
+    code, stdout, err = run(["import", "openshc", str(GOLDEN / "openshc" / f"{yaml_name}.yaml"),
+                             str(GOLDEN / "openshc" / "gait.yaml"), "--out", str(tmp_path)], capsys, monkeypatch)
+    assert code == 0, err
+    imported = tmp_path / "robots" / f"{yaml_name}.toml"
+    assert f"wrote {imported}" in stdout
+    outputs = []
+    for robot in (ours, str(imported)):
+        code, stdout, err = run(["workspace", robot, "--json"], capsys, monkeypatch)
+        assert code == 0, err
+        data = json.loads(stdout)
+        data.pop("robot")
+        outputs.append(data)
+    assert outputs[0] == outputs[1]
+
+
+def test_legs_share_a_template_and_list_only_their_differences(tmp_path: Path) -> None:
+    from shc_cli.interop.openshc import import_openshc
+
+    robot_file = import_openshc(GOLDEN / "openshc" / "bullet_insectoid.yaml", None, None, tmp_path)[0]
+    text = robot_file.read_text()
+    assert "[templates.leg]" in text and "individual_control_interface" in text.splitlines()[1]
+    import tomllib
+
+    data = tomllib.loads(text)
+    assert data["legs"]["BR"] == {"template": "leg", "base": {"r": 0.0}, "stance": {"x": -0.02, "y": -0.35}}
+    assert data["legs"]["AR"]["joints"] == {"coxa": {"min": -1.571, "max": 1.571}}  # OpenSHC's AR coxa limits
+    assert "base" not in data["legs"]["AR"]
+    loaded = load_robot(robot_file).robot
+    ours = load_robot("bullet").robot
+    assert loaded is not None and ours is not None
+    for leg_id, leg in ours.legs.items():  # every kinematic value as in our file
+        mine = loaded.legs[leg_id]
+        assert (mine.base, mine.stance) == (leg.base, leg.stance)
+        for name, joint in leg.joints.items():
+            assert mine.joints[name].model_dump(exclude={"mass"}) == joint.model_dump(exclude={"mass"})
+
+
+def test_gaits_and_auto_pose_sets_equal_the_shipped_ones(tmp_path: Path) -> None:
+    from shc_cli.interop.openshc import import_openshc
+
+    files = import_openshc(GOLDEN / "openshc" / "bullet_insectoid.yaml", GOLDEN / "openshc" / "gait.yaml",
+                           GOLDEN / "openshc" / "bullet_auto_pose.yaml", tmp_path)
+    gaits = [f for f in files if f.parent.name == "gaits"]
+    poses = [f for f in files if f.parent.name == "poses"]
+    assert {f.stem for f in gaits} == {"wave", "tripod", "ripple", "amble", "bipod"}
+    for path in gaits:
+        mine, ours = load_gait(path).gait, load_gait(path.stem).gait
+        assert mine is not None and ours is not None
+        assert mine.model_dump(exclude={"description"}) == ours.model_dump(exclude={"description"})
+    assert {f.stem for f in poses} >= {"wave", "tripod", "ripple", "amble", "bipod", "quad_wave"}
+    for path in poses:
+        mine_set, ours_set = load_pose_set(path).pose_set, load_pose_set(path.stem).pose_set
+        assert mine_set is not None and ours_set is not None
+        assert mine_set.model_dump(exclude={"description"}) == ours_set.model_dump(exclude={"description"})
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("syropod:\n  parameters: [1, 2\n", "YAML syntax error"),
+    ("other: 1\n", "no syropod.parameters"),
+    ("syropod:\n  parameters:\n    time_delta: 0.01\n", "missing or malformed OpenSHC parameter"),
+])
+def test_bad_yaml_is_one_line(text: str, message: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    path = tmp_path / "robot.yaml"
+    path.write_text(text)
+    code, _, err = run(["import", "openshc", str(path), "--out", str(tmp_path / "out")], capsys, monkeypatch)
+    assert code == 2 and len(err.strip().splitlines()) == 1 and message in err, err
