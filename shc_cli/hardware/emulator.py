@@ -1,0 +1,257 @@
+"""A bus of emulated Protocol 2.0 Dynamixel servos behind a pseudo-terminal, for testing without hardware.
+
+``BusEmulator(servos).start()`` opens a pty pair; open ``emulator.port`` with dynamixel-sdk (or anything that
+speaks the protocol) as if it were a USB2Dynamixel. Each servo has a control table (the addresses of
+:mod:`shc_cli.hardware.models`) and first-order position dynamics while its torque is enabled
+(``present += (goal − present)·(1 − e^(−Δt/τ))``, evaluated at every read). Faults can be injected per servo at
+any time: no reply, a corrupted CRC, Hardware Error Status bits (the status error byte then carries the alert
+bit), overload (also turns its torque off, as real servos do), vanishing after a given number of packets, and a
+present position whose bytes contain ``FF FF FD`` (so status packets need byte stuffing).
+
+Instructions: PING (unicast and broadcast), READ, WRITE, SYNC READ, SYNC WRITE; anything else gets an
+"instruction error" status. Replies are sent in ID order for broadcast ping and in the order of the IDs for sync
+read, each servo after its return delay.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import select
+import threading
+import time
+import tty
+from dataclasses import dataclass, field
+
+from shc_cli.hardware import protocol2 as p2
+from shc_cli.hardware.models import MODELS, OVERLOAD_ERROR, ServoModel
+
+TABLE_SIZE = 256
+STUFFING_POSITION = 0x00FDFFFF
+"""A present position whose little-endian bytes contain FF FF FD (``FF FF FD 00``)."""
+
+
+@dataclass
+class Faults:
+    """Injectable faults of one servo."""
+
+    no_reply: bool = False
+    corrupt_crc: bool = False
+    hardware_error: int = 0
+    overload: bool = False
+    vanish_after_packets: int | None = None
+    stuffing_position: bool = False
+
+
+@dataclass
+class EmulatedServo:
+    """One servo: its control table and faults."""
+
+    servo_id: int
+    model: ServoModel
+    firmware: int = 45
+    time_constant: float = 0.03
+    table: bytearray = field(default_factory=lambda: bytearray(TABLE_SIZE))
+    faults: Faults = field(default_factory=Faults)
+    packets_seen: int = 0
+    _updated: float = field(default_factory=time.monotonic)
+    _position: float = 2048.0
+
+    def __post_init__(self) -> None:
+        self.write(self.model.model_number_address, self.model.model_number.to_bytes(2, "little"))
+        self.write(self.model.firmware_address, bytes([self.firmware]))
+        self.write(7, bytes([self.servo_id]))
+        self.set_position(2048)
+        self.write(self.model.goal_position, (2048).to_bytes(4, "little", signed=True))
+
+    # -- control table -------------------------------------------------------------------------------------
+
+    def read(self, address: int, length: int) -> bytes:
+        self._advance()
+        if self.faults.hardware_error:
+            self.table[self.model.hardware_error_status] |= self.faults.hardware_error
+        return bytes(self.table[address:address + length])
+
+    def write(self, address: int, data: bytes) -> None:
+        self._advance()
+        self.table[address:address + len(data)] = data
+        if address <= self.model.goal_position < address + len(data) and self.faults.overload:
+            self._overload()
+
+    def set_position(self, ticks: int) -> None:
+        self._position = float(ticks)
+        self._store_position(ticks)
+
+    def _store_position(self, ticks: int) -> None:
+        value = STUFFING_POSITION if self.faults.stuffing_position else ticks
+        self.table[self.model.present_position:self.model.present_position + 4] = int(value).to_bytes(
+            4, "little", signed=value < 2**31)
+
+    def _int(self, address: int, length: int) -> int:
+        return int.from_bytes(self.table[address:address + length], "little", signed=True)
+
+    def _advance(self) -> None:
+        """First-order motion towards the goal since the last access (torque on only)."""
+        now = time.monotonic()
+        elapsed, self._updated = now - self._updated, now
+        if self.table[self.model.torque_enable] != 1 or elapsed <= 0.0:
+            self.table[self.model.present_velocity:self.model.present_velocity + 4] = bytes(4)
+            return
+        goal = self._int(self.model.goal_position, 4)
+        before = self._position
+        self._position += (goal - before) * (1.0 - math.exp(-elapsed / self.time_constant))
+        self._store_position(round(self._position))
+        rpm = (self._position - before) / self.model.ticks_per_revolution / elapsed * 60.0
+        velocity = round(rpm / self.model.velocity_unit_rpm)
+        self.table[self.model.present_velocity:self.model.present_velocity + 4] = velocity.to_bytes(
+            4, "little", signed=True)
+        current = max(-32768, min(32767, round((goal - self._position) * 2.0)))
+        self.table[self.model.present_current:self.model.present_current + 2] = current.to_bytes(
+            2, "little", signed=True)
+
+    def _overload(self) -> None:
+        self.table[self.model.hardware_error_status] |= OVERLOAD_ERROR
+        self.table[self.model.torque_enable] = 0
+
+    @property
+    def error_byte(self) -> int:
+        if self.faults.hardware_error:
+            self.table[self.model.hardware_error_status] |= self.faults.hardware_error
+        return p2.ERROR_ALERT if self.table[self.model.hardware_error_status] else 0
+
+    @property
+    def present(self) -> bool:
+        """Whether the servo still answers (not vanished)."""
+        limit = self.faults.vanish_after_packets
+        return limit is None or self.packets_seen < limit
+
+
+class BusEmulator:
+    """Servos on one emulated bus behind a pseudo-terminal.
+
+    Args:
+        servos: servo id → model name (see :data:`shc_cli.hardware.models.MODELS`).
+        return_delay: seconds each reply waits (a real servo's return delay time).
+    """
+
+    def __init__(self, servos: dict[int, str], return_delay: float = 0.0) -> None:
+        self.servos = {servo_id: EmulatedServo(servo_id, MODELS[model]) for servo_id, model in sorted(servos.items())}
+        self.return_delay = return_delay
+        self.packets: list[p2.Packet] = []
+        """Every instruction packet received, in order (for tests)."""
+        self.crc_errors = 0
+        self._master, self._slave = os.openpty()
+        tty.setraw(self._slave)
+        tty.setraw(self._master)
+        self.port = os.ttyname(self._slave)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._serve, name="dynamixel-emulator", daemon=True)
+        self._lock = threading.Lock()
+
+    def start(self) -> BusEmulator:
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+        for fd in (self._master, self._slave):
+            with contextlib.suppress(OSError):
+                os.close(fd)
+
+    def __enter__(self) -> BusEmulator:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def faults(self, servo_id: int) -> Faults:
+        return self.servos[servo_id].faults
+
+    def goal(self, servo_id: int) -> int:
+        servo = self.servos[servo_id]
+        return servo._int(servo.model.goal_position, 4)
+
+    def position(self, servo_id: int) -> int:
+        servo = self.servos[servo_id]
+        servo._advance()
+        return round(servo._position)
+
+    # -- the wire ------------------------------------------------------------------------------------------
+
+    def _serve(self) -> None:
+        buffer = bytearray()
+        while not self._stop.is_set():
+            ready, _, _ = select.select([self._master], [], [], 0.05)
+            if not ready:
+                continue
+            try:
+                chunk = os.read(self._master, 4096)
+            except OSError:
+                return
+            buffer += chunk
+            while True:
+                try:
+                    incoming = p2.parse(buffer)
+                except p2.PacketError:
+                    self.crc_errors += 1
+                    continue
+                if incoming is None:
+                    break
+                with self._lock:
+                    self.packets.append(incoming)
+                    replies = self._handle(incoming)
+                for reply in replies:
+                    if self.return_delay:
+                        time.sleep(self.return_delay)
+                    os.write(self._master, reply)
+
+    def _reply(self, servo: EmulatedServo, params: bytes = b"", error: int = 0) -> list[bytes]:
+        if servo.faults.no_reply or not servo.present:
+            return []
+        data = bytearray(p2.status(servo.servo_id, error | servo.error_byte, params))
+        if servo.faults.corrupt_crc:
+            data[-1] ^= 0xFF
+        return [bytes(data)]
+
+    def _handle(self, incoming: p2.Packet) -> list[bytes]:
+        for servo in self.servos.values():
+            if incoming.servo in (servo.servo_id, p2.BROADCAST):
+                servo.packets_seen += 1
+        target = self.servos.get(incoming.servo)
+        params = incoming.params
+        instruction = incoming.instruction
+        if instruction == p2.PING:
+            targets = list(self.servos.values()) if incoming.servo == p2.BROADCAST else [target] if target else []
+            return [r for servo in targets for r in self._reply(
+                servo, servo.model.model_number.to_bytes(2, "little") + bytes([servo.firmware]))]
+        if instruction == p2.SYNC_WRITE:
+            address, length = int.from_bytes(params[0:2], "little"), int.from_bytes(params[2:4], "little")
+            for at in range(4, len(params), 1 + length):
+                written = self.servos.get(params[at])
+                if written is not None and written.present:
+                    written.write(address, params[at + 1:at + 1 + length])
+            return []
+        if instruction == p2.SYNC_READ:
+            address, length = int.from_bytes(params[0:2], "little"), int.from_bytes(params[2:4], "little")
+            replies: list[bytes] = []
+            for servo_id in params[4:]:
+                asked = self.servos.get(servo_id)
+                if asked is not None:
+                    replies += self._reply(asked, asked.read(address, length))
+            return replies
+        if incoming.servo == p2.BROADCAST and instruction == p2.WRITE:  # every servo, no reply
+            for servo in self.servos.values():
+                if servo.present:
+                    servo.write(int.from_bytes(params[0:2], "little"), params[2:])
+            return []
+        if target is None:
+            return []
+        if instruction == p2.READ:
+            address, length = int.from_bytes(params[0:2], "little"), int.from_bytes(params[2:4], "little")
+            return self._reply(target, target.read(address, length))
+        if instruction == p2.WRITE:
+            target.write(int.from_bytes(params[0:2], "little"), params[2:])
+            return self._reply(target)
+        return self._reply(target, error=p2.ERROR_INSTRUCTION)
