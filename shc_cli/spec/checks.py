@@ -31,7 +31,48 @@ def check_robot(loaded: LoadedRobot) -> list[Issue]:
         issues = _mirrors(loaded, robot)
     if not issues:
         issues = _stance_reachable(loaded, robot)
+    if not issues:
+        issues = _hardware(loaded, robot)
     return one_per_mistake(issues, loaded.mirrors)
+
+
+def _hardware(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
+    """The servo table: every joint mapped once, known models, unique IDs per bus, zero offsets inside a turn."""
+    from shc_cli.hardware.models import MODELS
+
+    hardware = robot.hardware
+    if not hardware.servos:
+        return []
+    joints = [f"{leg}_{joint}" for leg, spec in robot.legs.items() for joint in spec.joints]
+    issues: list[Issue] = []
+    for key in hardware.servos:
+        if key not in joints:
+            issues.append(loaded.issue(("hardware", "servos", key), f"'{key}' is not a joint of this robot",
+                                       f"keys are <LEG>_<joint>, e.g. {joints[0]}"))
+    missing = [key for key in joints if key not in hardware.servos]
+    if missing:
+        issues.append(loaded.issue(("hardware", "servos"), f"no servo for {', '.join(missing[:3])}"
+                                   + (f" and {len(missing) - 3} more" if len(missing) > 3 else ""),
+                                   "map every joint to a servo id"))
+    if hardware.model not in MODELS:
+        issues.append(loaded.issue(("hardware", "model"), f"unknown servo model '{hardware.model}'",
+                                   f"use one of {', '.join(MODELS)}"))
+    seen: dict[tuple[int, int], str] = {}
+    for key, servo in hardware.servos.items():
+        if servo.model is not None and servo.model not in MODELS:
+            issues.append(loaded.issue(("hardware", "servos", key, "model"), f"unknown servo model '{servo.model}'",
+                                       f"use one of {', '.join(MODELS)}"))
+        if servo.zero_ticks >= hardware.ticks_per_revolution:
+            issues.append(loaded.issue(("hardware", "servos", key, "zero_ticks"),
+                                       f"zero_ticks {servo.zero_ticks} is outside one turn",
+                                       f"use 0 … {hardware.ticks_per_revolution - 1}"))
+        other = seen.get((servo.bus, servo.id))
+        if other is not None:
+            issues.append(loaded.issue(("hardware", "servos", key, "id"),
+                                       f"id {servo.id} on bus {servo.bus} is also {other}'s",
+                                       "give each servo its own id"))
+        seen[(servo.bus, servo.id)] = key
+    return issues
 
 
 def _joint_positions(loaded: LoadedRobot, robot: Robot) -> list[Issue]:

@@ -292,6 +292,29 @@ class Servo(Strict):
     velocity_gain: Positive = Field(1.0, description="PyBullet position-control velocity gain (Kd) [ratio]")
 
 
+class ServoMap(Strict):
+    """Where one joint's servo is on the bus and how its ticks map to the joint angle."""
+
+    id: Annotated[int, Field(ge=0, le=252)] = Field(description="Dynamixel ID")
+    bus: Annotated[int, Field(ge=0)] = Field(0, description="bus index (one port per bus; `run-hw --port` is bus 0)")
+    model: str | None = Field(None, description="servo model, default hardware.model (e.g. 'MX-106', 'XM430-W350')")
+    direction: Literal[1, -1] = Field(1, description="+1 if the servo turns with the joint angle, −1 if against it")
+    zero_ticks: Annotated[int, Field(ge=0)] = Field(
+        2048, description="servo position [ticks] at joint angle 0 (must be below ticks_per_revolution)")
+
+
+class Hardware(Strict):
+    """The real robot's servo bus (``shc run-hw``): Dynamixel Protocol 2.0."""
+
+    baud: Annotated[int, Field(gt=0)] = Field(1_000_000, description="bus baud rate [bit/s]")
+    model: str = Field("MX-106", description="servo model of every joint unless its entry names another")
+    ticks_per_revolution: Annotated[int, Field(gt=0)] = Field(4096, description="position ticks per turn")
+    current_limit_ma: Annotated[float, Field(gt=0)] | None = Field(
+        None, description="current limit written to the servos at start-up [mA] (None: leave as configured)")
+    servos: dict[str, ServoMap] = Field(
+        default_factory=dict, description="one entry per joint, keyed '<LEG>_<joint>' (e.g. AR_coxa)")
+
+
 class Robot(Strict):
     """A fully expanded robot: what ``shc validate --show`` prints and the controller uses."""
 
@@ -309,6 +332,7 @@ class Robot(Strict):
     manipulation: Manipulation = Field(default_factory=Manipulation)
     admittance: Admittance = Field(default_factory=Admittance)
     servo: Servo = Field(default_factory=Servo)
+    hardware: Hardware = Field(default_factory=Hardware)
 
     @property
     def leg_ids(self) -> list[str]:
