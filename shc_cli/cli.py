@@ -173,6 +173,29 @@ def _write_bag(run: Path, fmt: str | None) -> None:
     typer.echo(f"wrote {path}")
 
 
+@app.command("run-hw")
+def run_hw(
+    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name (its [hardware] servo table).")],
+    port: Annotated[str, typer.Option(help="Serial device of the servo bus, e.g. /dev/ttyUSB0.")],
+    baud: Annotated[int | None, typer.Option(help="Baud rate [default: hardware.baud].")] = None,
+    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    velocity: Annotated[str, typer.Option(help="Velocity input VX,VY,WZ in the robot's input mode.")] = "0,0,0",
+    duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
+    commands: Annotated[
+        Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
+    ] = None,
+    out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-run-hw).")] = None,
+    dry_run: Annotated[bool, typer.Option(help="Everything except torque enable and goal writes.")] = False,
+    on_fault: Annotated[str, typer.Option(help="On a servo fault: hold or torque-off.")] = "torque-off",
+    on_stop: Annotated[str, typer.Option(help="After Ctrl-C and the controlled stop: hold or torque-off.")]
+    = "torque-off",
+) -> None:
+    """Run the controller on the robot's Dynamixel servos (Protocol 2.0), safely."""
+    from shc_cli.commands.run_hw import run_hw as run
+
+    run(robot, gait, port, baud, velocity, duration, commands, out, dry_run, on_fault, on_stop)
+
+
 @app.command()
 def analyze(
     runs: Annotated[list[Path], typer.Argument(help="Run directories from plan or simulate.")],

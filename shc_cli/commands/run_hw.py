@@ -1,0 +1,202 @@
+"""``shc run-hw``: the one controller on real Dynamixel servos, at the robot's control period.
+
+Start: open the bus, ping every servo, check models and hardware errors (refuse to start with every problem
+listed), read the present positions — the controller starts from them. Each cycle: one sync read (positions,
+velocities, currents), the controller step, goal positions clamped to the joint limits and to the joints'
+speed limits, one sync write. The loop keeps its period with a drift-free deadline (``next += period``) and
+counts overruns. Ctrl-C or SIGTERM: the velocity input goes to zero, the robot stops walking, then torque is
+turned off (or held with ``--on-stop hold``). A servo fault (no reply to the sync read, hardware error status)
+stops commanding motion at once — no further goal is written — and holds or turns the torque off
+(``--on-fault``), naming the servo. ``--dry-run`` does everything except torque enable and goal writes.
+
+The run directory has the ``simulate`` log format (quantities a real robot does not measure — body pose, IMU,
+foot forces — are 0) plus ``cycle_time_ms`` in ``timing.csv``; the summary adds cycle-time statistics, overruns
+and faults.
+"""
+
+from __future__ import annotations
+
+import signal
+import time
+from datetime import datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import typer
+
+from shc_cli.commands.plan import parse_velocity, pose_sets_for, walk_cycles
+from shc_cli.control.controller import Command, Controller, RobotState
+from shc_cli.control.sensing import Sensors
+from shc_cli.control.walk import WalkState
+from shc_cli.errors import Issue, SpecError
+from shc_cli.hardware.bus import ERROR_CHECK_CYCLES
+from shc_cli.runlog import RunDirectory, joint_columns
+
+STOP_TIMEOUT_S = 10.0
+"""Longest controlled stop after Ctrl-C before the torque goes off anyway [s]."""
+LOG_COLUMNS_ZERO = ["x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz", "wx", "wy", "wz", "imu_qx", "imu_qy",
+                    "imu_qz", "imu_qw", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z", "height", "power_w"]
+
+
+def run_hw(robot_name: str, gait_name: str | None, port: str, baud: int | None, velocity: str,
+           duration: float | None, commands: Path | None, out: Path | None, dry_run: bool, on_fault: str,
+           on_stop: str) -> Path:
+    """Start up, run the timeline on the servos, stop safely; returns the run directory."""
+    from shc_cli.hardware.bus import HardwareError, ServoBus
+    from shc_cli.spec.checks import load_checked
+    from shc_cli.spec.timeline import constant, load_timeline
+
+    for option, value in (("--on-fault", on_fault), ("--on-stop", on_stop)):
+        if value not in ("hold", "torque-off"):
+            raise SpecError([Issue(None, None, option, f"'{value}' is not hold or torque-off",
+                                   "use hold or torque-off")])
+    robot, gait, loaded = load_checked(robot_name, gait_name)
+    timeline = load_timeline(commands, robot.time_delta) if commands else constant(parse_velocity(velocity))
+    cycles = walk_cycles(timeline, duration, robot.time_delta, commands is not None, default_s=20.0)
+    gait_file, _ = loaded.where(("walker", "gait"))
+    pose_sets = pose_sets_for(robot, gait, timeline, gait_file.parent)
+    bus = ServoBus(robot, port, baud)
+    bus.open()
+    try:
+        problems = bus.check()
+        if problems:
+            raise HardwareError(f"{port}: refusing to start: " + "; ".join(problems))
+        state = bus.read_state()
+        controller = Controller(robot, gait, joints=state.positions, pose_sets=pose_sets)
+        directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-run-hw"
+        log = RunDirectory(directory)
+        log.write_robot(robot)
+        loop = _Loop(robot, controller, bus, log, dry_run, on_fault, on_stop)
+        summary = loop.run(timeline.commands(cycles), state)
+        path = log.finish(summary)
+    finally:
+        bus.close()
+    fault = f", FAULT: {summary['fault']}" if summary["fault"] else ""
+    typer.echo(f"{robot.name} on {port}: {summary['cycles']} cycles, cycle time mean "
+               f"{summary['cycle_time_mean_ms']:.2f} ms, p99 {summary['cycle_time_p99_ms']:.2f} ms, "
+               f"{summary['overruns']} overruns{fault} → {path}")
+    return path
+
+
+class _Loop:
+    """The real-time loop and its stop and fault handling."""
+
+    def __init__(self, robot: Any, controller: Controller, bus: Any, log: RunDirectory, dry_run: bool, on_fault: str,
+                 on_stop: str) -> None:
+        self.robot, self.controller, self.bus, self.log = robot, controller, bus, log
+        self.dry_run, self.on_fault, self.on_stop = dry_run, on_fault, on_stop
+        self.stop_requested = False
+        self.fault = ""
+        dt = robot.time_delta
+        from shc_cli.model.chains import Chains
+
+        chains = Chains.from_robot(robot)
+        self.lower, self.upper = chains.lower, chains.upper
+        self.max_step = chains.max_vel * dt * 1.5  # rate limit: 1.5 × the joint speed limit per cycle
+        self.legs = list(robot.legs)
+
+    def _request_stop(self, signum: int, frame: Any) -> None:
+        self.stop_requested = True
+
+    def run(self, commands: list[Command], state: Any) -> dict[str, Any]:
+        robot, controller, bus = self.robot, self.controller, self.bus
+        dt = robot.time_delta
+        columns = (joint_columns(robot, "_cmd") + joint_columns(robot) + joint_columns(robot, "_torque")
+                   + joint_columns(robot, "_power") + [f"{leg}_force" for leg in self.legs]
+                   + [f"{leg}_contact" for leg in self.legs] + LOG_COLUMNS_ZERO
+                   + ["cmd_vx", "cmd_vy", "cmd_wz", "vel_x", "vel_y", "vel_wz", "robot_state", "walk_state"])
+        handle, row = self.log.table("log.csv", columns, ["%.6g"] * (len(columns) - 2) + ["%s", "%s"])
+        timing, timing_row = self.log.table("timing.csv", ["cycle_time_ms", "overrun"], ["%.4f", "%d"])
+        previous_handlers = {sig: signal.signal(sig, self._request_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
+        rows, cols = bus._rows, bus._cols
+        limit = round((robot.start_up.time_to_start + 2.0) / dt)
+        torque_on = False
+        goals = state.positions.copy()
+        cycle_times: list[float] = []
+        overruns = 0
+        walked = cycle = 0
+        stopping_since: int | None = None
+        deadline = time.perf_counter()
+        try:
+            if not self.dry_run:
+                bus.torque(True)
+                torque_on = True
+            while True:
+                started = time.perf_counter()
+                if cycle:  # the first cycle uses the start-up read
+                    state = bus.read_state()
+                if not state.answered.all():
+                    missing = [bus.slots[i].key for i in np.flatnonzero(~state.answered)]
+                    self._fault(f"no reply from {', '.join(missing)}")
+                    break
+                if cycle % ERROR_CHECK_CYCLES == 1:  # a hardware error is acted on within two cycles
+                    errors = bus.hardware_errors()
+                    if errors:
+                        self._fault("; ".join(f"{key}: {', '.join(names)}" for key, names in errors.items()))
+                        break
+                running = controller.state == RobotState.RUNNING
+                if running and walked >= len(commands):
+                    self.stop_requested = True  # the timeline is over: stop as after Ctrl-C
+                if self.stop_requested:
+                    stopping_since = cycle if stopping_since is None else stopping_since
+                    command = Command(state_request=RobotState.RUNNING)  # zero velocity: stop walking
+                    done = controller.walker is None or controller.walker.state == WalkState.STOPPED
+                    if (running and done) or (cycle - stopping_since) * dt > STOP_TIMEOUT_S or not running:
+                        break
+                elif not running:
+                    if cycle > limit:
+                        self._fault(f"did not reach RUNNING within {limit} cycles")
+                        break
+                    command = Command(state_request=RobotState.RUNNING)
+                else:
+                    command = commands[walked]
+                    walked += 1
+                out = controller.step(command, Sensors(joints=state.positions))
+                target = np.clip(out.joints, self.lower, self.upper)
+                goals = goals + np.clip(target - goals, -self.max_step, self.max_step)
+                if not self.dry_run:
+                    bus.write_goals(goals)
+                currents = state.currents[rows, cols]
+                values = np.concatenate((goals[rows, cols], state.positions[rows, cols], currents / 1000.0,
+                                         np.zeros(len(rows)), np.zeros(2 * len(self.legs)),
+                                         np.zeros(len(LOG_COLUMNS_ZERO)), command.velocity, out.velocity))
+                handle.write(row % (cycle, cycle * dt, *values.tolist(), out.robot_state.name, out.walk_state.name))
+                cycle += 1
+                deadline += dt
+                now = time.perf_counter()
+                cycle_times.append(now - started)
+                late = now > deadline
+                overruns += late
+                timing.write(timing_row % (cycle - 1, (cycle - 1) * dt, cycle_times[-1] * 1e3, late))
+                if late:
+                    deadline = now  # drift-free while on time; after an overrun, restart from now
+                else:
+                    time.sleep(deadline - now)
+                if cycle % 100 == 0:
+                    self.log.flush()
+        finally:
+            for sig, previous in previous_handlers.items():
+                signal.signal(sig, previous)
+            release = self.on_fault if self.fault else self.on_stop
+            if torque_on and release == "torque-off":
+                bus.torque(False)
+        times = np.array(cycle_times) * 1e3 if cycle_times else np.zeros(1)
+        if len(cycle_times) > 20 and np.mean(np.array(cycle_times) > dt) > 0.05:
+            typer.echo(f"warning: the loop missed its {dt * 1e3:.0f} ms period in {overruns} of {cycle} cycles",
+                       err=True)
+        return {
+            "robot": robot.name, "gait": controller.gait.name, "scenario": "hardware", "port": bus.port_name,
+            "baud": bus.baud, "dry_run": self.dry_run, "cycles": cycle, "sim_time_s": cycle * dt,
+            "cycle_time_mean_ms": float(times.mean()), "cycle_time_p99_ms": float(np.percentile(times, 99)),
+            "cycle_time_max_ms": float(times.max()), "overruns": int(overruns),
+            "wire_time_ms": bus.wire_time() * 1e3, "read_retries": bus.retries, "fault": self.fault or None,
+            "stopped_by_request": bool(self.stop_requested and not self.fault),
+            "step_frequency_hz": controller.parameters["step_frequency"],
+            "step_period_cycles": controller.cycle.period, "duty_factor": controller.cycle.duty_factor,
+        }
+
+    def _fault(self, text: str) -> None:
+        """Stop commanding motion now: no further goal is written; the torque is held or turned off on exit."""
+        self.fault = text
+        typer.echo(f"fault: {text} — {'holding' if self.on_fault == 'hold' else 'torque off'}", err=True)

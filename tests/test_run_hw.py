@@ -1,0 +1,110 @@
+"""``shc run-hw`` end to end against the Protocol 2.0 servo emulator: start-up, walking, faults, Ctrl-C."""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from shc_cli.hardware import protocol2 as p2
+from shc_cli.hardware.emulator import BusEmulator
+from shc_cli.runread import read_run
+from shc_cli.spec.loading import load_robot
+
+SHC = [sys.executable, "-m", "shc_cli.cli"]
+
+
+def _bus(skip: int | None = None) -> BusEmulator:
+    robot = load_robot("bullet").robot
+    assert robot is not None
+    return BusEmulator({s.id: "MX-106" for s in robot.hardware.servos.values() if s.id != skip})
+
+
+def _run_hw(bus: BusEmulator, out: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    """The CLI in its own process (the emulator thread keeps this one's interpreter to itself)."""
+    return subprocess.run([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(out), *args],
+                          capture_output=True, text=True, timeout=120)
+
+
+def _goal_writes_after(bus: BusEmulator, index: int) -> int:
+    return sum(1 for packet in bus.packets[index:] if packet.instruction == p2.SYNC_WRITE
+               and int.from_bytes(packet.params[0:2], "little") == 116)
+
+
+def test_walks_on_the_emulated_bus_and_stops_with_torque_off(tmp_path: Path) -> None:
+    with _bus() as bus:
+        result = _run_hw(bus, tmp_path / "run", "--velocity", "1,0,0", "--duration", "2")
+        assert result.returncode == 0, result.stderr
+        summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+        assert summary["fault"] is None and summary["stopped_by_request"] is True
+        assert summary["cycles"] > 508 + 200  # start-up, 2 s walking, the stop
+        assert all(servo.table[64] == 0 for servo in bus.servos.values())  # torque off at the end
+        assert all(abs(bus.position(i) - bus.goal(i)) <= 3 for i in bus.servos)  # the servos followed
+    log = read_run(tmp_path / "run")  # the simulate format: analyze and export bag read it
+    assert len(log.t) == summary["cycles"]
+    assert log.running.any() and (log.walk_state == "MOVING").any()
+    commanded, measured = log.commanded, log.joints
+    assert commanded is not None
+    assert abs(commanded[-1] - measured[-1]).max() < 0.01  # [rad]: commanded vs emulated at the end
+
+
+def test_dry_run_never_enables_torque_or_writes_goals(tmp_path: Path) -> None:
+    with _bus() as bus:
+        result = _run_hw(bus, tmp_path / "dry", "--dry-run", "--duration", "0.5")
+        assert result.returncode == 0, result.stderr
+        assert _goal_writes_after(bus, 0) == 0
+        assert not any(p.instruction == p2.SYNC_WRITE and p.params[0] == 64 and p.params[5] == 1 for p in bus.packets)
+
+
+def test_refuses_to_start_with_a_missing_servo_or_a_hardware_error(tmp_path: Path) -> None:
+    with _bus(skip=34) as bus:
+        result = _run_hw(bus, tmp_path / "missing")
+        assert result.returncode == 2
+        assert "refusing to start: CR_tibia: servo 34 does not answer" in result.stderr
+        assert len(result.stderr.strip().splitlines()) == 1 and not (tmp_path / "missing").exists()
+    with _bus() as bus:
+        bus.faults(53).hardware_error = 32
+        result = _run_hw(bus, tmp_path / "hot")
+        assert result.returncode == 2 and "BL_femur: hardware error (overload)" in result.stderr
+
+
+@pytest.mark.parametrize("fault", ["vanish", "overload"])
+def test_a_fault_mid_run_stops_commanding_within_two_cycles(fault: str, tmp_path: Path) -> None:
+    with _bus() as bus:
+        process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
+                                    "--velocity", "1,0,0", "--duration", "5", "--on-fault", "hold"],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(6.0)  # into walking
+        marker = len(bus.packets)
+        if fault == "vanish":
+            bus.faults(42).vanish_after_packets = bus.servos[42].packets_seen
+        else:
+            bus.faults(42).hardware_error = 32
+        _, stderr = process.communicate(timeout=60)
+        assert process.returncode == 0, stderr
+        assert "fault:" in stderr and "CL_coxat" in stderr
+        summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+        assert "CL_coxat" in summary["fault"]
+        assert _goal_writes_after(bus, marker) <= 2
+        assert bus.servos[13].table[64] == 1  # --on-fault hold: the others keep their torque
+
+
+def test_ctrl_c_stops_walking_and_keeps_a_complete_log(tmp_path: Path) -> None:
+    with _bus() as bus:
+        process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
+                                    "--velocity", "1,0,0", "--duration", "60"],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(7.0)
+        process.send_signal(signal.SIGINT)
+        _, stderr = process.communicate(timeout=60)
+        assert process.returncode == 0, stderr
+        summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+        assert summary["stopped_by_request"] is True and summary["fault"] is None
+        log = read_run(tmp_path / "run")
+        assert len(log.t) == summary["cycles"] and log.walk_state[-1] == "STOPPED"
+        assert all(servo.table[64] == 0 for servo in bus.servos.values())
