@@ -189,11 +189,15 @@ def run_hw(
     on_fault: Annotated[str, typer.Option(help="On a servo fault: hold or torque-off.")] = "torque-off",
     on_stop: Annotated[str, typer.Option(help="After Ctrl-C and the controlled stop: hold or torque-off.")]
     = "torque-off",
+    input_mode: Annotated[str, typer.Option("--input", help="timeline (--velocity/--commands) or stdin (JSON lines).")]
+    = "timeline",
+    watchdog: Annotated[float, typer.Option(help="stdin: seconds without a line before the velocity goes to 0.")]
+    = 0.5,
 ) -> None:
     """Run the controller on the robot's Dynamixel servos (Protocol 2.0), safely."""
     from shc_cli.commands.run_hw import run_hw as run
 
-    run(robot, gait, port, baud, velocity, duration, commands, out, dry_run, on_fault, on_stop)
+    run(robot, gait, port, baud, velocity, duration, commands, out, dry_run, on_fault, on_stop, input_mode, watchdog)
 
 
 @app.command()

@@ -108,3 +108,30 @@ def test_ctrl_c_stops_walking_and_keeps_a_complete_log(tmp_path: Path) -> None:
         log = read_run(tmp_path / "run")
         assert len(log.t) == summary["cycles"] and log.walk_state[-1] == "STOPPED"
         assert all(servo.table[64] == 0 for servo in bus.servos.values())
+
+
+def test_stdin_commands_and_the_watchdog(tmp_path: Path) -> None:
+    """JSON lines drive the walk; when they stop coming, the watchdog zeroes the velocity; end of input ends it."""
+    with _bus() as bus:
+        process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
+                                    "--input", "stdin", "--watchdog", "0.3"],
+                                   stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        assert process.stdin is not None
+        time.sleep(8.5)  # process start, bus check, the 5 s start-up
+        for _ in range(30):  # 3 s of walking commands
+            process.stdin.write('{"velocity": [1.0, 0.0, 0.0]}\n')
+            process.stdin.flush()
+            time.sleep(0.1)
+        process.stdin.write("not json\n")
+        process.stdin.flush()
+        time.sleep(4.0)  # silence: the watchdog stops the walk
+        _, stderr = process.communicate(timeout=60)  # closes stdin: end of input
+        assert process.returncode == 0, stderr
+        assert "ignored line 'not json'" in stderr
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["watchdog_trips"] == 1 and summary["fault"] is None
+    log = read_run(tmp_path / "run")
+    walked = log.command[:, 0] == 1.0
+    assert walked.sum() > 150  # the commanded cycles
+    after = int(walked.nonzero()[0][-1]) + 1
+    assert (log.command[after:, 0] == 0.0).all() and "STOPPED" in set(log.walk_state[after:])

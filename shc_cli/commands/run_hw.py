@@ -30,7 +30,7 @@ from shc_cli.control.controller import Command, Controller, RobotState
 from shc_cli.control.sensing import Sensors
 from shc_cli.control.walk import WalkState
 from shc_cli.errors import Issue, SpecError
-from shc_cli.hardware.bus import ERROR_CHECK_CYCLES
+from shc_cli.hardware.inputs import StdinInput, TimelineInput
 from shc_cli.runlog import RunDirectory, joint_columns
 
 STOP_TIMEOUT_S = 10.0
@@ -41,7 +41,7 @@ LOG_COLUMNS_ZERO = ["x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz", "wx
 
 def run_hw(robot_name: str, gait_name: str | None, port: str, baud: int | None, velocity: str,
            duration: float | None, commands: Path | None, out: Path | None, dry_run: bool, on_fault: str,
-           on_stop: str) -> Path:
+           on_stop: str, input_mode: str = "timeline", watchdog: float = 0.5) -> Path:
     """Start up, run the timeline on the servos, stop safely; returns the run directory."""
     from shc_cli.hardware.bus import HardwareError, ServoBus
     from shc_cli.spec.checks import load_checked
@@ -51,6 +51,8 @@ def run_hw(robot_name: str, gait_name: str | None, port: str, baud: int | None, 
         if value not in ("hold", "torque-off"):
             raise SpecError([Issue(None, None, option, f"'{value}' is not hold or torque-off",
                                    "use hold or torque-off")])
+    if input_mode not in ("timeline", "stdin"):
+        raise SpecError([Issue(None, None, "--input", f"'{input_mode}' is not an input", "use timeline or stdin")])
     robot, gait, loaded = load_checked(robot_name, gait_name)
     timeline = load_timeline(commands, robot.time_delta) if commands else constant(parse_velocity(velocity))
     cycles = walk_cycles(timeline, duration, robot.time_delta, commands is not None, default_s=20.0)
@@ -68,7 +70,10 @@ def run_hw(robot_name: str, gait_name: str | None, port: str, baud: int | None, 
         log = RunDirectory(directory)
         log.write_robot(robot)
         loop = _Loop(robot, controller, bus, log, dry_run, on_fault, on_stop)
-        summary = loop.run(timeline.commands(cycles), state)
+        source: Any = StdinInput(watchdog_s=watchdog) if input_mode == "stdin" else TimelineInput(
+            timeline.commands(cycles))
+        summary = loop.run(source, state)
+        summary["watchdog_trips"] = getattr(source, "watchdog_trips", 0)
         path = log.finish(summary)
     finally:
         bus.close()
@@ -99,7 +104,7 @@ class _Loop:
     def _request_stop(self, signum: int, frame: Any) -> None:
         self.stop_requested = True
 
-    def run(self, commands: list[Command], state: Any) -> dict[str, Any]:
+    def run(self, source: Any, state: Any) -> dict[str, Any]:
         robot, controller, bus = self.robot, self.controller, self.bus
         dt = robot.time_delta
         columns = (joint_columns(robot, "_cmd") + joint_columns(robot) + joint_columns(robot, "_torque")
@@ -130,14 +135,16 @@ class _Loop:
                     missing = [bus.slots[i].key for i in np.flatnonzero(~state.answered)]
                     self._fault(f"no reply from {', '.join(missing)}")
                     break
-                if cycle % ERROR_CHECK_CYCLES == 1:  # a hardware error is acted on within two cycles
+                if state.alerts.any():  # a status packet's alert bit: name the hardware errors and stop
                     errors = bus.hardware_errors()
-                    if errors:
-                        self._fault("; ".join(f"{key}: {', '.join(names)}" for key, names in errors.items()))
-                        break
+                    flagged = [bus.slots[i].key for i in np.flatnonzero(state.alerts)]
+                    self._fault("; ".join(f"{key}: {', '.join(names)}" for key, names in errors.items())
+                                or f"hardware error alert from {', '.join(flagged)}")
+                    break
                 running = controller.state == RobotState.RUNNING
-                if running and walked >= len(commands):
-                    self.stop_requested = True  # the timeline is over: stop as after Ctrl-C
+                command = source.next() if running and not self.stop_requested else None
+                if running and command is None:
+                    self.stop_requested = True  # the input is over: stop as after Ctrl-C
                 if self.stop_requested:
                     stopping_since = cycle if stopping_since is None else stopping_since
                     command = Command(state_request=RobotState.RUNNING)  # zero velocity: stop walking
@@ -150,8 +157,8 @@ class _Loop:
                         break
                     command = Command(state_request=RobotState.RUNNING)
                 else:
-                    command = commands[walked]
                     walked += 1
+                assert command is not None
                 out = controller.step(command, Sensors(joints=state.positions))
                 target = np.clip(out.joints, self.lower, self.upper)
                 goals = goals + np.clip(target - goals, -self.max_step, self.max_step)

@@ -2,9 +2,11 @@
 
 Joint angles ↔ ticks: ``ticks = zero_ticks + direction · q · ticks_per_revolution / 2π``. One sync read per cycle
 (present current, velocity and position: addresses 126–135, 10 bytes per servo) and one sync write (goal position).
-dynamixel-sdk's sync read drops each servo's status error byte, so Hardware Error Status (address 70) is read
-by its own sync read every :data:`ERROR_CHECK_CYCLES` cycles. The SDK does not byte-stuff what it sends, so every
-goal payload is checked for ``FF FF FD`` (impossible for positions below 65,535 ticks, checked anyway).
+dynamixel-sdk's GroupSyncRead drops each servo's status error byte, so the sync read is sent with it and the
+replies are received one by one with ``PacketHandler.readRx``, which keeps the error byte: its alert bit flags a
+hardware error in the same cycle, and only then is Hardware Error Status (address 70) read to name it. The SDK
+does not byte-stuff what it sends, so every goal payload is checked for ``FF FF FD`` (impossible for positions
+below 65,535 ticks, checked anyway).
 """
 
 from __future__ import annotations
@@ -20,8 +22,6 @@ from shc_cli.hardware import protocol2 as p2
 from shc_cli.hardware.models import MODELS, ServoModel, hardware_error_names
 from shc_cli.spec.robot import Robot
 
-ERROR_CHECK_CYCLES = 2
-"""Hardware Error Status is read every this many cycles."""
 STATE_ADDRESS, STATE_LENGTH = 126, 10
 """Present current (2), velocity (4), position (4), contiguous in the X/MX 2.0 control table."""
 
@@ -45,13 +45,14 @@ class Slot:
 
 @dataclass
 class BusState:
-    """One sync read: per joint (controller order) position [rad], velocity [rad/s], current [mA], and which servos
-    answered."""
+    """One sync read: per joint (controller order) position [rad], velocity [rad/s], current [mA]; per servo (slot
+    order) whether it answered and whether its status carried the hardware-error alert bit."""
 
     positions: np.ndarray
     velocities: np.ndarray
     currents: np.ndarray
     answered: np.ndarray
+    alerts: np.ndarray
 
 
 class ServoBus:
@@ -129,30 +130,37 @@ class ServoBus:
     # -- the cycle -------------------------------------------------------------------------------------------
 
     def read_state(self) -> BusState:
-        """One sync read of current, velocity and position of every servo; a read that misses a reply is retried
-        once at once (after clearing the port) before a servo counts as missing."""
+        """One sync read of current, velocity and position of every servo, keeping each status packet's error byte
+        (its alert bit says a Hardware Error Status bit is set). A read that misses a reply is repeated once at once,
+        after clearing the port, before the servos from that one on count as missing."""
         from dynamixel_sdk import COMM_SUCCESS
 
-        if self._state_reader.txRxPacket() != COMM_SUCCESS:
+        count = len(self.slots)
+        raw = np.zeros((count, STATE_LENGTH), dtype=np.uint8)
+        answered = np.zeros(count, dtype=bool)
+        alerts = np.zeros(count, dtype=bool)
+        for attempt in range(2):
+            self._state_reader.txPacket()
+            for index, slot in enumerate(self.slots):
+                data, result, error = self._handler.readRx(self._port, slot.servo_id, STATE_LENGTH)
+                if result != COMM_SUCCESS:
+                    break
+                raw[index] = data
+                answered[index] = True
+                alerts[index] = bool(error & p2.ERROR_ALERT)
+            if answered.all() or attempt:
+                break
             self._port.clearPort()
             self.retries += 1
-            self._state_reader.txRxPacket()
-        count = len(self.slots)
-        ticks, velocity, current = np.zeros(count), np.zeros(count), np.zeros(count)
-        answered = np.zeros(count, dtype=bool)
-        reader = self._state_reader
-        for index, slot in enumerate(self.slots):
-            if not reader.isAvailable(slot.servo_id, STATE_ADDRESS, STATE_LENGTH):
-                continue
-            answered[index] = True
-            ticks[index] = _signed(reader.getData(slot.servo_id, slot.model.present_position, 4), 32)
-            velocity[index] = _signed(reader.getData(slot.servo_id, slot.model.present_velocity, 4), 32)
-            current[index] = _signed(reader.getData(slot.servo_id, slot.model.present_current, 2), 16) \
-                * slot.model.current_unit_ma
+            answered[:] = False
+        current = raw[:, 0:2].copy().view("<i2")[:, 0].astype(float)
+        velocity = raw[:, 2:6].copy().view("<i4")[:, 0].astype(float)
+        ticks = raw[:, 6:10].copy().view("<i4")[:, 0].astype(float)
+        currents = current * np.array([s.model.current_unit_ma for s in self.slots])
         positions = self._direction * (ticks - self._zero) * (2.0 * math.pi / self.ticks)
         rpm = np.array([s.model.velocity_unit_rpm for s in self.slots])
         velocities = self._direction * velocity * rpm * (2.0 * math.pi / 60.0)
-        return BusState(self.padded(positions), self.padded(velocities), self.padded(current), answered)
+        return BusState(self.padded(positions), self.padded(velocities), self.padded(currents), answered, alerts)
 
     def hardware_errors(self) -> dict[str, list[str]]:
         """Servos whose Hardware Error Status is set (or that did not answer its read), by joint."""
