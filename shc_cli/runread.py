@@ -236,6 +236,7 @@ def _bag_run(path: Path) -> RunLog:
     """A bag from ``shc export bag`` (ROS 2 directory or ROS 1 file) as the run it was written from."""
     import tempfile
 
+    from shc_cli.control.sensing import quaternion_matrix
     from shc_cli.interop.bag import ROBOT_STATES, WALK_STATES, read_topics
     from shc_cli.spec.loading import load_robot
 
@@ -266,7 +267,7 @@ def _bag_run(path: Path) -> RunLog:
     position = np.array([[o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z] for o in odom])
     quaternion = np.array([[o.pose.pose.orientation.x, o.pose.pose.orientation.y, o.pose.pose.orientation.z,
                             o.pose.pose.orientation.w] for o in odom])
-    rotation = _quaternion_matrices(quaternion)
+    rotation = quaternion_matrix(quaternion)
     linear = np.array([[o.twist.twist.linear.x, o.twist.twist.linear.y, o.twist.twist.linear.z] for o in odom])
     angular = np.array([[o.twist.twist.angular.x, o.twist.twist.angular.y, o.twist.twist.angular.z] for o in odom])
     state = np.array([m.data for _, m in topics["/shc/state"]])
@@ -303,15 +304,6 @@ def _bag_run(path: Path) -> RunLog:
                        m.linear_acceleration.z] for m in imu]) if simulated else None,
         progress=None if simulated else progress, states=states,
     )
-
-
-def _quaternion_matrices(q: np.ndarray) -> np.ndarray:
-    x, y, z, w = q[:, 0], q[:, 1], q[:, 2], q[:, 3]
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)], axis=-1),
-        np.stack([2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)], axis=-1),
-        np.stack([2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)], axis=-1),
-    ], axis=1)
 
 
 def _rpy(rotation: np.ndarray) -> np.ndarray:

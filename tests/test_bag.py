@@ -165,6 +165,7 @@ def test_analyze_reads_a_bag_as_the_run(fixture: str, fmt: str, tmp_path: Path, 
     from shc_cli.interop.bag import export_bag
 
     path: Path = request.getfixturevalue(fixture)
+    capsys.readouterr()  # the fixture may have just printed its run's line
     bag = export_bag(read_run(path), tmp_path / ("run.bag" if fmt == "ros1" else "run_bag"), fmt)
     direct = analyze_run(read_run(path))
     code, out, err = run(["analyze", str(bag), "--json"], capsys, monkeypatch)
