@@ -210,7 +210,7 @@ def analyze(
     steady: Annotated[bool, typer.Option(help="Only cycles whose desired velocity held for a whole gait cycle.")]
     = False,
 ) -> None:
-    """Cost of transport (eq. 22), power, speed, duty factor, slip, stability margins, per-cycle posture."""
+    """Cost of transport, power, speed, duty factor, slip, stability margins and per-cycle posture of runs."""
     from shc_cli.commands.analyze import run_analyze
 
     run_analyze(runs, json_output, out, skip, steady)

@@ -31,6 +31,19 @@ def _run_hw(bus: BusEmulator, out: Path, *args: str) -> subprocess.CompletedProc
                           capture_output=True, text=True, timeout=120)
 
 
+def _wait_running(run: Path, extra_s: float = 0.0, timeout_s: float = 60.0) -> None:
+    """Wait until the streamed log of a running ``run-hw`` shows RUNNING (it is flushed every 100 cycles), then
+    ``extra_s`` more: the tests act on a walking robot however slow the machine is."""
+    log = run.with_name(run.name + ".partial") / "log.csv"
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if log.exists() and ",RUNNING," in log.read_text():
+            time.sleep(extra_s)
+            return
+        time.sleep(0.1)
+    raise AssertionError(f"{log}: never RUNNING")
+
+
 def _goal_writes_after(bus: BusEmulator, index: int) -> int:
     return sum(1 for packet in bus.packets[index:] if packet.instruction == p2.SYNC_WRITE
                and int.from_bytes(packet.params[0:2], "little") == 116)
@@ -79,7 +92,7 @@ def test_a_fault_mid_run_stops_commanding_within_two_cycles(fault: str, tmp_path
         process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
                                     "--velocity", "1,0,0", "--duration", "5", "--on-fault", "hold"],
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        time.sleep(6.0)  # into walking
+        _wait_running(tmp_path / "run", extra_s=1.0)  # into walking
         marker = len(bus.packets)
         if fault == "vanish":
             bus.faults(42).vanish_after_packets = bus.servos[42].packets_seen
@@ -99,7 +112,7 @@ def test_ctrl_c_stops_walking_and_keeps_a_complete_log(tmp_path: Path) -> None:
         process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
                                     "--velocity", "1,0,0", "--duration", "60"],
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        time.sleep(7.0)
+        _wait_running(tmp_path / "run", extra_s=1.0)
         process.send_signal(signal.SIGINT)
         _, stderr = process.communicate(timeout=60)
         assert process.returncode == 0, stderr
@@ -117,7 +130,7 @@ def test_stdin_commands_and_the_watchdog(tmp_path: Path) -> None:
                                     "--input", "stdin", "--watchdog", "0.3"],
                                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         assert process.stdin is not None
-        time.sleep(8.5)  # process start, bus check, the 5 s start-up
+        _wait_running(tmp_path / "run")  # process start, bus check, the 5 s start-up
         for _ in range(30):  # 3 s of walking commands
             process.stdin.write('{"velocity": [1.0, 0.0, 0.0]}\n')
             process.stdin.flush()

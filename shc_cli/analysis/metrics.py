@@ -130,23 +130,19 @@ def feet_and_com(run: RunLog, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     robot = run.robot
     chains = Chains.from_robot(robot)
     legs = len(robot.legs)
-    m = len(rows)
-    q = run.joints[rows].reshape(m * legs, -1)
-    big = chains.take(np.tile(np.arange(legs), m))
-    frames = big.frames(q)  # leg frames (m·L, n+1, 4, 4)
-    origins = np.einsum("bij,bkj->bki", big.base[:, :3, :3], frames[:, :, :3, 3]) + big.base[:, None, :3, 3]
+    origins = chains.frames_in_base(run.joints[rows])[..., :3, 3]  # (rows, L, n + 1, 3) in base_link
     width = chains.joints
     masses = np.zeros((legs, width + 1))
     for i, leg in enumerate(robot.legs.values()):
         for k, joint in enumerate(leg.joints.values()):
             masses[i, k] = link_mass(joint)
         masses[i, width] = FOOT_MASS
-    segment_mid = np.concatenate([(origins[:, :-1] + origins[:, 1:]) / 2.0, origins[:, -1:]], axis=1)
-    weighted = (segment_mid.reshape(m, legs, width + 1, 3) * masses[None, :, :, None]).sum(axis=(1, 2))
+    segment_mid = np.concatenate([(origins[:, :, :-1] + origins[:, :, 1:]) / 2.0, origins[:, :, -1:]], axis=2)
+    weighted = (segment_mid * masses[None, :, :, None]).sum(axis=(1, 2))
     body_mass = robot.body.mass
     total = body_mass + masses.sum()
     com_body = (weighted + body_mass * np.asarray(robot.body.com)) / total
-    tips = origins[:, -1].reshape(m, legs, 3)
+    tips = origins[:, :, -1]
     rotation = rotation_rpy(run.rpy[rows])
     position = run.position[rows]
     feet = np.einsum("mij,mlj->mli", rotation, tips) + position[:, None, :]

@@ -120,7 +120,7 @@ class _Loop:
         goals = state.positions.copy()
         cycle_times: list[float] = []
         overruns = 0
-        walked = cycle = 0
+        cycle = 0
         stopping_since: int | None = None
         deadline = time.perf_counter()
         try:
@@ -156,8 +156,6 @@ class _Loop:
                         self._fault(f"did not reach RUNNING within {limit} cycles")
                         break
                     command = Command(state_request=RobotState.RUNNING)
-                else:
-                    walked += 1
                 assert command is not None
                 out = controller.step(command, Sensors(joints=state.positions))
                 target = np.clip(out.joints, self.lower, self.upper)

@@ -102,15 +102,20 @@ def _robot_for(point: Point, out: Path) -> str:
     return str(path)
 
 
-def _is_adjustable(robot: Any, dotted: str) -> bool:
-    from shc_cli.spec.robot import Adjustable
-
+def _field(robot: Any, dotted: str) -> Any:
+    """The robot's value at a dotted robot-file path (tables and leg/joint maps alike), or ``None``."""
     node = robot
     for part in dotted.split("."):
         node = node.get(part) if isinstance(node, dict) else getattr(node, part, None)
         if node is None:
-            return False
-    return isinstance(node, Adjustable)
+            return None
+    return node
+
+
+def _is_adjustable(robot: Any, dotted: str) -> bool:
+    from shc_cli.spec.robot import Adjustable
+
+    return isinstance(_field(robot, dotted), Adjustable)
 
 
 def check_points(sweep: Sweep) -> None:
@@ -128,13 +133,10 @@ def check_points(sweep: Sweep) -> None:
             raise SpecError([Issue(sweep.path, document_lines.get("robot"), "robot", str(error).splitlines()[0],
                                    "name a bundled robot or a robot file")]) from None
         for dotted in {k for p in sweep.points for k in p.overrides}:
-            node: Any = robot
-            for part in dotted.split("."):
-                node = node.get(part) if isinstance(node, dict) else getattr(node, part, None)
-                if node is None:
-                    raise SpecError([Issue(sweep.path, document_lines.get(dotted), dotted,
-                                           f"robot '{name}' has no field '{dotted}'",
-                                           "use a dotted path of `shc validate --show ROBOT`")])
+            if _field(robot, dotted) is None:
+                raise SpecError([Issue(sweep.path, document_lines.get(dotted), dotted,
+                                       f"robot '{name}' has no field '{dotted}'",
+                                       "use a dotted path of `shc validate --show ROBOT`")])
     seen: set[tuple[str, str]] = set()
     for point in sweep.points:
         key = (str(point.options["robot"]), str(point.options["gait"]))

@@ -12,6 +12,7 @@ below 65,535 ticks, checked anyway).
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from typing import Any
 
@@ -81,7 +82,6 @@ class ServoBus:
         self._zero = np.array([s.zero for s in self.slots], dtype=float)
         self._port: Any = None
         self._handler: Any = None
-        self.cycles = 0
         self.retries = 0
         """Sync reads repeated because a reply was missing or corrupt."""
 
@@ -94,9 +94,12 @@ class ServoBus:
         try:
             opened = port.openPort()
         except Exception as error:  # pyserial raises several types; all mean "cannot open"
-            raise HardwareError(f"{self.port_name}: cannot open the serial port ({error})") from None
+            reason = "no such device" if not os.path.exists(self.port_name) else str(error) or type(error).__name__
+            raise HardwareError(f"{self.port_name}: cannot open the serial port: {reason} "
+                                "(give the servo bus adapter with --port, e.g. /dev/ttyUSB0)") from None
         if not opened or not port.setBaudRate(self.baud):
-            raise HardwareError(f"{self.port_name}: cannot open the serial port at {self.baud} baud")
+            raise HardwareError(f"{self.port_name}: cannot open the serial port at {self.baud} baud "
+                                "(check --port and --baud or hardware.baud)")
         self._port, self._handler = port, PacketHandler(2.0)
         self._state_reader = GroupSyncRead(port, self._handler, STATE_ADDRESS, STATE_LENGTH)
         self._error_reader = GroupSyncRead(port, self._handler, self.slots[0].model.hardware_error_status, 1)
@@ -197,7 +200,6 @@ class ServoBus:
         if p2.needs_stuffing(bytes(payload)):
             raise HardwareError("a goal payload contains FF FF FD, which dynamixel-sdk would send unstuffed")
         writer.txPacket()
-        self.cycles += 1
 
     def torque(self, on: bool) -> None:
         """Torque enable (or disable) on every servo, one sync write."""

@@ -183,12 +183,6 @@ def _differences(values: np.ndarray, dt: float) -> np.ndarray:
     return out
 
 
-def _rpy_matrices(rpy: np.ndarray) -> np.ndarray:
-    from shc_cli.analysis.metrics import rotation_rpy
-
-    return rotation_rpy(rpy)
-
-
 def export_bag(run: RunLog, out: Path, fmt: str) -> Path:
     """Write ``run`` as a bag at ``out`` (a directory for ROS 2 formats, a ``.bag`` file for ROS 1), atomically."""
     if fmt not in FORMATS:
@@ -242,6 +236,7 @@ Topic = tuple[str, str, Callable[[int, int, np.ndarray], Any], int, np.ndarray, 
 
 def _topics(run: RunLog, m: _Messages) -> list[Topic]:
     """Every topic: (name, type, builder, numbers per message, numbers ``(N, width)``, written once)."""
+    from shc_cli.analysis.metrics import rotation_rpy
     from shc_cli.backends.pybullet_.urdf import leg_names, robot_urdf
     from shc_cli.model.chains import Chains
 
@@ -284,10 +279,9 @@ def _topics(run: RunLog, m: _Messages) -> list[Topic]:
                    0, np.zeros((n, 0)), True))
 
     # /tf: odom → base_link, base_link → every joint link (DH frame k turned by q_k) and foot (the DH tip).
-    body_rotation = _rpy_matrices(run.rpy)
+    body_rotation = rotation_rpy(run.rpy)
     body = np.hstack([run.position, quaternions(body_rotation)])
-    frames = chains.take(np.tile(np.arange(len(legs)), n)).frames(run.joints.reshape(n * len(legs), -1))
-    frames = frames.reshape(n, len(legs), chains.joints + 1, 4, 4)
+    frames = chains.frames_in_base(run.joints)
     links: list[tuple[str, np.ndarray]] = []
     for i, leg in enumerate(legs):
         for k, link in enumerate(names[leg].links):
@@ -295,8 +289,8 @@ def _topics(run: RunLog, m: _Messages) -> list[Topic]:
             turn = np.zeros((n, 4, 4))
             turn[:, 0, 0], turn[:, 0, 1], turn[:, 1, 0], turn[:, 1, 1] = np.cos(q), -np.sin(q), np.sin(q), np.cos(q)
             turn[:, 2, 2] = turn[:, 3, 3] = 1.0
-            links.append((link, chains.base[i] @ frames[:, i, k] @ turn))
-        links.append((names[leg].foot, chains.base[i] @ frames[:, i, len(names[leg].links)]))
+            links.append((link, frames[:, i, k] @ turn))
+        links.append((names[leg].foot, frames[:, i, len(names[leg].links)]))
     tf_values = [body] + [np.hstack([matrix[:, :3, 3], quaternions(matrix[:, :3, :3])]) for _, matrix in links]
     child_names = ["base_link"] + [name for name, _ in links]
 
@@ -370,18 +364,9 @@ def _topics(run: RunLog, m: _Messages) -> list[Topic]:
     if run.power is not None:
         topics.append(("/shc/power", "std_msgs/msg/Float64", lambda s, ns, v: T["std_msgs/msg/Float64"](
             data=float(v[0])), 1, run.power[:, None], False))
-    tips = frames[:, :, -1, :3, 3]  # the measured joints' tips, leg frames
-    actual = np.einsum("lij,nlj->nli", chains.base[:, :3, :3], tips) + chains.base[None, :, :3, 3]
+    actual = frames[:, :, -1, :3, 3]  # the measured joints' tips
     topics += _leg_states(run, m, chains, legs, measured, commanded, efforts, rows_, actual)
     return topics
-
-
-def tips_of(chains: Any, joints: np.ndarray) -> np.ndarray:
-    """Tip positions in base_link for joints ``(N, L, n)`` → ``(N, L, 3)`` [m] (vectorised forward kinematics)."""
-    n, legs = joints.shape[:2]
-    frames = chains.take(np.tile(np.arange(legs), n)).frames(joints.reshape(n * legs, -1))
-    tips = frames[:, -1, :3, 3].reshape(n, legs, 3)
-    return np.asarray(np.einsum("lij,nlj->nli", chains.base[:, :3, :3], tips) + chains.base[None, :, :3, 3])
 
 
 def _leg_states(run: RunLog, m: _Messages, chains: Any, legs: list[str], measured: np.ndarray,
@@ -391,7 +376,7 @@ def _leg_states(run: RunLog, m: _Messages, chains: Any, legs: list[str], measure
     n = len(run.t)
     identity_q = np.tile([0.0, 0.0, 0.0, 1.0], (n, 1))
     commanded_full = run.commanded if run.commanded is not None else run.joints
-    model = tips_of(chains, commanded_full) if run.commanded is not None else actual
+    model = chains.frames_in_base(commanded_full)[:, :, -1, :3, 3] if run.commanded is not None else actual
     zeros3 = np.zeros((n, 3))
     dt = run.dt
     out: list[Topic] = []

@@ -136,6 +136,13 @@ class Chains:
             np.matmul(out[:, k], links[:, k], out=out[:, k + 1])
         return out
 
+    def frames_in_base(self, q: FloatArray) -> FloatArray:
+        """Frames of every joint and the tip in base_link for many configurations at once (numpy only):
+        joints ``(N, B, n)`` → ``(N, B, n + 1, 4, 4)``."""
+        count = q.shape[0]
+        frames = self.take(np.tile(np.arange(self.size), count)).frames(q.reshape(count * self.size, -1))
+        return np.asarray(np.matmul(self.base[None, :, None], frames.reshape(count, self.size, self.joints + 1, 4, 4)))
+
     def tips(self, q: FloatArray) -> FloatArray:
         """Tip positions in base_link, ``(B, 3)`` [m]."""
         out = np.empty((self.size, 3))
