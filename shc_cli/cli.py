@@ -176,28 +176,36 @@ def _write_bag(run: Path, fmt: str | None) -> None:
 @app.command("run-hw")
 def run_hw(
     robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name (its [hardware] servo table).")],
-    port: Annotated[str, typer.Option(help="Serial device of the servo bus, e.g. /dev/ttyUSB0.")],
+    port: Annotated[list[str], typer.Option(help="Serial device of a servo bus, e.g. /dev/ttyUSB0; once per bus, "
+                                                 "bus 0 first.")],
     baud: Annotated[int | None, typer.Option(help="Baud rate [default: hardware.baud].")] = None,
     gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    input_mode: Annotated[str, typer.Option("--input", help="timeline (--velocity/--commands), commands:FILE, "
+                                                            "stdin (JSON lines), keyboard, gamepad[:DEVICE].")]
+    = "timeline",
     velocity: Annotated[str, typer.Option(help="Velocity input VX,VY,WZ in the robot's input mode.")] = "0,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
     commands: Annotated[
         Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
     ] = None,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-run-hw).")] = None,
-    dry_run: Annotated[bool, typer.Option(help="Everything except torque enable and goal writes.")] = False,
+    dry_run: Annotated[bool, typer.Option(help="Everything except current-limit, torque-enable and goal writes.")]
+    = False,
+    stop_state: Annotated[str, typer.Option(help="State to shut down to after Ctrl-C or the input's end: packed, "
+                                                 "ready or running (just stop walking).")] = "packed",
     on_fault: Annotated[str, typer.Option(help="On a servo fault: hold or torque-off.")] = "torque-off",
-    on_stop: Annotated[str, typer.Option(help="After Ctrl-C and the controlled stop: hold or torque-off.")]
+    on_stop: Annotated[str, typer.Option(help="After the controlled stop and shut-down: hold or torque-off.")]
     = "torque-off",
-    input_mode: Annotated[str, typer.Option("--input", help="timeline (--velocity/--commands) or stdin (JSON lines).")]
-    = "timeline",
+    profile_velocity: Annotated[bool, typer.Option(help="Also write Profile Velocity: the servos interpolate "
+                                                        "between goals.")] = False,
     watchdog: Annotated[float, typer.Option(help="stdin: seconds without a line before the velocity goes to 0.")]
     = 0.5,
 ) -> None:
     """Run the controller on the robot's Dynamixel servos (Protocol 2.0), safely."""
     from shc_cli.commands.run_hw import run_hw as run
 
-    run(robot, gait, port, baud, velocity, duration, commands, out, dry_run, on_fault, on_stop, input_mode, watchdog)
+    run(robot, gait, port, baud, velocity, duration, commands, out, dry_run, on_fault, on_stop, input_mode, watchdog,
+        stop_state, profile_velocity)
 
 
 @app.command()

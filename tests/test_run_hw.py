@@ -64,11 +64,14 @@ def test_walks_on_the_emulated_bus_and_stops_with_torque_off(tmp_path: Path) -> 
     commanded, measured = log.commanded, log.joints
     assert commanded is not None
     assert abs(commanded[-1] - measured[-1]).max() < 0.01  # [rad]: commanded vs emulated at the end
+    # the shut-down: stopped walking, then back to the joints it started from (all servos at 2048 ticks = 0 rad)
+    assert summary["final_state"] == "PACKED" and log.states is not None and log.states[-1, 0] == "PACKED"
+    assert abs(commanded[-1] - measured[0]).max() < 1e-3
 
 
 def test_dry_run_never_enables_torque_or_writes_goals(tmp_path: Path) -> None:
     with _bus() as bus:
-        result = _run_hw(bus, tmp_path / "dry", "--dry-run", "--duration", "0.5")
+        result = _run_hw(bus, tmp_path / "dry", "--dry-run", "--duration", "0.5", "--stop-state", "ready")
         assert result.returncode == 0, result.stderr
         assert _goal_writes_after(bus, 0) == 0
         assert not any(p.instruction == p2.SYNC_WRITE and p.params[0] == 64 and p.params[5] == 1 for p in bus.packets)
@@ -120,31 +123,44 @@ def test_ctrl_c_stops_walking_and_keeps_a_complete_log(tmp_path: Path) -> None:
         assert summary["stopped_by_request"] is True and summary["fault"] is None
         log = read_run(tmp_path / "run")
         assert len(log.t) == summary["cycles"] and log.walk_state[-1] == "STOPPED"
+        assert summary["final_state"] == "PACKED"  # stopped walking, then shut down
         assert all(servo.table[64] == 0 for servo in bus.servos.values())
 
 
 def test_stdin_commands_and_the_watchdog(tmp_path: Path) -> None:
-    """JSON lines drive the walk; when they stop coming, the watchdog zeroes the velocity; end of input ends it."""
+    """JSON lines drive the walk, the gait and the robot state; when they stop coming, the watchdog zeroes the
+    velocity; the end of input ends the run."""
     with _bus() as bus:
         process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
-                                    "--input", "stdin", "--watchdog", "0.3"],
+                                    "--input", "stdin", "--watchdog", "0.3", "--stop-state", "ready"],
                                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         assert process.stdin is not None
-        _wait_running(tmp_path / "run")  # process start, bus check, the 5 s start-up
-        for _ in range(30):  # 3 s of walking commands
-            process.stdin.write('{"velocity": [1.0, 0.0, 0.0]}\n')
+
+        def send(line: str, wait_s: float = 0.1) -> None:
+            assert process.stdin is not None
+            process.stdin.write(line + "\n")
             process.stdin.flush()
-            time.sleep(0.1)
-        process.stdin.write("not json\n")
-        process.stdin.flush()
+            time.sleep(wait_s)
+
+        _wait_running(tmp_path / "run")  # process start, bus check, the 5 s start-up
+        for index in range(30):  # 3 s of walking commands; a gait change on the way
+            send('{"velocity": [1.0, 0.0, 0.0], "gait": "wave"}' if index == 5 else '{"velocity": [1.0, 0.0, 0.0]}')
+        send("not json")
+        send('{"velocity": [1.0, 0.0]}')
         time.sleep(4.0)  # silence: the watchdog stops the walk
+        send('{"state": "ready"}', 1.0)  # direct mode: READY once stopped
+        send('{"state": "running"}', 0.5)
         _, stderr = process.communicate(timeout=60)  # closes stdin: end of input
         assert process.returncode == 0, stderr
-        assert "ignored line 'not json'" in stderr
+        assert "ignored line 'not json'" in stderr and "velocity needs 3 numbers" in stderr
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert summary["watchdog_trips"] == 1 and summary["fault"] is None
+    assert summary["gait"] == "wave" and summary["final_state"] == "READY"
     log = read_run(tmp_path / "run")
     walked = log.command[:, 0] == 1.0
     assert walked.sum() > 150  # the commanded cycles
     after = int(walked.nonzero()[0][-1]) + 1
     assert (log.command[after:, 0] == 0.0).all() and "STOPPED" in set(log.walk_state[after:])
+    assert log.states is not None
+    order = [s for i, s in enumerate(log.states[after:, 0]) if i == 0 or s != log.states[after + i - 1, 0]]
+    assert order == ["RUNNING", "READY", "RUNNING", "READY"]  # asked for READY, RUNNING; the end of input: READY

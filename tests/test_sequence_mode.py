@@ -60,3 +60,33 @@ def test_shut_down_takes_the_nominal_time_unless_openshc_speed_is_asked_for(tmp_
     nominal = 2 * 91 + 273 + 91  # Bullet at 1.1 Hz: two group steps, the raise, the horizontal step
     expected = nominal // 2 if double else nominal
     assert abs(cycles - expected) <= 3
+
+
+@pytest.mark.parametrize("direct_shutdown", [False, True])
+def test_direct_mode_goes_back_down_only_when_asked_for(direct_shutdown: bool) -> None:
+    """OpenSHC's direct mode only goes up; ``direct_shutdown`` (run-hw) stops walking and moves the joints back to
+    where the robot started, in ``time_to_start``."""
+    robot, gait = load_robot("bullet").robot, load_gait("tripod").gait
+    assert robot is not None and gait is not None
+    from shc_cli.model.chains import Chains
+
+    chains = Chains.from_robot(robot)
+    rest = np.clip(np.full_like(chains.default_joints(), 0.3), chains.lower, chains.upper)  # "lying" joints
+    controller = Controller(robot, gait, joints=rest.copy(), direct_shutdown=direct_shutdown)
+    _run_until(controller, RobotState.RUNNING, RobotState.RUNNING)
+    first_stance = controller.model.tips.copy()
+    for _ in range(200):
+        controller.step(Command(velocity=(1.0, 0.0, 0.0), state_request=RobotState.RUNNING))
+    assert controller.walker is not None and controller.walker.state != WalkState.STOPPED  # walking
+    if not direct_shutdown:
+        for _ in range(100):
+            controller.step(Command(state_request=RobotState.PACKED))
+        assert controller.state == RobotState.RUNNING  # refused, as OpenSHC
+        return
+    _run_until(controller, RobotState.READY, RobotState.PACKED)
+    assert controller.walker.state == WalkState.STOPPED
+    cycles = _run_until(controller, RobotState.PACKED, RobotState.PACKED)
+    assert cycles == pytest.approx(robot.start_up.time_to_start / robot.time_delta, abs=2)
+    np.testing.assert_allclose(controller.model.joints, rest, atol=1e-12)
+    _run_until(controller, RobotState.RUNNING, RobotState.RUNNING)  # and up again, to the same stance
+    np.testing.assert_allclose(controller.model.tips, first_stance, atol=1e-4)

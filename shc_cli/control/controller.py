@@ -209,11 +209,16 @@ class Controller:
             docs/deviations.md); by default each sequence iteration takes one control cycle.
         pose_sets: auto-pose sets by gait name (used when ``robot.pose.auto``); the caller loads them
             (``shc_cli.spec.autopose``), so the controller stays free of I/O.
+        direct_shutdown: without a start-up sequence, let the robot go back down as well (an shc extension for
+            ``run-hw``; OpenSHC's direct mode refuses): RUNNING → READY stops walking, READY → PACKED moves the
+            joints back to ``joints`` (where the robot started, e.g. lying on the ground) in ``time_to_start``.
     """
 
     def __init__(self, robot: Robot, gait: Gait, joints: FloatArray | None = None,
-                 openshc_double_shutdown: bool = False, pose_sets: dict[str, AutoPoseSet] | None = None) -> None:
+                 openshc_double_shutdown: bool = False, pose_sets: dict[str, AutoPoseSet] | None = None,
+                 direct_shutdown: bool = False) -> None:
         self.robot = robot
+        self.direct_shutdown = direct_shutdown
         self.pose_sets = pose_sets or {}
         self.openshc_double_shutdown = openshc_double_shutdown
         self._packer: sequence.PackTransition | None = None
@@ -223,6 +228,8 @@ class Controller:
         chains = Chains.from_robot(robot)
         start = chains.default_joints() if joints is None else np.array(joints, dtype=float)
         self.model = Model(chains, start.copy(), np.zeros_like(start))
+        self.rest_joints = start.copy()
+        """Where a direct shut-down takes the joints (the initial joints) [rad]."""
         self.default_joints = chains.default_joints()
         self.state = RobotState.UNKNOWN
         self.requested = RobotState.UNKNOWN
@@ -443,7 +450,7 @@ class Controller:
         done = False
         if self.state == RobotState.PACKED and target == RobotState.READY:
             if not self.robot.start_up.sequence:
-                if self._direct_startup():
+                if self._direct_move(None):
                     self.default_joints = self.model.joints.copy()
                     self._generate_limits()
                     done = True
@@ -457,11 +464,16 @@ class Controller:
                 self.walker = None  # leg steppers re-created at the identity tips, as OpenSHC's walker init
                 self.default_joints = self.model.joints.copy()
                 self._generate_limits()
-        elif self.state == RobotState.RUNNING and target == RobotState.READY and self.robot.start_up.sequence:
+        elif self.state == RobotState.RUNNING and target == RobotState.READY and (
+                self.robot.start_up.sequence or self.direct_shutdown):
             if self.walker is not None and self.walker.state != WalkState.STOPPED:
                 self._stop_walking()
             else:
-                done = self._run_sequence(sequence.SequenceKind.SHUT_DOWN)
+                done = not self.robot.start_up.sequence or self._run_sequence(sequence.SequenceKind.SHUT_DOWN)
+        elif self.state == RobotState.READY and target == RobotState.PACKED and self.direct_shutdown:
+            done = self._direct_move(self.rest_joints)
+            if done:
+                self.walker = None  # the next start-up begins at the identity tips, as the first one
         else:
             self.transition_pending = False  # refused: direct mode only goes PACKED → READY → RUNNING
             return
@@ -505,10 +517,12 @@ class Controller:
                 return True
         return False
 
-    def _direct_startup(self) -> bool:
-        """Plan the stance by IK on the first cycle, then move in joint space; True when done."""
+    def _direct_move(self, target: FloatArray | None) -> bool:
+        """Move in joint space to ``target`` over ``time_to_start`` — or, with ``None``, the direct start-up: plan
+        the stance by IK on the first cycle, then move there; True when done."""
         if self._transition is None:
-            target = plan_direct_startup(self.robot, self.model.chains, self.default_joints)
+            if target is None:
+                target = plan_direct_startup(self.robot, self.model.chains, self.default_joints)
             steps = iterations(self.robot.start_up.time_to_start, self.dt)
             self._transition = _Transition(self.model.joints.copy(), target, 0, steps)
         move = self._transition

@@ -1,30 +1,37 @@
-"""The robot's servos on a Dynamixel Protocol 2.0 bus, through the official dynamixel-sdk.
+"""The robot's servos on one or more Dynamixel Protocol 2.0 buses, through the official dynamixel-sdk.
 
-Joint angles ↔ ticks: ``ticks = zero_ticks + direction · q · ticks_per_revolution / 2π``. One sync read per cycle
-(present current, velocity and position: addresses 126–135, 10 bytes per servo) and one sync write (goal position).
-dynamixel-sdk's GroupSyncRead drops each servo's status error byte, so the sync read is sent with it and the
-replies are received one by one with ``PacketHandler.readRx``, which keeps the error byte: its alert bit flags a
-hardware error in the same cycle, and only then is Hardware Error Status (address 70) read to name it. The SDK
-does not byte-stuff what it sends, so every goal payload is checked for ``FF FF FD`` (impossible for positions
-below 65,535 ticks, checked anyway).
+Joint angles ↔ ticks: ``ticks = zero_ticks + direction · (q + offset) · ticks_per_revolution / 2π`` (``offset`` is
+the joint's servo offset, as OpenSHC adds it to hardware commands). Per cycle and bus: one sync read (present
+current, velocity and position: addresses 126–135, 10 bytes per servo) and one sync write (goal position, or profile
+velocity + goal position: 112–119). With several buses the sync reads go out on every bus before the replies are
+received, so the buses answer in parallel.
+
+dynamixel-sdk's GroupSyncRead drops each servo's status error byte, so the sync read is sent with it and the replies
+are received one by one with ``PacketHandler.readRx``, which keeps the error byte: its alert bit flags a hardware
+error in the same cycle, and only then is Hardware Error Status (address 70) read to name it. The SDK does not
+byte-stuff what it sends, so every write payload is checked for ``FF FF FD``.
 """
 
 from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from shc_cli.errors import ShcError
 from shc_cli.hardware import protocol2 as p2
-from shc_cli.hardware.models import MODELS, ServoModel, hardware_error_names
+from shc_cli.hardware.models import MODELS, OPERATING_MODES, POSITION_MODES, ServoModel, hardware_error_names
 from shc_cli.spec.robot import Robot
 
 STATE_ADDRESS, STATE_LENGTH = 126, 10
 """Present current (2), velocity (4), position (4), contiguous in the X/MX 2.0 control table."""
+SETTINGS_ADDRESS, SETTINGS_LENGTH = 11, 45
+"""Operating Mode (11) to Min Position Limit (52–55): read once at start to check the servos' configuration."""
+PROFILE_ADDRESS = 112
+"""Profile Velocity (112–115) followed by Goal Position (116–119)."""
 
 
 class HardwareError(ShcError):
@@ -39,9 +46,13 @@ class Slot:
     leg: int
     joint: int
     servo_id: int
+    bus: int
     model: ServoModel
     direction: int
     zero: int
+    offset: float
+    limits: tuple[float, float]
+    """The joint's position limits [rad]."""
 
 
 @dataclass
@@ -56,159 +67,296 @@ class BusState:
     alerts: np.ndarray
 
 
+@dataclass
+class _Line:
+    """One bus: its port and the slots on it."""
+
+    name: str
+    slots: list[int]
+    port: Any = None
+    state_reader: Any = None
+    error_reader: Any = None
+    ids: list[int] = field(default_factory=list)
+
+
 class ServoBus:
-    """Every joint's servo on one bus.
+    """Every joint's servo, on one bus per port.
 
     Args:
-        robot: the robot (its ``[hardware]`` table).
-        port: serial device (a USB2Dynamixel/U2D2, or an emulator's pty).
-        baud: baud rate; default ``hardware.baud``.
+        robot: the robot (its ``[hardware]`` table; a servo's ``bus`` indexes ``ports``).
+        ports: serial devices, bus 0 first (USB2Dynamixel/U2D2 adapters, or emulators' ptys).
+        baud: baud rate of every bus; default ``hardware.baud``.
+        profile_velocity: also write Profile Velocity each cycle (the speed that reaches the goal in one period),
+            so the servos interpolate between goals.
     """
 
-    def __init__(self, robot: Robot, port: str, baud: int | None = None) -> None:
+    def __init__(self, robot: Robot, ports: list[str] | str, baud: int | None = None,
+                 profile_velocity: bool = False) -> None:
         hardware = robot.hardware
         if not hardware.servos:
             raise HardwareError(f"{robot.name}: no [hardware.servos] table (map every joint to a servo id)")
-        self.robot, self.port_name, self.baud = robot, port, baud or hardware.baud
+        ports = [ports] if isinstance(ports, str) else list(ports)
+        self.robot, self.port_names, self.baud = robot, ports, baud or hardware.baud
+        self.port_name = ", ".join(ports)
         self.ticks = hardware.ticks_per_revolution
-        self.slots = [Slot(f"{leg}_{joint}", i, k, hardware.servos[f"{leg}_{joint}"].id,
-                           MODELS[hardware.servos[f"{leg}_{joint}"].model or hardware.model],
-                           hardware.servos[f"{leg}_{joint}"].direction, hardware.servos[f"{leg}_{joint}"].zero_ticks)
-                      for i, (leg, spec) in enumerate(robot.legs.items()) for k, joint in enumerate(spec.joints)]
+        self.profile_velocity = profile_velocity
+        self.slots = []
+        for i, (leg, spec) in enumerate(robot.legs.items()):
+            for k, (joint, joint_spec) in enumerate(spec.joints.items()):
+                servo = hardware.servos[f"{leg}_{joint}"]
+                model = MODELS[servo.model or hardware.model]
+                self.slots.append(Slot(f"{leg}_{joint}", i, k, servo.id, servo.bus, model, servo.direction,
+                                       servo.zero_ticks, joint_spec.offset, (joint_spec.min, joint_spec.max)))
+        used = sorted({slot.bus for slot in self.slots})
+        if used[-1] >= len(ports):
+            raise HardwareError(f"{robot.name}: servos are on buses {', '.join(map(str, used))}, but "
+                                f"{len(ports)} port{'s' if len(ports) > 1 else ''} given "
+                                f"(give --port once per bus, bus 0 first)")
+        self.lines = [_Line(name, [i for i, s in enumerate(self.slots) if s.bus == b]) for b, name in enumerate(ports)]
         self.shape = (len(robot.legs), max(len(leg.joints) for leg in robot.legs.values()))
         self._rows = np.array([s.leg for s in self.slots])
         self._cols = np.array([s.joint for s in self.slots])
         self._direction = np.array([s.direction for s in self.slots], dtype=float)
         self._zero = np.array([s.zero for s in self.slots], dtype=float)
-        self._port: Any = None
+        self._offset = np.array([s.offset for s in self.slots])
+        self._current_unit = np.array([s.model.current_unit_ma for s in self.slots])
+        self._velocity_unit = np.array([s.model.velocity_unit_rpm for s in self.slots])
         self._handler: Any = None
+        self._last_ticks: np.ndarray | None = None
         self.retries = 0
         """Sync reads repeated because a reply was missing or corrupt."""
 
-    # -- opening and checking --------------------------------------------------------------------------------
+    # -- opening, checking, configuring ----------------------------------------------------------------------
 
     def open(self) -> None:
         from dynamixel_sdk import GroupSyncRead, PacketHandler, PortHandler
 
-        port = PortHandler(self.port_name)
-        try:
-            opened = port.openPort()
-        except Exception as error:  # pyserial raises several types; all mean "cannot open"
-            reason = "no such device" if not os.path.exists(self.port_name) else str(error) or type(error).__name__
-            raise HardwareError(f"{self.port_name}: cannot open the serial port: {reason} "
-                                "(give the servo bus adapter with --port, e.g. /dev/ttyUSB0)") from None
-        if not opened or not port.setBaudRate(self.baud):
-            raise HardwareError(f"{self.port_name}: cannot open the serial port at {self.baud} baud "
-                                "(check --port and --baud or hardware.baud)")
-        self._port, self._handler = port, PacketHandler(2.0)
-        self._state_reader = GroupSyncRead(port, self._handler, STATE_ADDRESS, STATE_LENGTH)
-        self._error_reader = GroupSyncRead(port, self._handler, self.slots[0].model.hardware_error_status, 1)
-        for slot in self.slots:
-            self._state_reader.addParam(slot.servo_id)
-            self._error_reader.addParam(slot.servo_id)
+        self._handler = PacketHandler(2.0)
+        for line in self.lines:
+            port = PortHandler(line.name)
+            try:
+                opened = port.openPort()
+            except Exception as error:  # pyserial raises several types; all mean "cannot open"
+                reason = "no such device" if not os.path.exists(line.name) else str(error) or type(error).__name__
+                self.close()
+                raise HardwareError(f"{line.name}: cannot open the serial port: {reason} "
+                                    "(give the servo bus adapter with --port, e.g. /dev/ttyUSB0)") from None
+            if not opened or not port.setBaudRate(self.baud):
+                self.close()
+                raise HardwareError(f"{line.name}: cannot open the serial port at {self.baud} baud "
+                                    "(check --port and --baud or hardware.baud)")
+            line.port = port
+            line.ids = [self.slots[i].servo_id for i in line.slots]
+            line.state_reader = GroupSyncRead(port, self._handler, STATE_ADDRESS, STATE_LENGTH)
+            error_address = self.slots[line.slots[0]].model.hardware_error_status if line.slots else 70
+            line.error_reader = GroupSyncRead(port, self._handler, error_address, 1) if line.slots else None
+            for servo_id in line.ids:
+                line.state_reader.addParam(servo_id)
+                line.error_reader.addParam(servo_id)
 
     def close(self) -> None:
-        if self._port is not None:
-            self._port.closePort()
-            self._port = None
+        for line in self.lines:
+            if line.port is not None:
+                line.port.closePort()
+                line.port = None
 
     def check(self) -> list[str]:
-        """Every problem that must stop a start: missing servos, wrong models, hardware errors (one text each)."""
+        """Every problem that must stop a start (one text each): missing servos (a broadcast ping, then a unicast
+        ping for each servo it did not find), wrong models, hardware errors, servos not in a position-control
+        operating mode, joint limits outside the servo's position limits."""
         from dynamixel_sdk import COMM_SUCCESS
 
-        found, result = self._handler.broadcastPing(self._port)
         problems = []
-        if result != COMM_SUCCESS and not found:
-            return [f"no servo answers a broadcast ping on {self.port_name} at {self.baud} baud"]
-        for slot in self.slots:
-            if slot.servo_id not in found:
-                problems.append(f"{slot.key}: servo {slot.servo_id} does not answer")
-            elif slot.model.model_number and found[slot.servo_id][0] != slot.model.model_number:
-                problems.append(f"{slot.key}: servo {slot.servo_id} is model number {found[slot.servo_id][0]}, "
-                                f"not a {slot.model.name} ({slot.model.model_number})")
-        if not problems:
-            problems += [f"{key}: hardware error ({', '.join(names)})" for key, names in self.hardware_errors().items()]
+        for line in self.lines:
+            if not line.slots:
+                continue
+            found, result = self._handler.broadcastPing(line.port)
+            found = dict(found) if result == COMM_SUCCESS or found else {}
+            for index in line.slots:
+                slot = self.slots[index]
+                if slot.servo_id not in found:
+                    number, result, _ = self._handler.ping(line.port, slot.servo_id)
+                    if result == COMM_SUCCESS:
+                        found[slot.servo_id] = [number, 0]
+                if slot.servo_id not in found:
+                    problems.append(f"{slot.key}: servo {slot.servo_id} does not answer on {line.name} "
+                                    f"at {self.baud} baud")
+                elif slot.model.model_number and found[slot.servo_id][0] != slot.model.model_number:
+                    problems.append(f"{slot.key}: servo {slot.servo_id} is model number {found[slot.servo_id][0]}, "
+                                    f"not a {slot.model.name} ({slot.model.model_number})")
+        if problems:
+            return problems
+        problems += [f"{key}: hardware error ({', '.join(names)})" for key, names in self.hardware_errors().items()]
+        return problems + self._check_settings()
+
+    def _check_settings(self) -> list[str]:
+        """Operating mode and position limits of every servo (one sync read per bus)."""
+        from dynamixel_sdk import COMM_SUCCESS, GroupSyncRead
+
+        problems = []
+        for line in self.lines:
+            if not line.slots:
+                continue
+            reader = GroupSyncRead(line.port, self._handler, SETTINGS_ADDRESS, SETTINGS_LENGTH)
+            for servo_id in line.ids:
+                reader.addParam(servo_id)
+            if reader.txRxPacket() != COMM_SUCCESS:
+                line.port.clearPort()
+                reader.txRxPacket()
+            for index in line.slots:
+                slot, model = self.slots[index], self.slots[index].model
+                if not reader.isAvailable(slot.servo_id, SETTINGS_ADDRESS, SETTINGS_LENGTH):
+                    problems.append(f"{slot.key}: servo {slot.servo_id} did not answer the settings read")
+                    continue
+                mode = reader.getData(slot.servo_id, model.operating_mode, 1)
+                if mode not in POSITION_MODES:
+                    problems.append(f"{slot.key}: servo {slot.servo_id} is in {OPERATING_MODES.get(mode, str(mode))} "
+                                    f"operating mode; set Operating Mode (address {model.operating_mode}) to 3 "
+                                    "(position control)")
+                    continue
+                if mode == 4:
+                    continue  # extended position mode has no position limits
+                high = _signed(reader.getData(slot.servo_id, model.max_position_limit, 4), 32)
+                low = _signed(reader.getData(slot.servo_id, model.min_position_limit, 4), 32)
+                ends = sorted(self._to_ticks(index, np.array(slot.limits)))
+                if ends[0] < low or ends[1] > high:
+                    problems.append(f"{slot.key}: the joint limits {slot.limits[0]:.3f}..{slot.limits[1]:.3f} rad are "
+                                    f"ticks {ends[0]}..{ends[1]}, outside servo {slot.servo_id}'s position limits "
+                                    f"{low}..{high}; widen the servo's Min/Max Position Limit or fix zero_ticks, "
+                                    "direction or the joint limits")
         return problems
+
+    def configure(self) -> list[str]:
+        """Write the robot file's current limit (EEPROM, torque off) where a servo differs; returns what it did."""
+        from dynamixel_sdk import COMM_SUCCESS
+
+        limit_ma = self.robot.hardware.current_limit_ma
+        if limit_ma is None:
+            return []
+        done = []
+        for line in self.lines:
+            for index in line.slots:
+                slot = self.slots[index]
+                value = round(limit_ma / slot.model.current_unit_ma)
+                present, result, _ = self._handler.read2ByteTxRx(line.port, slot.servo_id, slot.model.current_limit)
+                if result == COMM_SUCCESS and present == value:
+                    continue
+                result, error = self._handler.write2ByteTxRx(line.port, slot.servo_id, slot.model.current_limit, value)
+                if result != COMM_SUCCESS or error & 0x7F:
+                    raise HardwareError(f"{slot.key}: servo {slot.servo_id} refused Current Limit {value} "
+                                        f"({self._handler.getTxRxResult(result) if result != COMM_SUCCESS else error})")
+                done.append(slot.key)
+        return [f"current limit {limit_ma:g} mA written to {len(done)} servos"] if done else []
 
     # -- the cycle -------------------------------------------------------------------------------------------
 
     def read_state(self) -> BusState:
-        """One sync read of current, velocity and position of every servo, keeping each status packet's error byte
-        (its alert bit says a Hardware Error Status bit is set). A read that misses a reply is repeated once at once,
-        after clearing the port, before the servos from that one on count as missing."""
-        from dynamixel_sdk import COMM_SUCCESS
-
+        """One sync read per bus of current, velocity and position of every servo, keeping each status packet's
+        error byte (its alert bit says a Hardware Error Status bit is set). A bus that misses a reply is read again
+        once at once, after clearing its port, before the servos from that one on count as missing."""
         count = len(self.slots)
         raw = np.zeros((count, STATE_LENGTH), dtype=np.uint8)
         answered = np.zeros(count, dtype=bool)
         alerts = np.zeros(count, dtype=bool)
-        for attempt in range(2):
-            self._state_reader.txPacket()
-            for index, slot in enumerate(self.slots):
-                data, result, error = self._handler.readRx(self._port, slot.servo_id, STATE_LENGTH)
-                if result != COMM_SUCCESS:
-                    break
-                raw[index] = data
-                answered[index] = True
-                alerts[index] = bool(error & p2.ERROR_ALERT)
-            if answered.all() or attempt:
-                break
-            self._port.clearPort()
-            self.retries += 1
-            answered[:] = False
+        for line in self.lines:  # every bus starts answering at once
+            if line.slots:
+                line.state_reader.txPacket()
+        for line in self.lines:
+            if line.slots and not self._receive(line, raw, answered, alerts):
+                line.port.clearPort()
+                self.retries += 1
+                answered[line.slots] = False
+                line.state_reader.txPacket()
+                self._receive(line, raw, answered, alerts)
         current = raw[:, 0:2].copy().view("<i2")[:, 0].astype(float)
         velocity = raw[:, 2:6].copy().view("<i4")[:, 0].astype(float)
         ticks = raw[:, 6:10].copy().view("<i4")[:, 0].astype(float)
-        currents = current * np.array([s.model.current_unit_ma for s in self.slots])
-        positions = self._direction * (ticks - self._zero) * (2.0 * math.pi / self.ticks)
-        rpm = np.array([s.model.velocity_unit_rpm for s in self.slots])
-        velocities = self._direction * velocity * rpm * (2.0 * math.pi / 60.0)
-        return BusState(self.padded(positions), self.padded(velocities), self.padded(currents), answered, alerts)
+        positions = self._direction * (ticks - self._zero) * (2.0 * math.pi / self.ticks) - self._offset
+        velocities = self._direction * velocity * self._velocity_unit * (2.0 * math.pi / 60.0)
+        return BusState(self.padded(positions), self.padded(velocities), self.padded(current * self._current_unit),
+                        answered, alerts)
+
+    def _receive(self, line: _Line, raw: np.ndarray, answered: np.ndarray, alerts: np.ndarray) -> bool:
+        from dynamixel_sdk import COMM_SUCCESS
+
+        for index in line.slots:
+            data, result, error = self._handler.readRx(line.port, self.slots[index].servo_id, STATE_LENGTH)
+            if result != COMM_SUCCESS:
+                return False
+            raw[index] = data
+            answered[index] = True
+            alerts[index] = bool(error & p2.ERROR_ALERT)
+        return True
 
     def hardware_errors(self) -> dict[str, list[str]]:
         """Servos whose Hardware Error Status is set (or that did not answer its read), by joint."""
         from dynamixel_sdk import COMM_SUCCESS
 
-        reader = self._error_reader
-        if reader.txRxPacket() != COMM_SUCCESS:
-            self._port.clearPort()
-            self.retries += 1
-            reader.txRxPacket()
         out: dict[str, list[str]] = {}
-        for slot in self.slots:
-            if not reader.isAvailable(slot.servo_id, slot.model.hardware_error_status, 1):
-                out[slot.key] = ["no reply"]
+        for line in self.lines:
+            reader = line.error_reader
+            if reader is None:
                 continue
-            bits = reader.getData(slot.servo_id, slot.model.hardware_error_status, 1)
-            if bits:
-                out[slot.key] = hardware_error_names(bits) or [f"bits {bits:#04x}"]
+            if reader.txRxPacket() != COMM_SUCCESS:
+                line.port.clearPort()
+                self.retries += 1
+                reader.txRxPacket()
+            for index in line.slots:
+                slot = self.slots[index]
+                if not reader.isAvailable(slot.servo_id, slot.model.hardware_error_status, 1):
+                    out[slot.key] = ["no reply"]
+                    continue
+                bits = reader.getData(slot.servo_id, slot.model.hardware_error_status, 1)
+                if bits:
+                    out[slot.key] = hardware_error_names(bits) or [f"bits {bits:#04x}"]
         return out
 
-    def write_goals(self, joints: np.ndarray) -> None:
-        """One sync write of every goal position ``(L, n)`` [rad]."""
+    def write_goals(self, joints: np.ndarray, period: float) -> None:
+        """One sync write per bus of every goal position ``(L, n)`` [rad]; with ``profile_velocity`` also the speed
+        that reaches it in ``period`` [s] (at least one unit: 0 would mean unlimited)."""
         from dynamixel_sdk import GroupSyncWrite
 
-        values = joints[self._rows, self._cols]
-        ticks = np.rint(self._zero + self._direction * values * (self.ticks / (2.0 * math.pi))).astype(np.int64)
-        model = self.slots[0].model
-        writer = GroupSyncWrite(self._port, self._handler, model.goal_position, 4)
-        payload = bytearray()
-        for slot, tick in zip(self.slots, ticks.tolist(), strict=True):
-            data = int(tick).to_bytes(4, "little", signed=True)
-            writer.addParam(slot.servo_id, data)
-            payload += bytes([slot.servo_id]) + data
-        if p2.needs_stuffing(bytes(payload)):
-            raise HardwareError("a goal payload contains FF FF FD, which dynamixel-sdk would send unstuffed")
-        writer.txPacket()
+        ticks = self._to_ticks(slice(None), joints[self._rows, self._cols])
+        if self.profile_velocity:
+            previous = ticks if self._last_ticks is None else self._last_ticks
+            rpm = np.abs(ticks - previous) / self.ticks / period * 60.0
+            speed = np.maximum(1, np.rint(rpm / self._velocity_unit)).astype(np.int64)
+        self._last_ticks = ticks
+        for line in self.lines:
+            if not line.slots:
+                continue
+            model = self.slots[line.slots[0]].model
+            address, length = (PROFILE_ADDRESS, 8) if self.profile_velocity else (model.goal_position, 4)
+            writer = GroupSyncWrite(line.port, self._handler, address, length)
+            payload = bytearray()
+            for index in line.slots:
+                data = int(ticks[index]).to_bytes(4, "little", signed=True)
+                if self.profile_velocity:
+                    data = int(speed[index]).to_bytes(4, "little") + data
+                writer.addParam(self.slots[index].servo_id, data)
+                payload += bytes([self.slots[index].servo_id]) + data
+            if p2.needs_stuffing(bytes(payload)):
+                raise HardwareError(f"{line.name}: a goal payload contains FF FF FD, which dynamixel-sdk would send "
+                                    "unstuffed")
+            writer.txPacket()
 
     def torque(self, on: bool) -> None:
-        """Torque enable (or disable) on every servo, one sync write."""
+        """Torque enable (or disable) on every servo, one sync write per bus."""
         from dynamixel_sdk import GroupSyncWrite
 
-        writer = GroupSyncWrite(self._port, self._handler, self.slots[0].model.torque_enable, 1)
-        for slot in self.slots:
-            writer.addParam(slot.servo_id, bytes([1 if on else 0]))
-        writer.txPacket()
+        for line in self.lines:
+            if not line.slots:
+                continue
+            writer = GroupSyncWrite(line.port, self._handler, self.slots[line.slots[0]].model.torque_enable, 1)
+            for servo_id in line.ids:
+                writer.addParam(servo_id, bytes([1 if on else 0]))
+            writer.txPacket()
+
+    def _to_ticks(self, index: Any, joints: np.ndarray) -> np.ndarray:
+        """Joint angles [rad] of the slots ``index`` → servo ticks."""
+        ticks: np.ndarray = np.rint(self._zero[index] + self._direction[index] * (joints + self._offset[index])
+                                    * (self.ticks / (2.0 * math.pi))).astype(np.int64)
+        return ticks
 
     def padded(self, values: np.ndarray) -> np.ndarray:
         out = np.zeros(self.shape)
@@ -216,11 +364,12 @@ class ServoBus:
         return out
 
     def wire_time(self) -> float:
-        """Seconds one cycle's sync read (instruction + every status) and sync write occupy a real bus at this baud
-        (10 bits per byte on the wire; return delays not counted)."""
-        count = len(self.slots)
-        read = 14 + count + count * (11 + STATE_LENGTH)
-        write = 14 + count * 5
+        """Seconds one cycle's sync read (instruction + every status) and sync write occupy the busiest bus at this
+        baud (buses run in parallel; 10 bits per byte on the wire; return delays not counted)."""
+        per_goal = 9 if self.profile_velocity else 5
+        busiest = max(len(line.slots) for line in self.lines)
+        read = 14 + busiest + busiest * (11 + STATE_LENGTH)
+        write = 14 + busiest * per_goal
         return (read + write) * 10.0 / self.baud
 
 

@@ -1,23 +1,48 @@
-"""Where ``run-hw`` takes its commands from: a timeline (``--velocity``/``--commands``) or JSON lines on stdin.
+"""Where ``run-hw`` takes its commands from: a timeline, JSON lines on stdin, the keyboard or a gamepad.
 
-Each source answers :meth:`next` once per RUNNING cycle with the cycle's :class:`Command`, or ``None`` when it
-is finished (the timeline is over, stdin is closed or asked to stop) — the robot then stops walking.
+Each source answers :meth:`next` once per cycle after the start-up with the cycle's :class:`Command`, or ``None``
+when it is finished (the timeline is over, stdin is closed or sent ``stop``, the gamepad is gone, ``x`` was pressed)
+— the robot then stops walking and shuts down. The live sources hold their inputs between events: a velocity, a
+pose velocity and a requested robot state (``running`` at first) hold until changed; a gait change is made once.
 
-JSON lines on stdin (one object per line; every key optional): ``{"velocity": [vx, vy, wz]}`` (the robot's input
-mode), ``{"pose_velocity": [x, y, z, roll, pitch, yaw]}``, ``{"stop": true}``. The last velocity holds until the
-next line; the **watchdog** sets it to zero when no line has come for ``watchdog_s`` seconds (a lost link must not
-leave the robot walking), and a malformed line is ignored with a warning on stderr.
+* **stdin** — one JSON object per line, every key optional: ``{"velocity": [vx, vy, wz]}`` (the robot's input mode),
+  ``{"pose_velocity": [x, y, z, roll, pitch, yaw]}``, ``{"state": "packed" | "ready" | "running"}``,
+  ``{"gait": "wave"}`` (a bundled name or a gait file), ``{"stop": true}``. A **watchdog** sets the velocities to
+  zero when no line has come for ``watchdog_s`` seconds (a lost link must not leave the robot walking); a malformed
+  line is ignored with a warning on stderr.
+* **keyboard** — the terminal in cbreak mode (Ctrl-C still stops): ``w``/``s`` forward/back, ``a``/``d`` left/right,
+  ``q``/``e`` turn left/right, each press ±0.1 of full input (terminals send no key releases, so the input holds);
+  space zero; ``1`` packed, ``2`` ready, ``3`` running; ``g`` next gait; ``x`` stop and shut down.
+* **gamepad** — a Linux evdev joystick (``evdev``): left stick walk (up forward, sideways strafe), right stick x
+  turn, right stick y body pitch; A/south next gait, B/east zero velocity, Y/north ready, Start running,
+  Select/Back packed, Mode/Home stop and shut down. Stick values are scaled by the device's own ranges with a 10 %
+  dead zone. A disconnected gamepad stops the robot.
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
+import os
 import sys
 import threading
 import time
-from typing import IO
+from collections.abc import Callable
+from typing import IO, Any
 
 from shc_cli.control.controller import Command, RobotState
+from shc_cli.errors import ShcError
+from shc_cli.spec.gait import Gait
+
+STATES = {"packed": RobotState.PACKED, "ready": RobotState.READY, "running": RobotState.RUNNING}
+KEY_STEP = 0.1
+"""Velocity input change per key press [fraction of full input]."""
+DEAD_ZONE = 0.1
+"""Stick deflection below which a gamepad axis reads 0 [fraction of its range]."""
+
+
+class InputError(ShcError):
+    """An input device is missing or unusable (one line, exit 2)."""
 
 
 class TimelineInput:
@@ -34,24 +59,72 @@ class TimelineInput:
         self.index += 1
         return command
 
+    def close(self) -> None:
+        """Nothing to release."""
 
-class StdinInput:
+
+class HeldInput:
+    """Inputs that hold between events, shared by the live sources (thread-safe).
+
+    Args:
+        gaits: the gaits ``next_gait`` cycles through (the robot's bundled gaits).
+        watchdog_s: seconds without an event after which the velocities become zero (``None``: no watchdog).
+    """
+
+    def __init__(self, gaits: list[Gait] | None = None, watchdog_s: float | None = None) -> None:
+        self.gaits = gaits or []
+        self.watchdog_s = watchdog_s
+        self.velocity = [0.0, 0.0, 0.0]
+        self.pose_velocity = [0.0] * 6
+        self.state = RobotState.RUNNING
+        self.gait: Gait | None = None
+        self.gait_index = 0
+        self.finished = False
+        self.watchdog_trips = 0
+        self.last = time.monotonic()
+        self._lock = threading.Lock()
+
+    def update(self, change: Callable[[HeldInput], None]) -> None:
+        """Apply ``change`` under the lock and feed the watchdog."""
+        with self._lock:
+            change(self)
+            self.last = time.monotonic()
+
+    def next_gait(self) -> None:
+        if self.gaits:
+            self.gait_index = (self.gait_index + 1) % len(self.gaits)
+            self.gait = self.gaits[self.gait_index]
+
+    def next(self) -> Command | None:
+        with self._lock:
+            if self.finished:
+                return None
+            idle = self.watchdog_s is not None and time.monotonic() - self.last > self.watchdog_s
+            if idle and (any(self.velocity) or any(self.pose_velocity)):
+                self.velocity, self.pose_velocity = [0.0, 0.0, 0.0], [0.0] * 6
+                self.watchdog_trips += 1
+            gait, self.gait = self.gait, None
+            return Command(velocity=tuple(self.velocity), pose_velocity=tuple(self.pose_velocity),  # type: ignore[arg-type]
+                           state_request=self.state, gait=gait)
+
+    def close(self) -> None:
+        """Release the device (subclasses)."""
+
+
+class StdinInput(HeldInput):
     """JSON lines from a stream (stdin), read by a thread, with a watchdog.
 
     Args:
         stream: the text stream.
-        watchdog_s: seconds without a line after which the velocity input becomes zero.
+        watchdog_s: seconds without a line after which the velocity inputs become zero.
+        load_gait: gait name or file → Gait (raises :class:`ShcError` for an unknown one).
     """
 
-    def __init__(self, stream: IO[str] | None = None, watchdog_s: float = 0.5) -> None:
+    def __init__(self, stream: IO[str] | None = None, watchdog_s: float = 0.5,
+                 load_gait: Callable[[str], Gait] | None = None) -> None:
+        super().__init__(watchdog_s=watchdog_s)
         self.stream = stream or sys.stdin
-        self.watchdog_s = watchdog_s
-        self.velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
-        self.pose_velocity: tuple[float, ...] = (0.0,) * 6
-        self.last = time.monotonic()
-        self.finished = False
-        self.watchdog_trips = 0
-        self._lock = threading.Lock()
+        self.load_gait = load_gait
         self._thread = threading.Thread(target=self._read, name="run-hw-stdin", daemon=True)
         self._thread.start()
 
@@ -61,34 +134,210 @@ class StdinInput:
             if not text:
                 continue
             try:
-                data = json.loads(text)
-                if not isinstance(data, dict):
-                    raise ValueError("not an object")
-                with self._lock:
-                    if "velocity" in data:
-                        vx, vy, wz = (float(v) for v in data["velocity"])
-                        self.velocity = (vx, vy, wz)
-                    if "pose_velocity" in data:
-                        values = tuple(float(v) for v in data["pose_velocity"])
-                        if len(values) != 6:
-                            raise ValueError("pose_velocity needs 6 numbers")
-                        self.pose_velocity = values
-                    if data.get("stop"):
-                        self.finished = True
-                    self.last = time.monotonic()
-            except (ValueError, TypeError) as error:
+                self.update(self._parse(text))
+            except (ValueError, TypeError, KeyError, ShcError) as error:
                 print(f"warning: stdin: ignored line {text[:60]!r} ({error})", file=sys.stderr, flush=True)
             if self.finished:
                 return
         self.finished = True  # end of input
 
-    def next(self) -> Command | None:
-        with self._lock:
-            if self.finished:
-                return None
-            if time.monotonic() - self.last > self.watchdog_s and any(self.velocity):
-                self.velocity = (0.0, 0.0, 0.0)
-                self.pose_velocity = (0.0,) * 6
-                self.watchdog_trips += 1
-            return Command(velocity=self.velocity, pose_velocity=self.pose_velocity,  # type: ignore[arg-type]
-                           state_request=RobotState.RUNNING)
+    def _parse(self, text: str) -> Callable[[HeldInput], None]:
+        """The change one line asks for (validated before anything is applied)."""
+        data = json.loads(text)
+        if not isinstance(data, dict):
+            raise ValueError("not an object")
+        unknown = set(data) - {"velocity", "pose_velocity", "state", "gait", "stop"}
+        if unknown:
+            raise ValueError(f"unknown key {sorted(unknown)[0]!r}")
+        velocity = [float(v) for v in data["velocity"]] if "velocity" in data else None
+        if velocity is not None and len(velocity) != 3:
+            raise ValueError("velocity needs 3 numbers")
+        pose = [float(v) for v in data["pose_velocity"]] if "pose_velocity" in data else None
+        if pose is not None and len(pose) != 6:
+            raise ValueError("pose_velocity needs 6 numbers")
+        if "state" in data and data["state"] not in STATES:
+            raise ValueError(f"state is one of {', '.join(STATES)}")
+        gait = None
+        if "gait" in data:
+            if self.load_gait is None:
+                raise ValueError("gait changes are not available")
+            gait = self.load_gait(str(data["gait"]))
+
+        def change(held: HeldInput) -> None:
+            if velocity is not None:
+                held.velocity = velocity
+            if pose is not None:
+                held.pose_velocity = pose
+            if "state" in data:
+                held.state = STATES[data["state"]]
+            if gait is not None:
+                held.gait = gait
+            if data.get("stop"):
+                held.finished = True
+
+        return change
+
+
+KEYS: dict[str, Callable[[HeldInput], None]] = {
+    "w": lambda h: _nudge(h.velocity, 0, KEY_STEP), "s": lambda h: _nudge(h.velocity, 0, -KEY_STEP),
+    "a": lambda h: _nudge(h.velocity, 1, KEY_STEP), "d": lambda h: _nudge(h.velocity, 1, -KEY_STEP),
+    "q": lambda h: _nudge(h.velocity, 2, KEY_STEP), "e": lambda h: _nudge(h.velocity, 2, -KEY_STEP),
+    " ": lambda h: setattr(h, "velocity", [0.0, 0.0, 0.0]),
+    "1": lambda h: setattr(h, "state", RobotState.PACKED), "2": lambda h: setattr(h, "state", RobotState.READY),
+    "3": lambda h: setattr(h, "state", RobotState.RUNNING), "g": lambda h: h.next_gait(),
+    "x": lambda h: setattr(h, "finished", True),
+}
+"""Key → change of the held inputs."""
+KEY_HELP = ("keys: w/s forward/back, a/d left/right, q/e turn, space zero, 1 packed, 2 ready, 3 running, g gait, "
+            "x stop")
+
+
+def _nudge(values: list[float], index: int, step: float) -> None:
+    values[index] = round(max(-1.0, min(1.0, values[index] + step)), 6)
+
+
+class KeyboardInput(HeldInput):
+    """Keys from a terminal (default: stdin), read by a thread; the terminal is in cbreak mode until :meth:`close`.
+
+    Args:
+        gaits: the gaits ``g`` cycles through.
+        fd: the terminal's file descriptor.
+    """
+
+    def __init__(self, gaits: list[Gait] | None = None, fd: int | None = None) -> None:
+        import termios
+        import tty
+
+        super().__init__(gaits)
+        self.fd = sys.stdin.fileno() if fd is None else fd
+        if not os.isatty(self.fd):
+            raise InputError("--input keyboard: standard input is not a terminal (use stdin for piped JSON lines)")
+        self._saved = termios.tcgetattr(self.fd)
+        tty.setcbreak(self.fd)  # keys arrive one by one, unechoed; Ctrl-C still sends SIGINT
+        print(KEY_HELP, file=sys.stderr, flush=True)
+        self._thread = threading.Thread(target=self._read, name="run-hw-keyboard", daemon=True)
+        self._thread.start()
+
+    def _read(self) -> None:
+        while not self.finished:
+            try:
+                data = os.read(self.fd, 1)
+            except OSError:
+                data = b""
+            if not data:
+                self.finished = True
+                return
+            change = KEYS.get(data.decode("ascii", "replace").lower())
+            if change is not None:
+                self.update(change)
+
+    def close(self) -> None:
+        import termios
+
+        with contextlib.suppress(OSError, termios.error):
+            termios.tcsetattr(self.fd, termios.TCSADRAIN, self._saved)
+
+
+class GamepadInput(HeldInput):
+    """A gamepad through Linux evdev, read by a thread.
+
+    Args:
+        device: an evdev device path (``/dev/input/eventN``); default the first device with sticks and a south
+            button.
+        gaits: the gaits the south button cycles through.
+    """
+
+    def __init__(self, device: str | None = None, gaits: list[Gait] | None = None) -> None:
+        super().__init__(gaits)
+        try:
+            import evdev
+        except ImportError:  # evdev is Linux only
+            raise InputError("--input gamepad needs the evdev package (Linux): pip install evdev") from None
+        self.device = _open_gamepad(evdev, device)
+        self.mapping = GamepadMapping(self.device.capabilities(absinfo=True))
+        print(f"gamepad: {self.device.name} ({self.device.path})", file=sys.stderr, flush=True)
+        self._thread = threading.Thread(target=self._read, name="run-hw-gamepad", daemon=True)
+        self._thread.start()
+
+    def _read(self) -> None:
+        try:
+            for event in self.device.read_loop():
+                change = self.mapping.change(event.type, event.code, event.value)
+                if change is not None:
+                    self.update(change)
+                if self.finished:
+                    return
+        except OSError:
+            print("warning: the gamepad is gone: stopping", file=sys.stderr, flush=True)
+        self.finished = True
+
+    def close(self) -> None:
+        with contextlib.suppress(OSError):
+            self.device.close()
+
+
+def _open_gamepad(evdev: Any, path: str | None) -> Any:
+    if path is not None:
+        try:
+            return evdev.InputDevice(path)
+        except OSError as error:
+            raise InputError(f"{path}: cannot open the gamepad: {error.strerror} (check the device and that you may "
+                             "read it: the 'input' group)") from None
+    for candidate in evdev.list_devices():
+        with contextlib.suppress(OSError):
+            device = evdev.InputDevice(candidate)
+            capabilities = device.capabilities()
+            axes = {code if isinstance(code, int) else code[0] for code in capabilities.get(evdev.ecodes.EV_ABS, [])}
+            keys = set(capabilities.get(evdev.ecodes.EV_KEY, []))
+            if {evdev.ecodes.ABS_X, evdev.ecodes.ABS_Y} <= axes and evdev.ecodes.BTN_SOUTH in keys:
+                return device
+            device.close()
+    raise InputError("no gamepad found in /dev/input (plug one in, check you may read it, or name it with "
+                     "--input gamepad:/dev/input/eventN)")
+
+
+class GamepadMapping:
+    """evdev events → changes of the held inputs (pure: testable without a device).
+
+    Args:
+        capabilities: ``device.capabilities(absinfo=True)``: each axis with its minimum and maximum.
+    """
+
+    EV_KEY, EV_ABS = 0x01, 0x03
+    ABS_X, ABS_Y, ABS_RX, ABS_RY = 0x00, 0x01, 0x03, 0x04
+    BTN_SOUTH, BTN_EAST, BTN_NORTH, BTN_WEST = 0x130, 0x131, 0x133, 0x134
+    BTN_SELECT, BTN_START, BTN_MODE = 0x13A, 0x13B, 0x13C
+
+    def __init__(self, capabilities: dict[int, list[Any]]) -> None:
+        self.ranges: dict[int, tuple[float, float]] = {}
+        for entry in capabilities.get(self.EV_ABS, []):
+            if isinstance(entry, tuple) and len(entry) == 2:
+                code, info = entry
+                self.ranges[code] = (float(info.min), float(info.max))
+
+    def axis(self, code: int, value: int) -> float:
+        """An axis value as −1..1 (its range's centre 0), with the dead zone."""
+        low, high = self.ranges.get(code, (-32768.0, 32767.0))
+        scaled = (2.0 * (value - low) / (high - low) - 1.0) if high > low else 0.0
+        scaled = max(-1.0, min(1.0, scaled))
+        return 0.0 if abs(scaled) < DEAD_ZONE else round(scaled, 4)
+
+    def change(self, kind: int, code: int, value: int) -> Callable[[HeldInput], None] | None:
+        """The change an event makes, or None for an event that changes nothing."""
+        if kind == self.EV_ABS and code in (self.ABS_X, self.ABS_Y, self.ABS_RX, self.ABS_RY):
+            scaled = self.axis(code, value)
+            slot = {self.ABS_Y: ("velocity", 0), self.ABS_X: ("velocity", 1), self.ABS_RX: ("velocity", 2),
+                    self.ABS_RY: ("pose_velocity", 4)}[code]
+
+            def move(held: HeldInput) -> None:
+                getattr(held, slot[0])[slot[1]] = -scaled + 0.0  # stick up/right is negative y/x: forward/left
+
+            return move
+        if kind == self.EV_KEY and value == 1:  # presses only
+            return {self.BTN_SOUTH: lambda h: h.next_gait(),
+                    self.BTN_EAST: lambda h: setattr(h, "velocity", [0.0, 0.0, 0.0]),
+                    self.BTN_NORTH: lambda h: setattr(h, "state", RobotState.READY),
+                    self.BTN_START: lambda h: setattr(h, "state", RobotState.RUNNING),
+                    self.BTN_SELECT: lambda h: setattr(h, "state", RobotState.PACKED),
+                    self.BTN_MODE: lambda h: setattr(h, "finished", True)}.get(code)
+        return None

@@ -22,6 +22,10 @@ class ServoModel:
     # control table
     model_number_address: int = 0
     firmware_address: int = 6
+    operating_mode: int = 11
+    current_limit: int = 38
+    max_position_limit: int = 48
+    min_position_limit: int = 52
     torque_enable: int = 64
     hardware_error_status: int = 70
     profile_velocity: int = 112
@@ -40,6 +44,11 @@ MODELS = {
     "generic": ServoModel("generic", 0),
 }
 """By name; ``generic`` accepts any model number with the X-series addresses."""
+
+POSITION_MODES = {3: "position", 4: "extended position"}
+"""Operating Mode values in which Goal Position drives the servo."""
+OPERATING_MODES = {0: "current", 1: "velocity", 3: "position", 4: "extended position", 5: "current-based position",
+                   16: "PWM"}
 
 # Hardware Error Status bits (e-Manual).
 INPUT_VOLTAGE_ERROR, OVERHEATING_ERROR, MOTOR_ENCODER_ERROR, ELECTRICAL_SHOCK_ERROR, OVERLOAD_ERROR = 1, 4, 8, 16, 32
