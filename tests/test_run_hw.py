@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import json
+import os
 import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from shc_cli.hardware import protocol2 as p2
@@ -164,3 +166,102 @@ def test_stdin_commands_and_the_watchdog(tmp_path: Path) -> None:
     assert log.states is not None
     order = [s for i, s in enumerate(log.states[after:, 0]) if i == 0 or s != log.states[after + i - 1, 0]]
     assert order == ["RUNNING", "READY", "RUNNING", "READY"]  # asked for READY, RUNNING; the end of input: READY
+
+
+def test_keyboard_keys_drive_the_robot_and_the_terminal_is_restored(tmp_path: Path) -> None:
+    import pty
+    import termios
+
+    master, slave = pty.openpty()
+    before = termios.tcgetattr(slave)
+    try:
+        with _bus() as bus:
+            process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
+                                        "--input", "keyboard", "--stop-state", "ready"],
+                                       stdin=slave, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+            _wait_running(tmp_path / "run")
+            os.write(master, b"www")  # three presses: 0.3 forward
+            time.sleep(1.5)
+            os.write(master, b" ")
+            time.sleep(0.3)
+            os.write(master, b"x")  # stop and shut down
+            _, stderr = process.communicate(timeout=60)
+            assert process.returncode == 0, stderr
+            assert "keys: w/s forward/back" in stderr
+        assert termios.tcgetattr(slave) == before  # cbreak mode undone
+    finally:
+        os.close(master)
+        os.close(slave)
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["stopped_by_request"] is True and summary["final_state"] == "READY"
+    log = read_run(tmp_path / "run")
+    forward = log.command[:, 0]
+    assert 0.3 in set(np.round(forward, 6)) and forward[-1] == 0.0  # the presses add up; space zeroes
+    assert (log.walk_state[forward == 0.3] != "STOPPED").any()  # it set off
+
+
+@pytest.mark.parametrize(("input_mode", "message"), [
+    ("gamepad:/dev/input/event99", "/dev/input/event99: cannot open the gamepad"),
+    ("keyboard", "standard input is not a terminal"),
+    ("joystick", "'joystick' is not an input"),
+    ("commands", "'commands' is not an input"),
+])
+def test_unusable_inputs_are_one_line_errors(input_mode: str, message: str, tmp_path: Path) -> None:
+    with _bus() as bus:
+        result = subprocess.run([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
+                                 "--input", input_mode], capture_output=True, text=True, timeout=60,
+                                stdin=subprocess.DEVNULL)
+    assert result.returncode == 2 and message in result.stderr, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and not (tmp_path / "run").exists()
+
+
+def _two_bus_robot(tmp_path: Path) -> Path:
+    """Bullet with its left legs on a second bus and a current limit."""
+    lines = ['extends = "bullet"', 'name = "bullet_two_buses"', "[hardware]", "current_limit_ma = 1000.0",
+             "[hardware.servos]"]
+    lines += [f"{leg}_{joint} = {{ id = {10 * row + col + 1}, bus = 1 }}"
+              for row, leg in ((4, "CL"), (5, "BL"), (6, "AL"))
+              for col, joint in enumerate(("coxa", "coxat", "femur", "tibia", "tarsus"))]
+    path = tmp_path / "two_buses.toml"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_two_buses_profile_velocity_and_current_limit(tmp_path: Path) -> None:
+    robot_file = _two_bus_robot(tmp_path)
+    right = {i: "MX-106" for row in (1, 2, 3) for i in range(10 * row + 1, 10 * row + 6)}
+    left = {i: "MX-106" for row in (4, 5, 6) for i in range(10 * row + 1, 10 * row + 6)}
+    with BusEmulator(right) as bus0, BusEmulator(left) as bus1:
+        missing = subprocess.run([*SHC, "run-hw", str(robot_file), "--port", bus0.port], capture_output=True,
+                                 text=True, timeout=60)
+        assert missing.returncode == 2 and "servos are on buses 0, 1, but 1 port given" in missing.stderr
+        result = subprocess.run([*SHC, "run-hw", str(robot_file), "--port", bus0.port, "--port", bus1.port,
+                                 "--out", str(tmp_path / "run"), "--velocity", "1,0,0", "--duration", "1",
+                                 "--profile-velocity", "--stop-state", "ready"], capture_output=True, text=True,
+                                timeout=120)
+        assert result.returncode == 0, result.stderr
+        assert "current limit 1000 mA written to 30 servos" in result.stderr
+        for bus in (bus0, bus1):
+            assert all(int.from_bytes(s.table[38:40], "little") == round(1000 / 3.36) for s in bus.servos.values())
+            writes = [p for p in bus.packets if p.instruction == p2.SYNC_WRITE
+                      and int.from_bytes(p.params[0:2], "little") == 112]
+            assert writes and all(int.from_bytes(p.params[2:4], "little") == 8 for p in writes)  # speed + goal
+            speeds = [int.from_bytes(p.params[at + 1:at + 5], "little") for p in writes
+                      for at in range(4, len(p.params), 9)]
+            assert min(speeds) >= 1 and max(speeds) > 20  # [0.229 rpm]: 0 would mean no limit
+            assert all(abs(bus.position(i) - bus.goal(i)) <= 3 for i in bus.servos)
+            reads = [p for p in bus.packets if p.instruction == p2.SYNC_READ and p.params[0] == 126]
+            assert len(reads) > 500 and set(reads[-1].params[4:]) == set(bus.servos)  # only its own servos
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["fault"] is None and summary["port"] == f"{bus0.port}, {bus1.port}"
+
+
+def test_refuses_servos_not_in_position_mode_or_with_narrow_position_limits(tmp_path: Path) -> None:
+    with _bus() as bus:
+        bus.servos[23].table[11] = 1  # velocity mode
+        bus.servos[44].table[52:56] = (1000).to_bytes(4, "little")  # min position limit inside the joint's range
+        result = _run_hw(bus, tmp_path / "run")
+    assert result.returncode == 2, result.stderr
+    assert "BR_femur: servo 23 is in velocity operating mode; set Operating Mode (address 11) to 3" in result.stderr
+    assert "CL_tibia: the joint limits" in result.stderr and "servo 44's position limits 1000..4095" in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1

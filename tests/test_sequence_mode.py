@@ -84,7 +84,7 @@ def test_direct_mode_goes_back_down_only_when_asked_for(direct_shutdown: bool) -
         assert controller.state == RobotState.RUNNING  # refused, as OpenSHC
         return
     _run_until(controller, RobotState.READY, RobotState.PACKED)
-    assert controller.walker.state == WalkState.STOPPED
+    assert controller.walker.state.name == "STOPPED"
     cycles = _run_until(controller, RobotState.PACKED, RobotState.PACKED)
     assert cycles == pytest.approx(robot.start_up.time_to_start / robot.time_delta, abs=2)
     np.testing.assert_allclose(controller.model.joints, rest, atol=1e-12)

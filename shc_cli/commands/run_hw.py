@@ -62,8 +62,8 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
         raise SpecError([Issue(None, None, "--stop-state", f"'{stop_state}' is not a robot state",
                                "use packed, ready or running")])
     kind, _, argument = input_mode.partition(":")
-    if kind not in ("timeline", "commands", "stdin", "keyboard", "gamepad") or (kind == "commands") != bool(argument) \
-            or (argument and kind not in ("commands", "gamepad")):
+    takes = {"timeline": False, "commands": True, "stdin": False, "keyboard": False, "gamepad": None}
+    if kind not in takes or takes[kind] not in (None, bool(argument)):
         raise SpecError([Issue(None, None, "--input", f"'{input_mode}' is not an input", f"use {INPUTS}")])
     if kind == "commands":
         commands = Path(argument)
@@ -72,9 +72,10 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
     cycles = walk_cycles(timeline, duration, robot.time_delta, commands is not None, default_s=20.0)
     gait_file, _ = loaded.where(("walker", "gait"))
     pose_sets = pose_sets_for(robot, gait, timeline, gait_file.parent)
-    source = _source(kind, argument, robot, timeline.commands(cycles), watchdog)
     bus = ServoBus(robot, ports, baud, profile_velocity)
+    source: Any = None
     try:
+        source = _source(kind, argument, robot, gait, timeline.commands(cycles), watchdog)
         bus.open()
         problems = bus.check()
         if problems:
@@ -93,7 +94,8 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
         summary["watchdog_trips"] = getattr(source, "watchdog_trips", 0)
         path = log.finish(summary)
     finally:
-        source.close()
+        if source is not None:
+            source.close()
         bus.close()
     fault = f", FAULT: {summary['fault']}" if summary["fault"] else ""
     typer.echo(f"{robot.name} on {bus.port_name}: {summary['cycles']} cycles, cycle time mean "
@@ -102,7 +104,7 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
     return path
 
 
-def _source(kind: str, argument: str, robot: Any, commands: list[Command], watchdog: float) -> Any:
+def _source(kind: str, argument: str, robot: Any, gait: Any, commands: list[Command], watchdog: float) -> Any:
     """The input source (keyboard and gamepad cycle through the bundled gaits that fit the robot's legs)."""
     from shc_cli.hardware.inputs import GamepadInput, KeyboardInput, StdinInput
     from shc_cli.spec.loading import bundled, load_gait
@@ -114,7 +116,10 @@ def _source(kind: str, argument: str, robot: Any, commands: list[Command], watch
         return StdinInput(watchdog_s=watchdog, load_gait=gait_of)
     if kind in ("keyboard", "gamepad"):
         gaits = [g for g in (gait_of(name) for name in bundled("gaits")) if set(g.offset_multiplier) == set(robot.legs)]
-        return KeyboardInput(gaits) if kind == "keyboard" else GamepadInput(argument or None, gaits)
+        source = KeyboardInput(gaits) if kind == "keyboard" else GamepadInput(argument or None, gaits)
+        names = [g.name for g in gaits]
+        source.gait_index = names.index(gait.name) if gait.name in names else 0  # the next gait is the one after
+        return source
     return TimelineInput(commands)
 
 

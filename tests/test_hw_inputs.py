@@ -1,0 +1,105 @@
+"""``run-hw``'s live inputs without devices: gamepad events, keys and JSON lines → the held command."""
+
+from __future__ import annotations
+
+import io
+import time
+
+import pytest
+from evdev import AbsInfo, ecodes
+
+from shc_cli.control.controller import RobotState
+from shc_cli.hardware.inputs import KEYS, GamepadMapping, HeldInput, StdinInput
+from shc_cli.spec.loading import load_gait
+
+
+def _pad() -> GamepadMapping:
+    """An 8-bit-stick gamepad as evdev describes it (0..255, centre 128)."""
+    info = AbsInfo(value=128, min=0, max=255, fuzz=0, flat=15, resolution=0)
+    return GamepadMapping({ecodes.EV_ABS: [(code, info) for code in (ecodes.ABS_X, ecodes.ABS_Y, ecodes.ABS_RX,
+                                                                      ecodes.ABS_RY)]})
+
+
+def _apply(held: HeldInput, mapping: GamepadMapping, kind: int, code: int, value: int) -> None:
+    change = mapping.change(kind, code, value)
+    assert change is not None, (kind, code, value)
+    held.update(change)
+
+
+def test_gamepad_sticks_scale_by_the_device_range_with_a_dead_zone() -> None:
+    mapping, held = _pad(), HeldInput()
+    _apply(held, mapping, ecodes.EV_ABS, ecodes.ABS_Y, 0)  # left stick fully up: forward
+    _apply(held, mapping, ecodes.EV_ABS, ecodes.ABS_X, 255)  # fully right: strafe right (−y)
+    _apply(held, mapping, ecodes.EV_ABS, ecodes.ABS_RX, 64)  # right stick half left: turn left (+yaw)
+    command = held.next()
+    assert command is not None
+    assert command.velocity == pytest.approx((1.0, -1.0, 0.498), abs=1e-3)
+    _apply(held, mapping, ecodes.EV_ABS, ecodes.ABS_Y, 140)  # within 10 % of the centre: 0
+    _apply(held, mapping, ecodes.EV_ABS, ecodes.ABS_RY, 255)  # right stick down: body pitch
+    command = held.next()
+    assert command is not None and command.velocity[0] == 0.0 and command.pose_velocity[4] == -1.0
+    assert mapping.axis(ecodes.ABS_Y, 999) == 1.0  # out-of-range values are clamped
+
+
+def test_gamepad_buttons_set_state_gait_and_stop() -> None:
+    mapping = _pad()
+    gaits = [load_gait(name).gait for name in ("tripod", "wave")]
+    held = HeldInput([g for g in gaits if g is not None])
+    assert mapping.change(ecodes.EV_KEY, ecodes.BTN_SELECT, 0) is None  # releases change nothing
+    _apply(held, mapping, ecodes.EV_KEY, ecodes.BTN_SELECT, 1)
+    assert held.state == RobotState.PACKED
+    _apply(held, mapping, ecodes.EV_KEY, ecodes.BTN_NORTH, 1)
+    assert held.state.name == "READY"
+    _apply(held, mapping, ecodes.EV_KEY, ecodes.BTN_START, 1)
+    _apply(held, mapping, ecodes.EV_KEY, ecodes.BTN_SOUTH, 1)  # next gait: a one-off request
+    first, second = held.next(), held.next()
+    assert first is not None and first.gait is not None and first.gait.name == "wave"
+    assert first.state_request == RobotState.RUNNING and second is not None and second.gait is None
+    _apply(held, mapping, ecodes.EV_KEY, ecodes.BTN_MODE, 1)
+    assert held.next() is None
+
+
+def test_keys_nudge_and_clamp_the_velocity() -> None:
+    held = HeldInput()
+    for key in "wwwaq" + "w" * 20:
+        held.update(KEYS[key])
+    assert held.velocity == [1.0, 0.1, 0.1]  # clamped to full input
+    held.update(KEYS["s"])
+    held.update(KEYS["1"])
+    assert held.velocity[0] == pytest.approx(0.9) and held.state == RobotState.PACKED
+    held.update(KEYS[" "])
+    held.update(KEYS["x"])
+    assert held.velocity == [0.0, 0.0, 0.0] and held.next() is None
+
+
+def test_stdin_lines_hold_until_changed_and_the_watchdog_zeroes_the_velocity() -> None:
+    lines = io.StringIO('{"velocity": [0.5, 0, 0.1], "pose_velocity": [0, 0, 1, 0, 0, 0]}\n{"state": "ready"}\n'
+                        '{"state": "flying"}\n{"gait": "wave"}\n')
+    source = StdinInput(lines, watchdog_s=0.2, load_gait=lambda name: load_gait(name).gait)  # type: ignore[arg-type,return-value]
+    deadline = time.monotonic() + 5.0
+    while not source.finished and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert source.finished and source.next() is None  # end of input
+    assert source.velocity == [0.5, 0.0, 0.1] and source.pose_velocity[2] == 1.0
+    assert source.state == RobotState.READY  # the "flying" line was ignored
+    assert source.gait is not None and source.gait.name == "wave"
+    held = StdinInput(io.StringIO(""), watchdog_s=0.05)
+    held.finished = False
+    held.update(lambda h: setattr(h, "velocity", [1.0, 0.0, 0.0]))
+    command = held.next()
+    assert command is not None and command.velocity == (1.0, 0.0, 0.0)
+    time.sleep(0.1)
+    command = held.next()
+    assert command is not None and command.velocity == (0.0, 0.0, 0.0) and held.watchdog_trips == 1
+
+
+def test_stdin_parse_validates_before_applying() -> None:
+    source = StdinInput(io.StringIO(""), load_gait=lambda name: load_gait(name).gait)  # type: ignore[arg-type,return-value]
+    held = HeldInput()
+    source._parse('{"velocity": [0.5, 0, 0.1], "state": "packed", "gait": "wave"}')(held)
+    assert held.velocity == [0.5, 0.0, 0.1] and held.state == RobotState.PACKED
+    assert held.gait is not None and held.gait.name == "wave"
+    for bad, message in (('{"velocity": [1, 2]}', "3 numbers"), ('{"state": "flying"}', "packed, ready, running"),
+                         ('{"speed": 1}', "unknown key 'speed'"), ("[1, 2]", "not an object")):
+        with pytest.raises(ValueError, match=message):
+            source._parse(bad)
