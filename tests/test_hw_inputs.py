@@ -67,9 +67,11 @@ def test_keys_nudge_and_clamp_the_velocity() -> None:
     held.update(KEYS["s"])
     held.update(KEYS["1"])
     assert held.velocity[0] == pytest.approx(0.9) and held.state == RobotState.PACKED
+    held.update(KEYS["r"])
+    assert held.pose_velocity[2] == 0.5
     held.update(KEYS[" "])
     held.update(KEYS["x"])
-    assert held.velocity == [0.0, 0.0, 0.0] and held.next() is None
+    assert held.velocity == [0.0, 0.0, 0.0] and held.pose_velocity == [0.0] * 6 and held.next() is None
 
 
 def test_stdin_lines_hold_until_changed_and_the_watchdog_zeroes_the_velocity() -> None:

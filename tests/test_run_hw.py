@@ -91,7 +91,7 @@ def test_refuses_to_start_with_a_missing_servo_or_a_hardware_error(tmp_path: Pat
         assert result.returncode == 2 and "BL_femur: hardware error (overload)" in result.stderr
 
 
-@pytest.mark.parametrize("fault", ["vanish", "overload"])
+@pytest.mark.parametrize("fault", ["vanish", "overload", "corrupt_crc"])
 def test_a_fault_mid_run_stops_commanding_within_two_cycles(fault: str, tmp_path: Path) -> None:
     with _bus() as bus:
         process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
@@ -101,11 +101,15 @@ def test_a_fault_mid_run_stops_commanding_within_two_cycles(fault: str, tmp_path
         marker = len(bus.packets)
         if fault == "vanish":
             bus.faults(42).vanish_after_packets = bus.servos[42].packets_seen
+        elif fault == "corrupt_crc":
+            bus.faults(42).corrupt_crc = True
         else:
             bus.faults(42).hardware_error = 32
         _, stderr = process.communicate(timeout=60)
         assert process.returncode == 0, stderr
-        assert "fault:" in stderr and "CL_coxat" in stderr
+        reason = {"vanish": "no reply from CL_coxat", "corrupt_crc": "corrupt reply (CRC or length) from CL_coxat",
+                  "overload": "CL_coxat: overload"}[fault]
+        assert f"fault: {reason}" in stderr
         summary = json.loads((tmp_path / "run" / "summary.json").read_text())
         assert "CL_coxat" in summary["fault"]
         assert _goal_writes_after(bus, marker) <= 2

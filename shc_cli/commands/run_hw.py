@@ -196,9 +196,10 @@ class _Loop:
                 began = time.perf_counter()
                 if cycle:  # the first cycle uses the start-up read
                     state = bus.read_state()
-                if not state.answered.all():
+                if not state.answered.all():  # the first servo that failed and why; the rest of its bus unread
                     missing = [bus.slots[i].key for i in np.flatnonzero(~state.answered)]
-                    self._fault(f"no reply from {', '.join(missing)}")
+                    reasons = [f"{reason} from {bus.slots[i].key}" for i, reason in state.failures.items()]
+                    self._fault(f"{'; '.join(reasons) or 'no reply'} (unread: {', '.join(missing)})")
                     break
                 if state.alerts.any():  # a status packet's alert bit: name the hardware errors and stop
                     errors = bus.hardware_errors()

@@ -58,13 +58,15 @@ class Slot:
 @dataclass
 class BusState:
     """One sync read: per joint (controller order) position [rad], velocity [rad/s], current [mA]; per servo (slot
-    order) whether it answered and whether its status carried the hardware-error alert bit."""
+    order) whether it answered and whether its status carried the hardware-error alert bit; and why servos did not
+    answer (slot → "no reply" or "corrupt reply")."""
 
     positions: np.ndarray
     velocities: np.ndarray
     currents: np.ndarray
     answered: np.ndarray
     alerts: np.ndarray
+    failures: dict[int, str] = field(default_factory=dict)
 
 
 @dataclass
@@ -258,30 +260,35 @@ class ServoBus:
         raw = np.zeros((count, STATE_LENGTH), dtype=np.uint8)
         answered = np.zeros(count, dtype=bool)
         alerts = np.zeros(count, dtype=bool)
+        failures: dict[int, str] = {}
         for line in self.lines:  # every bus starts answering at once
             if line.slots:
                 line.state_reader.txPacket()
         for line in self.lines:
-            if line.slots and not self._receive(line, raw, answered, alerts):
+            if line.slots and not self._receive(line, raw, answered, alerts, failures):
                 line.port.clearPort()
                 self.retries += 1
                 answered[line.slots] = False
                 line.state_reader.txPacket()
-                self._receive(line, raw, answered, alerts)
+                if self._receive(line, raw, answered, alerts, failures):
+                    failures.clear()
         current = raw[:, 0:2].copy().view("<i2")[:, 0].astype(float)
         velocity = raw[:, 2:6].copy().view("<i4")[:, 0].astype(float)
         ticks = raw[:, 6:10].copy().view("<i4")[:, 0].astype(float)
         positions = self._direction * (ticks - self._zero) * (2.0 * math.pi / self.ticks) - self._offset
         velocities = self._direction * velocity * self._velocity_unit * (2.0 * math.pi / 60.0)
         return BusState(self.padded(positions), self.padded(velocities), self.padded(current * self._current_unit),
-                        answered, alerts)
+                        answered, alerts, failures)
 
-    def _receive(self, line: _Line, raw: np.ndarray, answered: np.ndarray, alerts: np.ndarray) -> bool:
-        from dynamixel_sdk import COMM_SUCCESS
+    def _receive(self, line: _Line, raw: np.ndarray, answered: np.ndarray, alerts: np.ndarray,
+                 failures: dict[int, str]) -> bool:
+        """Each servo's status of the sync read just sent, in order; False at the first missing or corrupt one."""
+        from dynamixel_sdk import COMM_RX_CORRUPT, COMM_SUCCESS
 
         for index in line.slots:
             data, result, error = self._handler.readRx(line.port, self.slots[index].servo_id, STATE_LENGTH)
             if result != COMM_SUCCESS:
+                failures[index] = "corrupt reply (CRC or length)" if result == COMM_RX_CORRUPT else "no reply"
                 return False
             raw[index] = data
             answered[index] = True

@@ -12,7 +12,8 @@ pose velocity and a requested robot state (``running`` at first) hold until chan
   line is ignored with a warning on stderr.
 * **keyboard** — the terminal in cbreak mode (Ctrl-C still stops): ``w``/``s`` forward/back, ``a``/``d`` left/right,
   ``q``/``e`` turn left/right, each press ±0.1 of full input (terminals send no key releases, so the input holds);
-  space zero; ``1`` packed, ``2`` ready, ``3`` running; ``g`` next gait; ``x`` stop and shut down.
+  ``r``/``f`` body up/down (pose velocity ±0.5 per press); space zeroes both; ``1`` packed, ``2`` ready,
+  ``3`` running; ``g`` next gait; ``x`` stop and shut down.
 * **gamepad** — a Linux evdev joystick (``evdev``): left stick walk (up forward, sideways strafe), right stick x
   turn, right stick y body pitch; A/south next gait, B/east zero velocity, Y/north ready, Start running,
   Select/Back packed, Mode/Home stop and shut down. Stick values are scaled by the device's own ranges with a 10 %
@@ -90,6 +91,10 @@ class HeldInput:
             change(self)
             self.last = time.monotonic()
 
+    def zero(self) -> None:
+        """Velocity and pose velocity inputs to zero."""
+        self.velocity, self.pose_velocity = [0.0, 0.0, 0.0], [0.0] * 6
+
     def next_gait(self) -> None:
         if self.gaits:
             self.gait_index = (self.gait_index + 1) % len(self.gaits)
@@ -101,7 +106,7 @@ class HeldInput:
                 return None
             idle = self.watchdog_s is not None and time.monotonic() - self.last > self.watchdog_s
             if idle and (any(self.velocity) or any(self.pose_velocity)):
-                self.velocity, self.pose_velocity = [0.0, 0.0, 0.0], [0.0] * 6
+                self.zero()
                 self.watchdog_trips += 1
             gait, self.gait = self.gait, None
             return Command(velocity=tuple(self.velocity), pose_velocity=tuple(self.pose_velocity),  # type: ignore[arg-type]
@@ -182,14 +187,15 @@ KEYS: dict[str, Callable[[HeldInput], None]] = {
     "w": lambda h: _nudge(h.velocity, 0, KEY_STEP), "s": lambda h: _nudge(h.velocity, 0, -KEY_STEP),
     "a": lambda h: _nudge(h.velocity, 1, KEY_STEP), "d": lambda h: _nudge(h.velocity, 1, -KEY_STEP),
     "q": lambda h: _nudge(h.velocity, 2, KEY_STEP), "e": lambda h: _nudge(h.velocity, 2, -KEY_STEP),
-    " ": lambda h: setattr(h, "velocity", [0.0, 0.0, 0.0]),
+    "r": lambda h: _nudge(h.pose_velocity, 2, 5 * KEY_STEP), "f": lambda h: _nudge(h.pose_velocity, 2, -5 * KEY_STEP),
+    " ": lambda h: h.zero(),
     "1": lambda h: setattr(h, "state", RobotState.PACKED), "2": lambda h: setattr(h, "state", RobotState.READY),
     "3": lambda h: setattr(h, "state", RobotState.RUNNING), "g": lambda h: h.next_gait(),
     "x": lambda h: setattr(h, "finished", True),
 }
 """Key → change of the held inputs."""
-KEY_HELP = ("keys: w/s forward/back, a/d left/right, q/e turn, space zero, 1 packed, 2 ready, 3 running, g gait, "
-            "x stop")
+KEY_HELP = ("keys: w/s forward/back, a/d left/right, q/e turn, r/f body up/down, space zero, 1 packed, 2 ready, "
+            "3 running, g gait, x stop")
 
 
 def _nudge(values: list[float], index: int, step: float) -> None:
