@@ -177,3 +177,41 @@ def test_mean_joint_speed_from_the_displacement_equals_the_mean_of_every_physics
     finally:
         world.p = pybullet
         world.close()
+
+
+def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(tmp_path: Path) -> None:
+    """``[servo] control = "pd"``: ATHENA standing on flat ground settles (no oscillation) lower than with the stiff
+    position motor, and its femurs' steady errors halve when the stiffness doubles (a proportional servo)."""
+    import numpy as np
+
+    from shc_cli.backends.pybullet_.terrain import parse_terrain
+    from shc_cli.backends.pybullet_.world import World
+    from shc_cli.control.startup import plan_direct_startup
+    from shc_cli.model.chains import Chains
+    from shc_cli.spec.loading import load_robot
+
+    names = ["athena"]
+    for stiffness in (5.0, 10.0):
+        path = tmp_path / f"soft{stiffness:g}.toml"
+        path.write_text(f'extends = "athena"\nname = "athena_soft"\n[servo]\ncontrol = "pd"\n'
+                        f"stiffness = {stiffness}\ndamping = 0.05\n")
+        names.append(str(path))
+    heights, errors = [], []
+    for name in names:
+        robot = load_robot(name).robot
+        assert robot is not None
+        chains = Chains.from_robot(robot)
+        stance = plan_direct_startup(robot, chains, chains.default_joints())
+        world = World(robot, parse_terrain("flat"), robot.time_delta, 4, False, stance)
+        try:
+            for _ in range(300):  # 3 s: settled
+                world.command(stance)
+                world.step()
+            reading = world.read()
+        finally:
+            world.close()
+        assert np.abs(reading.joint_velocities).max() < 0.01  # [rad/s]: standing still
+        heights.append(reading.position[2])
+        errors.append(np.abs(reading.joints - stance)[:, 1])  # femurs
+    assert heights[1] < heights[2] < heights[0] - 0.002  # [m]: softer sits lower
+    np.testing.assert_allclose(errors[1] / errors[2], 2.0, rtol=0.25)

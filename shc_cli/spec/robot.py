@@ -290,6 +290,12 @@ class Servo(Strict):
         0.0, description="share of negative mechanical power returned to the supply [ratio]")
     position_gain: Positive = Field(0.1, description="PyBullet position-control gain (Kp) [ratio]")
     velocity_gain: Positive = Field(1.0, description="PyBullet position-control velocity gain (Kd) [ratio]")
+    control: Literal["position", "pd"] = Field(
+        "position", description="'position': PyBullet's position motor, stiff up to the stall torque; 'pd': a "
+        "compliant proportional servo, torque = stiffness·error − damping·speed within ± stall torque (PyBullet's "
+        "stable PD, implicit, every physics step): it sags under load as real servos do")
+    stiffness: Positive = Field(5.0, description="'pd' control: torque per rad of position error [N·m/rad]")
+    damping: NonNegative = Field(0.05, description="'pd' control: torque per rad/s of joint speed [N·m·s/rad]")
 
 
 class ServoMap(Strict):

@@ -204,6 +204,8 @@ class World:
         self._velocity_gains = [servo.velocity_gain] * count
         self._mean_torque = np.zeros(count)
         self._mean_power = np.full(count, servo.idle_power)
+        self.compliant = servo.control == "pd"
+        self._goals = np.zeros(count)
         for row, indices in enumerate(self.joint_index):
             for k, index in enumerate(indices):
                 p.resetJointState(self.body, index, float(joints[row, k]), 0.0, physicsClientId=c)
@@ -227,6 +229,9 @@ class World:
         speed is the joints' velocity limit (set once with ``maxJointVelocity``, since POSITION_CONTROL
         ignores the URDF's limits)."""
         p = self.p
+        if self.compliant:  # stable PD is set before every physics step (step): it does not persist
+            self._goals = targets[self.slot_rows, self.slot_cols].astype(float)
+            return
         p.setJointMotorControlArray(self.body, self.flat_joints, p.POSITION_CONTROL,
                                     targetPositions=[float(targets[leg, k]) for leg, k in self.slots],
                                     forces=self._forces, positionGains=self._position_gains,
@@ -243,7 +248,10 @@ class World:
         p, c, body, joints, count = self.p, self.client, self.body, self.flat_joints, len(self.flat_joints)
         clock = time.perf_counter
         samples = []
+        pd = self._stable_pd() if self.compliant else None
         for _ in range(self.substeps):
+            if pd is not None:
+                p.setJointMotorControlMultiDofArray(body, joints, p.STABLE_PD_CONTROL, **pd, physicsClientId=c)
             started = clock()
             p.stepSimulation(physicsClientId=c)
             self.physics_time += clock() - started
@@ -255,9 +263,26 @@ class World:
         # speeds is exactly the displacement over the period: no per-step speed sampling needed.
         mean_speed = (positions - self._positions) / self.control_period
         self._positions = positions
-        torques = np.fromiter([state[3] for sample in samples for state in sample], float, self.substeps * count)
-        self._mean_torque = torques.reshape(self.substeps, count).mean(axis=0)
+        if self.compliant:  # stable PD reports no motor torque: the PD law at each sub-step's end state
+            servo = self.robot.servo
+            values = np.array([[state[0], state[1]] for sample in samples for state in sample]).reshape(
+                self.substeps, count, 2)
+            torques = np.clip(servo.stiffness * (self._goals - values[:, :, 0]) - servo.damping * values[:, :, 1],
+                              -servo.stall_torque, servo.stall_torque)
+            self._mean_torque = torques.mean(axis=0)
+        else:
+            torques = np.fromiter([state[3] for sample in samples for state in sample], float,
+                                  self.substeps * count)
+            self._mean_torque = torques.reshape(self.substeps, count).mean(axis=0)
         self._mean_power = servo_power(self.robot.servo, self._mean_torque, mean_speed)
+
+    def _stable_pd(self) -> dict[str, Any]:
+        """Arguments of PyBullet's stable (implicit) PD motor for this period's goals: a proportional servo of
+        ``servo.stiffness`` and ``servo.damping``, at most its stall torque."""
+        servo, count = self.robot.servo, len(self.flat_joints)
+        return {"targetPositions": [[goal] for goal in self._goals.tolist()], "targetVelocities": [[0.0]] * count,
+                "positionGains": [servo.stiffness] * count, "velocityGains": [servo.damping] * count,
+                "forces": [[servo.stall_torque]] * count}
 
     def read(self) -> Reading:
         """Sensor readings now."""
