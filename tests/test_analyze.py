@@ -64,6 +64,8 @@ def test_two_feet_give_minus_the_distance_to_their_segment() -> None:
 
 def _segment_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     ab = b - a
+    if not np.dot(ab, ab):
+        return float(np.linalg.norm(p - a))
     s = float(np.clip(np.dot(p - a, ab) / np.dot(ab, ab), 0.0, 1.0))
     return float(np.linalg.norm(p - (a + s * ab)))
 

@@ -89,9 +89,12 @@ def edge_margin(polygon: np.ndarray, point: np.ndarray) -> float:
         s = 0.0 if not ab.any() else float(np.clip(np.dot(point - a, ab) / np.dot(ab, ab), 0.0, 1.0))
         return -float(np.linalg.norm(point - (a + s * ab)))
     a = polygon
-    b = np.roll(polygon, -1, axis=0)
-    edge = b - a
+    edge = np.roll(polygon, -1, axis=0) - a
     length = np.linalg.norm(edge, axis=1)
+    real = length > 0.0  # a hull may repeat a vertex (points closer than float resolution): no edge there
+    if not real.any():
+        return -float(np.linalg.norm(point - a[0]))
+    a, edge, length = a[real], edge[real], length[real]
     signed = (edge[:, 0] * (point[1] - a[:, 1]) - edge[:, 1] * (point[0] - a[:, 0])) / length
     return float(signed.min())
 
