@@ -245,6 +245,7 @@ def test_two_buses_profile_velocity_and_current_limit(tmp_path: Path) -> None:
                                 timeout=120)
         assert result.returncode == 0, result.stderr
         assert "current limit 1000 mA written to 30 servos" in result.stderr
+        assert "return delay time 0 µs written to 30 servos" in result.stderr  # from the factory 500 µs
         for bus in (bus0, bus1):
             assert all(int.from_bytes(s.table[38:40], "little") == round(1000 / 3.36) for s in bus.servos.values())
             writes = [p for p in bus.packets if p.instruction == p2.SYNC_WRITE
@@ -269,3 +270,23 @@ def test_refuses_servos_not_in_position_mode_or_with_narrow_position_limits(tmp_
     assert "BR_femur: servo 23 is in velocity operating mode; set Operating Mode (address 11) to 3" in result.stderr
     assert "CL_tibia: the joint limits" in result.stderr and "servo 44's position limits 1000..4095" in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_sequence_mode_unpacks_starts_up_and_packs_again_on_the_servos(tmp_path: Path) -> None:
+    """A robot with ``start_up.sequence``: from the servos' positions the controller estimates PACKED, unpacks, runs
+    the stepped start-up, walks, and at the end of the input runs the shut-down sequence and packs."""
+    robot_file = tmp_path / "sequence.toml"
+    robot_file.write_text('extends = "bullet"\nname = "bullet_sequence"\n[start_up]\nsequence = true\n')
+    with _bus() as bus:
+        result = subprocess.run([*SHC, "run-hw", str(robot_file), "--port", bus.port, "--out", str(tmp_path / "run"),
+                                 "--velocity", "1,0,0", "--duration", "0.5"], capture_output=True, text=True,
+                                timeout=120)
+        assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["fault"] is None and summary["final_state"] == "PACKED"
+    log = read_run(tmp_path / "run")
+    assert log.states is not None
+    states = log.states[:, 0]
+    order = [s for i, s in enumerate(states) if i == 0 or s != states[i - 1]]
+    assert order == ["PACKED", "READY", "RUNNING", "READY", "PACKED"]
+    assert (log.walk_state == "MOVING").any() or (log.walk_state == "STARTING").any()

@@ -32,6 +32,8 @@ SETTINGS_ADDRESS, SETTINGS_LENGTH = 11, 45
 """Operating Mode (11) to Min Position Limit (52–55): read once at start to check the servos' configuration."""
 PROFILE_ADDRESS = 112
 """Profile Velocity (112–115) followed by Goal Position (116–119)."""
+COMM_SUCCESS_VALUE = 0
+"""dynamixel-sdk's COMM_SUCCESS."""
 
 
 class HardwareError(ShcError):
@@ -124,6 +126,8 @@ class ServoBus:
         self._current_unit = np.array([s.model.current_unit_ma for s in self.slots])
         self._velocity_unit = np.array([s.model.velocity_unit_rpm for s in self.slots])
         self._handler: Any = None
+        self.return_delays = [0.0] * len(self.slots)
+        """Each servo's Return Delay Time [s], as read at the start check (or written by :meth:`configure`)."""
         self._last_ticks: np.ndarray | None = None
         self.retries = 0
         """Sync reads repeated because a reply was missing or corrupt."""
@@ -192,63 +196,108 @@ class ServoBus:
         return problems + self._check_settings()
 
     def _check_settings(self) -> list[str]:
-        """Operating mode and position limits of every servo (one sync read per bus)."""
-        from dynamixel_sdk import COMM_SUCCESS, GroupSyncRead
+        """Operating mode and position limits of every servo, and their Return Delay Time (kept for
+        :meth:`wire_time`); reads of defined items only (a read across the control table's gaps may be refused)."""
+        problems: list[str] = []
+        model = self.slots[0].model
+        modes = self.read_items(model.operating_mode, 1, "Operating Mode", problems)
+        limits = self.read_items(model.max_position_limit, 8, "Max/Min Position Limit", problems)
+        delays = self.read_items(model.return_delay_time, 1, "Return Delay Time", problems)
+        for index, data in delays.items():
+            self.return_delays[index] = 2e-6 * data[0]
+        for index, slot in enumerate(self.slots):
+            if index not in modes or index not in limits:
+                continue
+            mode = modes[index][0]
+            if mode not in POSITION_MODES:
+                problems.append(f"{slot.key}: servo {slot.servo_id} is in {OPERATING_MODES.get(mode, str(mode))} "
+                                f"operating mode; set Operating Mode (address {slot.model.operating_mode}) to 3 "
+                                "(position control)")
+                continue
+            if mode == 4:
+                continue  # extended position mode has no position limits
+            high = int.from_bytes(limits[index][0:4], "little", signed=True)
+            low = int.from_bytes(limits[index][4:8], "little", signed=True)
+            ends = sorted(self._to_ticks(index, np.array(slot.limits)))
+            if ends[0] < low or ends[1] > high:
+                problems.append(f"{slot.key}: the joint limits {slot.limits[0]:.3f}..{slot.limits[1]:.3f} rad are "
+                                f"ticks {ends[0]}..{ends[1]}, outside servo {slot.servo_id}'s position limits "
+                                f"{low}..{high}; widen the servo's Min/Max Position Limit or fix zero_ticks, "
+                                "direction or the joint limits")
+        return problems
 
-        problems = []
+    def read_items(self, address: int, length: int, name: str, problems: list[str]) -> dict[int, bytes]:
+        """One sync read per bus of ``length`` bytes at ``address``, each reply with its status error byte (unlike
+        GroupSyncRead, which ignores it): the data by slot; a servo that did not answer, or answered with an error
+        (Access, Data Range, …), adds a problem naming it. Retried once per bus."""
+        from dynamixel_sdk import COMM_RX_CORRUPT, COMM_SUCCESS, GroupSyncRead
+
+        out: dict[int, bytes] = {}
         for line in self.lines:
             if not line.slots:
                 continue
-            reader = GroupSyncRead(line.port, self._handler, SETTINGS_ADDRESS, SETTINGS_LENGTH)
+            reader = GroupSyncRead(line.port, self._handler, address, length)
             for servo_id in line.ids:
                 reader.addParam(servo_id)
-            if reader.txRxPacket() != COMM_SUCCESS:
+            failures: dict[int, str] = {}
+            for attempt in range(2):
+                failures.clear()
+                reader.txPacket()
+                for index in line.slots:
+                    data, result, error = self._handler.readRx(line.port, self.slots[index].servo_id, length)
+                    if result != COMM_SUCCESS:
+                        failures[index] = "no reply" if result != COMM_RX_CORRUPT else "a corrupt reply"
+                        break
+                    if error & 0x7F:
+                        failures[index] = p2.error_name(error)
+                        continue
+                    out[index] = bytes(data)
+                if not failures or attempt:
+                    break
                 line.port.clearPort()
-                reader.txRxPacket()
-            for index in line.slots:
-                slot, model = self.slots[index], self.slots[index].model
-                if not reader.isAvailable(slot.servo_id, SETTINGS_ADDRESS, SETTINGS_LENGTH):
-                    problems.append(f"{slot.key}: servo {slot.servo_id} did not answer the settings read")
-                    continue
-                mode = reader.getData(slot.servo_id, model.operating_mode, 1)
-                if mode not in POSITION_MODES:
-                    problems.append(f"{slot.key}: servo {slot.servo_id} is in {OPERATING_MODES.get(mode, str(mode))} "
-                                    f"operating mode; set Operating Mode (address {model.operating_mode}) to 3 "
-                                    "(position control)")
-                    continue
-                if mode == 4:
-                    continue  # extended position mode has no position limits
-                high = _signed(reader.getData(slot.servo_id, model.max_position_limit, 4), 32)
-                low = _signed(reader.getData(slot.servo_id, model.min_position_limit, 4), 32)
-                ends = sorted(self._to_ticks(index, np.array(slot.limits)))
-                if ends[0] < low or ends[1] > high:
-                    problems.append(f"{slot.key}: the joint limits {slot.limits[0]:.3f}..{slot.limits[1]:.3f} rad are "
-                                    f"ticks {ends[0]}..{ends[1]}, outside servo {slot.servo_id}'s position limits "
-                                    f"{low}..{high}; widen the servo's Min/Max Position Limit or fix zero_ticks, "
-                                    "direction or the joint limits")
-        return problems
+                self.retries += 1
+            problems += [f"{self.slots[i].key}: servo {self.slots[i].servo_id} answered the {name} read (address "
+                         f"{address}) with {reason}" for i, reason in failures.items()]
+        return out
 
     def configure(self) -> list[str]:
-        """Write the robot file's current limit (EEPROM, torque off) where a servo differs; returns what it did."""
-        from dynamixel_sdk import COMM_SUCCESS
-
-        limit_ma = self.robot.hardware.current_limit_ma
-        if limit_ma is None:
-            return []
-        done = []
-        for line in self.lines:
-            for index in line.slots:
-                slot = self.slots[index]
-                value = round(limit_ma / slot.model.current_unit_ma)
-                present, result, _ = self._handler.read2ByteTxRx(line.port, slot.servo_id, slot.model.current_limit)
-                if result == COMM_SUCCESS and present == value:
+        """Write the robot file's Return Delay Time and current limit (EEPROM, torque off) where a servo differs;
+        returns what it did."""
+        hardware, done = self.robot.hardware, []
+        if hardware.return_delay_us is not None:
+            value = hardware.return_delay_us // 2
+            changed = [i for i, delay in enumerate(self.return_delays) if round(delay / 2e-6) != value]
+            for index in changed:
+                self._write(index, self.slots[index].model.return_delay_time, bytes([value]), "Return Delay Time")
+                self.return_delays[index] = 2e-6 * value
+            if changed:
+                done.append(f"return delay time {2 * value} µs written to {len(changed)} servos")
+        if hardware.current_limit_ma is not None:
+            changed = []
+            for index, slot in enumerate(self.slots):
+                value = round(hardware.current_limit_ma / slot.model.current_unit_ma)
+                present, result, error = self._handler.read2ByteTxRx(self._port_of(index), slot.servo_id,
+                                                                     slot.model.current_limit)
+                if result == COMM_SUCCESS_VALUE and not error & 0x7F and present == value:
                     continue
-                result, error = self._handler.write2ByteTxRx(line.port, slot.servo_id, slot.model.current_limit, value)
-                if result != COMM_SUCCESS or error & 0x7F:
-                    raise HardwareError(f"{slot.key}: servo {slot.servo_id} refused Current Limit {value} "
-                                        f"({self._handler.getTxRxResult(result) if result != COMM_SUCCESS else error})")
-                done.append(slot.key)
-        return [f"current limit {limit_ma:g} mA written to {len(done)} servos"] if done else []
+                self._write(index, slot.model.current_limit, value.to_bytes(2, "little"), "Current Limit")
+                changed.append(index)
+            if changed:
+                done.append(f"current limit {hardware.current_limit_ma:g} mA written to {len(changed)} servos")
+        return done
+
+    def _port_of(self, index: int) -> Any:
+        return self.lines[self.slots[index].bus].port
+
+    def _write(self, index: int, address: int, data: bytes, name: str) -> None:
+        """One WRITE with its status checked (and the payload checked for what the SDK would not stuff)."""
+        slot = self.slots[index]
+        if p2.needs_stuffing(address.to_bytes(2, "little") + data):
+            raise HardwareError(f"{slot.key}: the {name} write contains FF FF FD, which dynamixel-sdk sends unstuffed")
+        result, error = self._handler.writeTxRx(self._port_of(index), slot.servo_id, address, len(data), list(data))
+        if result != COMM_SUCCESS_VALUE or error & 0x7F:
+            reason = self._handler.getTxRxResult(result) if result != COMM_SUCCESS_VALUE else p2.error_name(error)
+            raise HardwareError(f"{slot.key}: servo {slot.servo_id} refused {name} (address {address}): {reason}")
 
     # -- the cycle -------------------------------------------------------------------------------------------
 
@@ -290,32 +339,24 @@ class ServoBus:
             if result != COMM_SUCCESS:
                 failures[index] = "corrupt reply (CRC or length)" if result == COMM_RX_CORRUPT else "no reply"
                 return False
+            if error & 0x7F or len(data) != STATE_LENGTH:  # an error status carries no data
+                failures[index] = f"{p2.error_name(error)} reply" if error & 0x7F else "short reply"
+                return False
             raw[index] = data
             answered[index] = True
             alerts[index] = bool(error & p2.ERROR_ALERT)
         return True
 
     def hardware_errors(self) -> dict[str, list[str]]:
-        """Servos whose Hardware Error Status is set (or that did not answer its read), by joint."""
-        from dynamixel_sdk import COMM_SUCCESS
-
+        """Servos whose Hardware Error Status is set (or that did not answer its read properly), by joint."""
+        problems: list[str] = []
+        bits = self.read_items(self.slots[0].model.hardware_error_status, 1, "Hardware Error Status", problems)
         out: dict[str, list[str]] = {}
-        for line in self.lines:
-            reader = line.error_reader
-            if reader is None:
-                continue
-            if reader.txRxPacket() != COMM_SUCCESS:
-                line.port.clearPort()
-                self.retries += 1
-                reader.txRxPacket()
-            for index in line.slots:
-                slot = self.slots[index]
-                if not reader.isAvailable(slot.servo_id, slot.model.hardware_error_status, 1):
-                    out[slot.key] = ["no reply"]
-                    continue
-                bits = reader.getData(slot.servo_id, slot.model.hardware_error_status, 1)
-                if bits:
-                    out[slot.key] = hardware_error_names(bits) or [f"bits {bits:#04x}"]
+        for index, slot in enumerate(self.slots):
+            if index not in bits:
+                out[slot.key] = ["no proper reply to its read"]
+            elif bits[index][0]:
+                out[slot.key] = hardware_error_names(bits[index][0]) or [f"bits {bits[index][0]:#04x}"]
         return out
 
     def write_goals(self, joints: np.ndarray, period: float) -> None:
@@ -371,13 +412,17 @@ class ServoBus:
         return out
 
     def wire_time(self) -> float:
-        """Seconds one cycle's sync read (instruction + every status) and sync write occupy the busiest bus at this
-        baud (buses run in parallel; 10 bits per byte on the wire; return delays not counted)."""
+        """Seconds one cycle's sync read (instruction + every status, each after its servo's Return Delay Time) and
+        sync write occupy the busiest bus at this baud (buses run in parallel; 10 bits per byte on the wire; the
+        USB adapter's latency not counted)."""
         per_goal = 9 if self.profile_velocity else 5
-        busiest = max(len(line.slots) for line in self.lines)
-        read = 14 + busiest + busiest * (11 + STATE_LENGTH)
-        write = 14 + busiest * per_goal
-        return (read + write) * 10.0 / self.baud
+        busiest = 0.0
+        for line in self.lines:
+            count = len(line.slots)
+            read = (14 + count + count * (11 + STATE_LENGTH)) * 10.0 / self.baud
+            write = (14 + count * per_goal) * 10.0 / self.baud
+            busiest = max(busiest, read + write + sum(self.return_delays[i] for i in line.slots))
+        return busiest
 
 
 def _signed(value: int, bits: int) -> int:

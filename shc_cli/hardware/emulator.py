@@ -62,7 +62,8 @@ class EmulatedServo:
         self.write(self.model.model_number_address, self.model.model_number.to_bytes(2, "little"))
         self.write(self.model.firmware_address, bytes([self.firmware]))
         self.write(7, bytes([self.servo_id]))
-        self.write(self.model.operating_mode, bytes([3]))  # factory defaults: position control, full range
+        self.write(self.model.operating_mode, bytes([3]))  # factory defaults: position control, full range,
+        self.write(self.model.return_delay_time, bytes([250]))  # 500 µs return delay (not waited for here)
         self.write(self.model.max_position_limit, (4095).to_bytes(4, "little"))
         self.write(self.model.current_limit, (2047).to_bytes(2, "little"))
         self.set_position(2048)

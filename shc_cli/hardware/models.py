@@ -22,6 +22,7 @@ class ServoModel:
     # control table
     model_number_address: int = 0
     firmware_address: int = 6
+    return_delay_time: int = 9
     operating_mode: int = 11
     current_limit: int = 38
     max_position_limit: int = 48

@@ -20,6 +20,15 @@ SYNC_READ, SYNC_WRITE, BULK_READ, BULK_WRITE = 0x82, 0x83, 0x92, 0x93
 ERROR_RESULT_FAIL, ERROR_INSTRUCTION, ERROR_CRC, ERROR_DATA_RANGE, ERROR_DATA_LENGTH, ERROR_DATA_LIMIT, \
     ERROR_ACCESS = 1, 2, 3, 4, 5, 6, 7
 ERROR_ALERT = 0x80
+ERROR_NAMES = {ERROR_RESULT_FAIL: "Result Fail", ERROR_INSTRUCTION: "Instruction Error", ERROR_CRC: "CRC Error",
+               ERROR_DATA_RANGE: "Data Range Error", ERROR_DATA_LENGTH: "Data Length Error",
+               ERROR_DATA_LIMIT: "Data Limit Error", ERROR_ACCESS: "Access Error"}
+
+
+def error_name(error: int) -> str:
+    """A status packet's error byte in words (the e-Manual's names)."""
+    name = ERROR_NAMES.get(error & 0x7F, f"error {error & 0x7F}")
+    return name + (" (with the hardware alert)" if error & ERROR_ALERT else "")
 
 
 def _crc_table() -> list[int]:

@@ -315,6 +315,9 @@ class Hardware(Strict):
     baud: Annotated[int, Field(gt=0)] = Field(1_000_000, description="bus baud rate [bit/s]")
     model: str = Field("MX-106", description="servo model of every joint unless its entry names another")
     ticks_per_revolution: Annotated[int, Field(gt=0)] = Field(4096, description="position ticks per turn")
+    return_delay_us: Annotated[int, Field(ge=0, le=508)] | None = Field(
+        0, description="Return Delay Time written to the servos at start-up [µs, multiple of 2] (None: leave as "
+        "configured). Dynamixels ship with 500 µs: with 30 servos that alone is 15 ms per sync read")
     current_limit_ma: Annotated[float, Field(gt=0)] | None = Field(
         None, description="current limit written to the servos at start-up [mA] (None: leave as configured)")
     servos: dict[str, ServoMap] = Field(
