@@ -69,6 +69,15 @@ def test_walks_on_the_emulated_bus_and_stops_with_torque_off(tmp_path: Path) -> 
     # the shut-down: stopped walking, then back to the joints it started from (all servos at 2048 ticks = 0 rad)
     assert summary["final_state"] == "PACKED" and log.states is not None and log.states[-1, 0] == "PACKED"
     assert abs(commanded[-1] - measured[0]).max() < 1e-3
+    analysis = subprocess.run([*SHC, "analyze", str(tmp_path / "run"), "--json"], capture_output=True, text=True,
+                              timeout=120)
+    assert analysis.returncode == 0, analysis.stderr
+    report = json.loads(analysis.stdout)
+    assert report["scenario"] == "hardware" and report["window_s"] > 2.0  # the RUNNING cycles
+    bag = subprocess.run([*SHC, "export", "bag", str(tmp_path / "run"), "--out", str(tmp_path / "run.mcap")],
+                         capture_output=True, text=True, timeout=120)
+    assert bag.returncode == 0, bag.stderr
+    assert (tmp_path / "run.mcap").exists()
 
 
 def test_dry_run_never_enables_torque_or_writes_goals(tmp_path: Path) -> None:
