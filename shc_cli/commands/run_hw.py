@@ -1,8 +1,9 @@
 """``shc run-hw``: the one controller on real Dynamixel servos, at the robot's control period.
 
 Start: open every bus, ping every servo, check models, hardware errors, operating modes and position limits (refuse
-to start with every problem listed), write the robot file's current limit, read the present positions — the
-controller starts from them and runs the robot file's start-up (direct, or unpack + start-up sequence). Each cycle:
+to start with every problem listed), write the robot file's return delay and current limit, read the present
+positions — the controller starts from them and runs the robot file's start-up (direct, or unpack + start-up
+sequence). Each cycle:
 one sync read per bus (positions, velocities, currents), the controller step, goal positions clamped to the joint
 limits and to the joints' speed limits, one sync write per bus (optionally with profile velocity). The loop keeps
 its period with a drift-free deadline (``next += period``) and counts overruns. The input (timeline, stdin,
@@ -115,12 +116,18 @@ def _source(kind: str, argument: str, robot: Any, gait: Any, commands: list[Comm
     from shc_cli.spec.loading import bundled, load_gait
 
     def gait_of(name: str) -> Any:
-        return load_gait(name).gait
+        found = load_gait(name).gait
+        if found is not None and set(found.offset_multiplier) != set(robot.legs):
+            legs = ", ".join(found.offset_multiplier)
+            raise SpecError([Issue(None, None, "gait", f"gait '{name}' is for legs {legs}",
+                                   f"use a gait for {', '.join(robot.legs)}")])
+        return found
 
     if kind == "stdin":
         return StdinInput(watchdog_s=watchdog, load_gait=gait_of)
     if kind in ("keyboard", "gamepad"):
-        gaits = [g for g in (gait_of(name) for name in bundled("gaits")) if set(g.offset_multiplier) == set(robot.legs)]
+        gaits = [g for g in (load_gait(name).gait for name in bundled("gaits"))
+                 if g is not None and set(g.offset_multiplier) == set(robot.legs)]
         source = KeyboardInput(gaits) if kind == "keyboard" else GamepadInput(argument or None, gaits)
         names = [g.name for g in gaits]
         source.gait_index = names.index(gait.name) if gait.name in names else 0  # the next gait is the one after

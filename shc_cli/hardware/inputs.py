@@ -134,16 +134,19 @@ class StdinInput(HeldInput):
         self._thread.start()
 
     def _read(self) -> None:
-        for line in self.stream:
-            text = line.strip()
-            if not text:
-                continue
-            try:
-                self.update(self._parse(text))
-            except (ValueError, TypeError, KeyError, ShcError) as error:
-                print(f"warning: stdin: ignored line {text[:60]!r} ({error})", file=sys.stderr, flush=True)
-            if self.finished:
-                return
+        try:
+            for line in self.stream:
+                text = line.strip()
+                if not text:
+                    continue
+                try:
+                    self.update(self._parse(text))
+                except (ValueError, TypeError, KeyError, ShcError) as error:
+                    print(f"warning: stdin: ignored line {text[:60]!r} ({error})", file=sys.stderr, flush=True)
+                if self.finished:
+                    return
+        except (OSError, ValueError) as error:  # an unreadable or closed stream ends the input like EOF
+            print(f"warning: stdin: {error}: stopping", file=sys.stderr, flush=True)
         self.finished = True  # end of input
 
     def _parse(self, text: str) -> Callable[[HeldInput], None]:
