@@ -176,8 +176,8 @@ def _write_bag(run: Path, fmt: str | None) -> None:
 @app.command("run-hw")
 def run_hw(
     robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name (its [hardware] servo table).")],
-    port: Annotated[list[str], typer.Option(help="Serial device of a servo bus, e.g. /dev/ttyUSB0; once per bus, "
-                                                 "bus 0 first.")],
+    port: Annotated[list[str], typer.Option(metavar="DEV", help="Serial device of a servo bus, e.g. /dev/ttyUSB0; "
+                                                                "once per bus, bus 0 first.")],
     baud: Annotated[int | None, typer.Option(help="Baud rate [default: hardware.baud].")] = None,
     gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
     input_mode: Annotated[str, typer.Option("--input", help="timeline (--velocity/--commands), commands:FILE, "
