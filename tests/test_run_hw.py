@@ -125,13 +125,16 @@ def test_a_fault_mid_run_stops_commanding_within_two_cycles(fault: str, tmp_path
         assert bus.servos[13].table[64] == 1  # --on-fault hold: the others keep their torque
 
 
-def test_ctrl_c_stops_walking_and_keeps_a_complete_log(tmp_path: Path) -> None:
+@pytest.mark.parametrize("stop_signal", [signal.SIGINT, signal.SIGTERM])
+def test_ctrl_c_stops_walking_and_keeps_a_complete_log(stop_signal: signal.Signals, tmp_path: Path) -> None:
+    """Ctrl-C (SIGINT) or SIGTERM: the walk stops, the robot shuts down to PACKED, the torque goes off, the log is
+    complete."""
     with _bus() as bus:
         process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
                                     "--velocity", "1,0,0", "--duration", "60"],
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         _wait_running(tmp_path / "run", extra_s=1.0)
-        process.send_signal(signal.SIGINT)
+        process.send_signal(stop_signal)
         _, stderr = process.communicate(timeout=60)
         assert process.returncode == 0, stderr
         summary = json.loads((tmp_path / "run" / "summary.json").read_text())
