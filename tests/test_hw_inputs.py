@@ -123,3 +123,56 @@ def test_a_gait_for_other_legs_is_refused_on_stdin(monkeypatch: pytest.MonkeyPat
     with pytest.raises(SpecError, match="gait 'quad_wave' is for legs"):
         source.load_gait("quad_wave")
     assert source.load_gait("wave").name == "wave"
+
+
+class _FakeGamepad:
+    """An evdev InputDevice stand-in: sticks and buttons, a few events, then unplugged (OSError)."""
+
+    def __init__(self, path: str) -> None:
+        self.path, self.name, self.closed = path, "Fake Pad", False
+
+    def capabilities(self, absinfo: bool = True) -> dict[int, list[object]]:
+        info = AbsInfo(value=128, min=0, max=255, fuzz=0, flat=15, resolution=0)
+        return {ecodes.EV_ABS: [(ecodes.ABS_X, info), (ecodes.ABS_Y, info)],
+                ecodes.EV_KEY: [ecodes.BTN_SOUTH, ecodes.BTN_START]}
+
+    def read_loop(self) -> object:
+        from evdev import InputEvent
+
+        yield InputEvent(0, 0, ecodes.EV_ABS, ecodes.ABS_Y, 0)  # full forward
+        yield InputEvent(0, 0, ecodes.EV_KEY, ecodes.BTN_SELECT, 1)  # packed
+        time.sleep(0.3)
+        raise OSError(19, "No such device")  # unplugged
+
+    def close(self) -> None:
+        self.closed = True
+
+
+class _Keyboard(_FakeGamepad):
+    def capabilities(self, absinfo: bool = True) -> dict[int, list[object]]:
+        return {ecodes.EV_KEY: [ecodes.KEY_A]}
+
+
+def test_gamepad_is_found_read_and_its_loss_stops_the_robot(monkeypatch: pytest.MonkeyPatch,
+                                                            capsys: pytest.CaptureFixture[str]) -> None:
+    import evdev
+
+    from shc_cli.hardware.inputs import GamepadInput, InputError
+
+    monkeypatch.setattr(evdev, "list_devices", lambda: ["/dev/input/event3", "/dev/input/event7"])
+    monkeypatch.setattr(evdev, "InputDevice", lambda path: (_Keyboard if path.endswith("3") else _FakeGamepad)(path))
+    pad = GamepadInput()  # the keyboard (no sticks) is skipped
+    assert pad.device.path == "/dev/input/event7"
+    deadline = time.monotonic() + 5.0
+    while pad.state != RobotState.PACKED and time.monotonic() < deadline:
+        time.sleep(0.01)
+    command = pad.next()
+    assert command is not None and command.velocity[0] == 1.0 and command.state_request == RobotState.PACKED
+    while not pad.finished and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert pad.next() is None  # unplugged: the input is over, run-hw stops and shuts down
+    assert "the gamepad is gone" in capsys.readouterr().err
+    pad.close()
+    monkeypatch.setattr(evdev, "list_devices", lambda: ["/dev/input/event3"])
+    with pytest.raises(InputError, match="no gamepad found"):
+        GamepadInput()
