@@ -84,8 +84,9 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
         if not dry_run:
             for done in bus.configure():
                 typer.echo(done, err=True)
-        if bus.wire_time() > robot.time_delta:
-            typer.echo(f"warning: one cycle needs {bus.wire_time() * 1e3:.1f} ms on the bus (packets and return "
+        bus_time = bus.wire_time()
+        if bus_time > robot.time_delta:
+            typer.echo(f"warning: one cycle needs {bus_time * 1e3:.1f} ms on the bus (packets and return "
                        f"delays at {bus.baud} baud), more than the {robot.time_delta * 1e3:.0f} ms period: raise the "
                        "baud rate, lower Return Delay Time (hardware.return_delay_us) or split the servos over "
                        "more buses", err=True)

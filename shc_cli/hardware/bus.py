@@ -32,8 +32,6 @@ SETTINGS_ADDRESS, SETTINGS_LENGTH = 11, 45
 """Operating Mode (11) to Min Position Limit (52–55): read once at start to check the servos' configuration."""
 PROFILE_ADDRESS = 112
 """Profile Velocity (112–115) followed by Goal Position (116–119)."""
-COMM_SUCCESS_VALUE = 0
-"""dynamixel-sdk's COMM_SUCCESS."""
 
 
 class HardwareError(ShcError):
@@ -79,7 +77,6 @@ class _Line:
     slots: list[int]
     port: Any = None
     state_reader: Any = None
-    error_reader: Any = None
     ids: list[int] = field(default_factory=list)
 
 
@@ -154,11 +151,8 @@ class ServoBus:
             line.port = port
             line.ids = [self.slots[i].servo_id for i in line.slots]
             line.state_reader = GroupSyncRead(port, self._handler, STATE_ADDRESS, STATE_LENGTH)
-            error_address = self.slots[line.slots[0]].model.hardware_error_status if line.slots else 70
-            line.error_reader = GroupSyncRead(port, self._handler, error_address, 1) if line.slots else None
             for servo_id in line.ids:
                 line.state_reader.addParam(servo_id)
-                line.error_reader.addParam(servo_id)
 
     def close(self) -> None:
         for line in self.lines:
@@ -227,10 +221,9 @@ class ServoBus:
         return problems
 
     def read_items(self, address: int, length: int, name: str, problems: list[str]) -> dict[int, bytes]:
-        """One sync read per bus of ``length`` bytes at ``address``, each reply with its status error byte (unlike
-        GroupSyncRead, which ignores it): the data by slot; a servo that did not answer, or answered with an error
-        (Access, Data Range, …), adds a problem naming it. Retried once per bus."""
-        from dynamixel_sdk import COMM_RX_CORRUPT, COMM_SUCCESS, GroupSyncRead
+        """One sync read per bus of ``length`` bytes at ``address``: the data by slot; a servo that did not answer
+        properly (no reply, a corrupt one, an error status such as Access Error) adds a problem naming it."""
+        from dynamixel_sdk import GroupSyncRead
 
         out: dict[int, bytes] = {}
         for line in self.lines:
@@ -239,30 +232,46 @@ class ServoBus:
             reader = GroupSyncRead(line.port, self._handler, address, length)
             for servo_id in line.ids:
                 reader.addParam(servo_id)
-            failures: dict[int, str] = {}
-            for attempt in range(2):
-                failures.clear()
-                reader.txPacket()
-                for index in line.slots:
-                    data, result, error = self._handler.readRx(line.port, self.slots[index].servo_id, length)
-                    if result != COMM_SUCCESS:
-                        failures[index] = "no reply" if result != COMM_RX_CORRUPT else "a corrupt reply"
-                        break
-                    if error & 0x7F:
-                        failures[index] = p2.error_name(error)
-                        continue
-                    out[index] = bytes(data)
-                if not failures or attempt:
-                    break
-                line.port.clearPort()
-                self.retries += 1
-            problems += [f"{self.slots[i].key}: servo {self.slots[i].servo_id} answered the {name} read (address "
-                         f"{address}) with {reason}" for i, reason in failures.items()]
+            replies, failures = self._sync_read(line, reader, length)
+            out.update((index, data) for index, (data, _) in replies.items())
+            problems += [f"{self.slots[i].key}: servo {self.slots[i].servo_id}, {name} read (address {address}): "
+                         f"{reason}" for i, reason in failures.items()]
         return out
+
+    def _sync_read(self, line: _Line, reader: Any, length: int, sent: bool = False
+                   ) -> tuple[dict[int, tuple[bytes, int]], dict[int, str]]:
+        """Send ``reader``'s sync read (unless ``sent``) and receive each servo's status in order with ``readRx``,
+        which keeps the error byte (GroupSyncRead drops it). Returns ``{slot: (data, error byte)}`` and
+        ``{slot: why it failed}``: an error status or a short reply fails that servo; a missing or corrupt one
+        also leaves the rest of the bus unread. On a failure the port is cleared and the read repeated once."""
+        from dynamixel_sdk import COMM_RX_CORRUPT, COMM_SUCCESS
+
+        retried = False
+        while True:
+            if retried or not sent:
+                reader.txPacket()
+            replies: dict[int, tuple[bytes, int]] = {}
+            failures: dict[int, str] = {}
+            for index in line.slots:
+                data, result, error = self._handler.readRx(line.port, self.slots[index].servo_id, length)
+                if result != COMM_SUCCESS:
+                    failures[index] = "corrupt reply (CRC or length)" if result == COMM_RX_CORRUPT else "no reply"
+                    break
+                if error & 0x7F or len(data) != length:  # an error status carries no data
+                    failures[index] = f"{p2.error_name(error)} reply" if error & 0x7F else "short reply"
+                    continue
+                replies[index] = (bytes(data), error)
+            if not failures or retried:
+                return replies, failures
+            line.port.clearPort()
+            self.retries += 1
+            retried = True
 
     def configure(self) -> list[str]:
         """Write the robot file's Return Delay Time and current limit (EEPROM, torque off) where a servo differs;
         returns what it did."""
+        from dynamixel_sdk import COMM_SUCCESS
+
         hardware, done = self.robot.hardware, []
         if hardware.return_delay_us is not None:
             value = hardware.return_delay_us // 2
@@ -278,7 +287,7 @@ class ServoBus:
                 value = round(hardware.current_limit_ma / slot.model.current_unit_ma)
                 present, result, error = self._handler.read2ByteTxRx(self._port_of(index), slot.servo_id,
                                                                      slot.model.current_limit)
-                if result == COMM_SUCCESS_VALUE and not error & 0x7F and present == value:
+                if result == COMM_SUCCESS and not error & 0x7F and present == value:
                     continue
                 self._write(index, slot.model.current_limit, value.to_bytes(2, "little"), "Current Limit")
                 changed.append(index)
@@ -291,12 +300,14 @@ class ServoBus:
 
     def _write(self, index: int, address: int, data: bytes, name: str) -> None:
         """One WRITE with its status checked (and the payload checked for what the SDK would not stuff)."""
+        from dynamixel_sdk import COMM_SUCCESS
+
         slot = self.slots[index]
         if p2.needs_stuffing(address.to_bytes(2, "little") + data):
             raise HardwareError(f"{slot.key}: the {name} write contains FF FF FD, which dynamixel-sdk sends unstuffed")
         result, error = self._handler.writeTxRx(self._port_of(index), slot.servo_id, address, len(data), list(data))
-        if result != COMM_SUCCESS_VALUE or error & 0x7F:
-            reason = self._handler.getTxRxResult(result) if result != COMM_SUCCESS_VALUE else p2.error_name(error)
+        if result != COMM_SUCCESS or error & 0x7F:
+            reason = self._handler.getTxRxResult(result) if result != COMM_SUCCESS else p2.error_name(error)
             raise HardwareError(f"{slot.key}: servo {slot.servo_id} refused {name} (address {address}): {reason}")
 
     # -- the cycle -------------------------------------------------------------------------------------------
@@ -314,13 +325,14 @@ class ServoBus:
             if line.slots:
                 line.state_reader.txPacket()
         for line in self.lines:
-            if line.slots and not self._receive(line, raw, answered, alerts, failures):
-                line.port.clearPort()
-                self.retries += 1
-                answered[line.slots] = False
-                line.state_reader.txPacket()
-                if self._receive(line, raw, answered, alerts, failures):
-                    failures.clear()
+            if not line.slots:
+                continue
+            replies, missed = self._sync_read(line, line.state_reader, STATE_LENGTH, sent=True)
+            failures.update(missed)
+            for index, (data, error) in replies.items():
+                raw[index] = np.frombuffer(data, dtype=np.uint8)
+                answered[index] = True
+                alerts[index] = bool(error & p2.ERROR_ALERT)
         current = raw[:, 0:2].copy().view("<i2")[:, 0].astype(float)
         velocity = raw[:, 2:6].copy().view("<i4")[:, 0].astype(float)
         ticks = raw[:, 6:10].copy().view("<i4")[:, 0].astype(float)
@@ -328,24 +340,6 @@ class ServoBus:
         velocities = self._direction * velocity * self._velocity_unit * (2.0 * math.pi / 60.0)
         return BusState(self.padded(positions), self.padded(velocities), self.padded(current * self._current_unit),
                         answered, alerts, failures)
-
-    def _receive(self, line: _Line, raw: np.ndarray, answered: np.ndarray, alerts: np.ndarray,
-                 failures: dict[int, str]) -> bool:
-        """Each servo's status of the sync read just sent, in order; False at the first missing or corrupt one."""
-        from dynamixel_sdk import COMM_RX_CORRUPT, COMM_SUCCESS
-
-        for index in line.slots:
-            data, result, error = self._handler.readRx(line.port, self.slots[index].servo_id, STATE_LENGTH)
-            if result != COMM_SUCCESS:
-                failures[index] = "corrupt reply (CRC or length)" if result == COMM_RX_CORRUPT else "no reply"
-                return False
-            if error & 0x7F or len(data) != STATE_LENGTH:  # an error status carries no data
-                failures[index] = f"{p2.error_name(error)} reply" if error & 0x7F else "short reply"
-                return False
-            raw[index] = data
-            answered[index] = True
-            alerts[index] = bool(error & p2.ERROR_ALERT)
-        return True
 
     def hardware_errors(self) -> dict[str, list[str]]:
         """Servos whose Hardware Error Status is set (or that did not answer its read properly), by joint."""
