@@ -143,14 +143,15 @@ def simulate(
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
     bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
+    engine: Annotated[str, typer.Option(help="Physics engine: pybullet or mujoco.")] = "pybullet",
 ) -> None:
-    """Run the controller on the robot in PyBullet physics: terrains, servos, sensors, power, CoT."""
+    """Run the controller on the robot in physics (PyBullet or MuJoCo): terrains, servos, sensors, power, CoT."""
     from shc_cli.commands.simulate import Feedback, run_simulate
 
     _bag_check(bag)
     path = run_simulate(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate,
                         friction, restitution, seed, imu_noise, start, gui, stand,
-                        Feedback(posture, imu_posing, inclination, admittance))
+                        Feedback(posture, imu_posing, inclination, admittance), engine)
     _write_bag(path, bag)
 
 

@@ -111,7 +111,7 @@ def test_readings_are_those_after_the_last_physics_step(substeps: int) -> None:
     asking PyBullet again: they must equal a fresh read."""
     import numpy as np
 
-    from shc_cli.backends.pybullet_.terrain import parse_terrain
+    from shc_cli.backends.terrain import parse_terrain
     from shc_cli.commands.simulate import Simulation
     from shc_cli.control.controller import Command, RobotState
     from shc_cli.spec.checks import load_checked
@@ -137,8 +137,8 @@ def test_mean_joint_speed_from_the_displacement_equals_the_mean_of_every_physics
     speeds PyBullet reports after each sub-step and compare."""
     import numpy as np
 
-    from shc_cli.backends.pybullet_.power import servo_power
-    from shc_cli.backends.pybullet_.terrain import parse_terrain
+    from shc_cli.backends.power import servo_power
+    from shc_cli.backends.terrain import parse_terrain
     from shc_cli.commands.simulate import Simulation
     from shc_cli.control.controller import Command, RobotState
     from shc_cli.spec.checks import load_checked
@@ -184,8 +184,8 @@ def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(tmp_path:
     position motor, and its femurs' steady errors halve when the stiffness doubles (a proportional servo)."""
     import numpy as np
 
-    from shc_cli.backends.pybullet_.terrain import parse_terrain
     from shc_cli.backends.pybullet_.world import World
+    from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.startup import plan_direct_startup
     from shc_cli.model.chains import Chains
     from shc_cli.spec.loading import load_robot
