@@ -233,11 +233,14 @@ def sweep(
     scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address (default: a LocalCluster).")] = None,
     out: Annotated[Path | None, typer.Option(help="Output directory (default runs/<sweep name>).")] = None,
     resume: Annotated[bool, typer.Option(help="Continue a sweep: finished runs are read, not re-run.")] = False,
+    engine: Annotated[
+        str | None, typer.Option(help="Physics engine (pybullet or mujoco) of runs the sweep file does not set.")
+    ] = None,
 ) -> None:
     """Run a grid of simulations in parallel and tabulate CoT, power, speed and stability per run."""
     from shc_cli.commands.sweep import run_sweep
 
-    run_sweep(file, workers, executor, scheduler, out, resume)
+    run_sweep(file, workers, executor, scheduler, out, resume, engine)
 
 
 export_app = typer.Typer(help="Export robots and runs to other formats.", no_args_is_help=True)

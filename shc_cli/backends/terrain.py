@@ -288,10 +288,14 @@ class Terrain:
             y index along +y from the field's −y edge), otherwise ``None``.
         field: Height-field samples ``(nx, ny)`` [m] for ``heightfield`` (as :attr:`TerrainSpec.heights`),
             otherwise ``None``.
+        diagonal: Whose triangulation of the height-field cells :meth:`height_at` follows (``pybullet`` or
+            ``mujoco``: the engines split a cell along different diagonals).
     """
 
-    def __init__(self, spec: TerrainSpec, seed: int, body_ids: tuple[int, ...] = ()) -> None:
+    def __init__(self, spec: TerrainSpec, seed: int, body_ids: tuple[int, ...] = (),
+                 diagonal: Literal["pybullet", "mujoco"] = "pybullet") -> None:
         self.spec = spec
+        self.diagonal = diagonal
         self.seed = seed
         self.body_ids = body_ids
         self.block_heights: np.ndarray | None = None
@@ -337,7 +341,8 @@ class Terrain:
         return 0.0
 
     def _field_height(self, x: float, y: float) -> float:
-        """Height on PyBullet's triangulation: each cell split along its (i+1, j)–(i, j+1) diagonal."""
+        """Height on the engine's triangulation: PyBullet splits each cell along its (i+1, j)–(i, j+1) diagonal,
+        MuJoCo along its (i, j)–(i+1, j+1) one."""
         assert self.field is not None
         field, cell = self.field, self.spec.cell
         nx, ny = field.shape
@@ -348,6 +353,10 @@ class Terrain:
         i, j = min(int(u), nx - 2), min(int(v), ny - 2)
         fx, fy = u - i, v - j
         h00, h10, h01, h11 = field[i, j], field[i + 1, j], field[i, j + 1], field[i + 1, j + 1]
+        if self.diagonal == "mujoco":
+            if fx >= fy:
+                return float(h00 + fx * (h10 - h00) + fy * (h11 - h10))
+            return float(h00 + fy * (h01 - h00) + fx * (h11 - h01))
         if fx + fy <= 1.0:
             return float(h00 + fx * (h10 - h00) + fy * (h01 - h00))
         return float(h11 + (1.0 - fx) * (h01 - h11) + (1.0 - fy) * (h10 - h11))

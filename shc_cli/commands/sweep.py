@@ -16,6 +16,7 @@ with ``status = failed`` and its error. ``--resume`` re-reads finished run direc
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import math
 import os
@@ -35,7 +36,7 @@ METRICS = ("cot", "mean_power_w", "mean_speed_mps", "steady_speed_mps", "command
            "distance_m", "duty_factor", "foot_slip_m", "stability_margin_median_m", "zmp_margin_median_m",
            "height_median_m", "height_iqr_m", "roll_rate_median_rps", "pitch_rate_median_rps", "step_frequency_hz")
 """Analysis keys copied into the results table."""
-RUN_KEYS = ("fell", "sim_time_s", "wall_time_s", "physics_time_s")
+RUN_KEYS = ("engine", "fell", "sim_time_s", "wall_time_s", "physics_time_s")
 """Summary keys copied into the results table (the timings differ from run to run; compare the others)."""
 
 
@@ -83,7 +84,7 @@ def _simulate(point: Point, out: Path, directory: Path) -> None:
     simulate_to(robot, options["gait"] or None, velocity, float(options["duration"]), None, directory, False,
                 options["terrain"], options["scenario"], float(options["physics_rate"]), float(options["friction"]),
                 float(options["restitution"]), int(options["seed"]), float(options["imu_noise"]), options["start"],
-                False, options["stand"])
+                False, options["stand"], engine=options["engine"])
 
 
 def _robot_for(point: Point, out: Path) -> str:
@@ -229,9 +230,21 @@ def dask_results(points: list[Point], out: Path, workers: int, scheduler: str | 
 
 
 def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | None, out: Path | None,
-              resume: bool) -> Path:
-    """Check the sweep, run every point, write the results table and plots; returns the output directory."""
+              resume: bool, engine: str | None = None) -> Path:
+    """Check the sweep, run every point, write the results table and plots; returns the output directory.
+
+    ``engine`` is the physics engine of every run whose sweep file does not choose one (``engine`` in
+    ``[fixed]`` or ``[grid]``).
+    """
     sweep = load_sweep(file)
+    if engine is not None:
+        if engine not in ("pybullet", "mujoco"):
+            raise SpecError([Issue(None, None, "--engine", f"'{engine}' is not a physics engine",
+                                   "use pybullet or mujoco")])
+        if "engine" not in sweep.fixed and "engine" not in sweep.grid:
+            sweep = dataclasses.replace(sweep, points=[dataclasses.replace(point, options={**point.options,
+                                                                                           "engine": engine})
+                                                       for point in sweep.points])
     if executor not in ("local", "dask"):
         raise SpecError([Issue(None, None, "--executor", f"'{executor}' is not an executor", "use local or dask")])
     if scheduler is not None and executor != "dask":

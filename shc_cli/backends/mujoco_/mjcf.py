@@ -164,8 +164,8 @@ def _terrain(asset: ET.Element, world: ET.Element, terrain: Terrain) -> None:
         field, cell = terrain.field, terrain.spec.cell
         nx, ny = field.shape
         top = max(float(field.max()), 1e-6)
-        # MuJoCo's elevation: nrow × ncol, row r at y = −size_y … +size_y, column c along x; heights / top.
-        rows = field.T / top
+        # MuJoCo's elevation: nrow × ncol, the first row at +y (as an image's top line), columns along +x; / top.
+        rows = field.T[::-1] / top
         ET.SubElement(asset, "hfield", name="field", nrow=str(ny), ncol=str(nx),
                       size=_vec(((nx - 1) * cell / 2.0, (ny - 1) * cell / 2.0, top, 0.01)),
                       elevation=" ".join(_num(v) for v in rows.ravel()))

@@ -67,7 +67,7 @@ class MujocoWorld:
         self.substeps = substeps
         self.physics_time = 0.0
         """Wall time spent inside ``mj_step`` [s]."""
-        self.terrain = Terrain(terrain, seed)
+        self.terrain = Terrain(terrain, seed, diagonal="mujoco")
         stand = stand and not fixed_base
         self.fixed_base = fixed_base
         height = spawn_height(robot, self.terrain, initial_joints, fixed_base, stand)
