@@ -30,6 +30,7 @@ from shc_cli.backends.mujoco_.mjcf import Options, robot_mjcf, velocity_stiffnes
 from shc_cli.backends.power import servo_power
 from shc_cli.backends.pybullet_.urdf import leg_names
 from shc_cli.backends.terrain import Terrain, TerrainSpec
+from shc_cli.errors import BackendError
 from shc_cli.spec.robot import Robot
 
 RAY_GROUPS = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)
@@ -102,6 +103,10 @@ class MujocoWorld:
         self._mean_torque = np.zeros(len(joints))
         self._mean_power = np.full(len(joints), servo.idle_power)
         self.imu = Imu(control_period, imu_noise, seed)
+        self._q = _view(data.qpos, self.qpos_index)
+        """The servos' joint positions: a view into ``qpos`` (the hinges follow the free joint, legs in order)."""
+        self._v = _view(data.qvel, self.qvel_index)
+        self._work = np.zeros(len(joints))
         self._ray_hit = np.zeros(1, dtype=np.int32)
         self.command(initial_joints)
 
@@ -120,23 +125,32 @@ class MujocoWorld:
     def step(self) -> None:
         """Advance one control period; torque and speed averaged over its physics steps give the power."""
         mujoco, model, data = self.mujoco, self.model, self.data
-        qpos, qvel, ctrl = data.qpos, data.qvel, data.ctrl
-        qi, vi, goals = self.qpos_index, self.qvel_index, self._goals
+        q, v, ctrl, goals, work = self._q, self._v, data.ctrl, self._goals, self._work
+        gain, keep, speed, kv, stall = self._gain, self._keep, self._speed, self._kv, self._stall
         clock = time.perf_counter
         total = np.zeros(len(goals))
         physics = 0.0
         for _ in range(self.substeps):
             if not self.compliant:  # PyBullet's velocity motor: the speed that closes position_gain of the error
-                ctrl[:] = np.clip(self._gain * (goals - qpos[qi]) + self._keep * qvel[vi], -self._speed, self._speed)
+                np.subtract(goals, q, out=work)
+                work *= gain
+                if keep != 0.0:
+                    work += keep * v
+                np.minimum(work, speed, out=work)
+                np.maximum(work, -speed, out=ctrl)
             started = clock()
             mujoco.mj_step(model, data)
             physics += clock() - started
             if self.compliant:
                 total += data.actuator_force
             else:  # the implicit step applied kv·(ctrl − v_new); a clamped one (explicit) the stall torque
-                total += np.clip(self._kv * (ctrl - qvel[vi]), -self._stall, self._stall)
+                np.subtract(ctrl, v, out=work)
+                work *= kv
+                np.minimum(work, stall, out=work)
+                np.maximum(work, -stall, out=work)
+                total += work
         self.physics_time += physics
-        positions = qpos[qi].copy()
+        positions = np.array(q)
         # mj_step integrates q += v·h with the new v (semi-implicit Euler): the displacement is the mean speed.
         mean_speed = (positions - self._positions) / self.control_period
         self._positions = positions
@@ -154,11 +168,14 @@ class MujocoWorld:
         else:
             linear_origin = data.qvel[0:3].copy()
             angular = rotation @ data.qvel[3:6]  # a free joint's angular velocity is in the body frame
-        velocity = linear_origin + np.cross(angular, rotation @ self.com_offset)  # of the centre of mass, as PyBullet
+        r = rotation @ self.com_offset
+        w = angular
+        velocity = linear_origin + np.array([w[1] * r[2] - w[2] * r[1], w[2] * r[0] - w[0] * r[2],
+                                             w[0] * r[1] - w[1] * r[0]])  # of the centre of mass, as PyBullet
         specific_force, rate = self.imu.sense(rotation, velocity, angular)
         forces = data.sensordata[self.touch_index].copy()
         return Reading(
-            joints=self.padded(self._positions), joint_velocities=self.padded(data.qvel[self.qvel_index]),
+            joints=self.padded(self._positions), joint_velocities=self.padded(np.array(self._v)),
             joint_efforts=self.padded(self._mean_torque), servo_power=self.padded(self._mean_power),
             orientation=np.array([quat[1], quat[2], quat[3], quat[0]]), angular_rate=rate,
             linear_acceleration=specific_force, foot_forces=forces, foot_contact=forces > 0.0,
@@ -185,3 +202,11 @@ class MujocoWorld:
     def close(self) -> None:
         """Nothing to free but the references."""
         self.stand = None
+
+
+def _view(values: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """``values[index]`` as a view (a slice) when ``index`` is a contiguous run, which it is for the servos."""
+    start = int(index[0])
+    if np.array_equal(index, np.arange(start, start + len(index))):
+        return values[start:start + len(index)]
+    raise BackendError("MuJoCo model: the servo joints are not contiguous in qpos/qvel")
