@@ -37,7 +37,8 @@ def uptime() -> str:
     return subprocess.run(["uptime"], capture_output=True, text=True, check=False).stdout.strip()
 
 
-def simulate(engine: str, duration: float, out: Path, extra: list[str] | None = None) -> tuple[dict[str, object], float]:
+def simulate(engine: str, duration: float, out: Path,
+             extra: list[str] | None = None) -> tuple[dict[str, object], float]:
     """One whole ``shc simulate`` command; returns its summary and its wall time [s]."""
     started = time.perf_counter()
     subprocess.run([*SHC, "simulate", "--engine", engine, "--gait", "tripod", "--duration", f"{duration:g}",

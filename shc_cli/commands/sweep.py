@@ -229,6 +229,19 @@ def dask_results(points: list[Point], out: Path, workers: int, scheduler: str | 
             cluster.close()
 
 
+def with_engine(sweep: Sweep, engine: str | None) -> Sweep:
+    """The sweep with ``engine`` (``--engine``) for every run, unless the file chooses the engine itself."""
+    if engine is None:
+        return sweep
+    if engine not in ("pybullet", "mujoco"):
+        raise SpecError([Issue(None, None, "--engine", f"'{engine}' is not a physics engine",
+                               "use pybullet or mujoco")])
+    if "engine" in sweep.fixed or "engine" in sweep.grid:
+        return sweep
+    return dataclasses.replace(sweep, points=[dataclasses.replace(point, options={**point.options, "engine": engine})
+                                              for point in sweep.points])
+
+
 def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | None, out: Path | None,
               resume: bool, engine: str | None = None) -> Path:
     """Check the sweep, run every point, write the results table and plots; returns the output directory.
@@ -236,15 +249,7 @@ def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | N
     ``engine`` is the physics engine of every run whose sweep file does not choose one (``engine`` in
     ``[fixed]`` or ``[grid]``).
     """
-    sweep = load_sweep(file)
-    if engine is not None:
-        if engine not in ("pybullet", "mujoco"):
-            raise SpecError([Issue(None, None, "--engine", f"'{engine}' is not a physics engine",
-                                   "use pybullet or mujoco")])
-        if "engine" not in sweep.fixed and "engine" not in sweep.grid:
-            sweep = dataclasses.replace(sweep, points=[dataclasses.replace(point, options={**point.options,
-                                                                                           "engine": engine})
-                                                       for point in sweep.points])
+    sweep = with_engine(load_sweep(file), engine)
     if executor not in ("local", "dask"):
         raise SpecError([Issue(None, None, "--executor", f"'{executor}' is not an executor", "use local or dask")])
     if scheduler is not None and executor != "dask":
