@@ -4,9 +4,10 @@ Run:  .venv/bin/python benchmarks/bench_engines.py speed [--duration 60] [--repe
       .venv/bin/python benchmarks/bench_engines.py terrains [--duration 10] [--engine mujoco]
 
 ``speed``: ``--repeats`` times, alternating the engines, runs the whole command
-``shc simulate --engine E --gait tripod --duration D --no-plots`` as a subprocess (start-up and imports included)
+``shc simulate --engine E --gait tripod --duration D`` as a subprocess (start-up, imports and plots included)
 and prints per engine the median simulated ÷ wall time of the simulation loop (``summary.json``), of the whole
-command, the mean speed and whether it fell; then the MuJoCo ÷ PyBullet ratio of the loop figures, pairing the
+command, simulated ÷ the command's CPU time (what a free core would give: these machines are shared), the mean
+speed and whether it fell; then the MuJoCo ÷ PyBullet ratio of the loop figures, pairing the
 runs made one after the other, and the load (``uptime``) before and after.
 
 ``terrains``: every shipped robot on every terrain (flat, ramp:10, blocks, stairs:0.05,0.3 and a generated
@@ -19,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -38,32 +40,38 @@ def uptime() -> str:
 
 
 def simulate(engine: str, duration: float, out: Path,
-             extra: list[str] | None = None) -> tuple[dict[str, object], float]:
-    """One whole ``shc simulate`` command; returns its summary and its wall time [s]."""
+             extra: list[str] | None = None) -> tuple[dict[str, object], float, float]:
+    """One whole ``shc simulate`` command; returns its summary, its wall time and its CPU time [s]."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     started = time.perf_counter()
     subprocess.run([*SHC, "simulate", "--engine", engine, "--gait", "tripod", "--duration", f"{duration:g}",
-                    "--no-plots", "--out", str(out), *(extra or [])], check=True, cwd=ROOT, capture_output=True)
+                    "--out", str(out), *(extra or [])], check=True, cwd=ROOT, capture_output=True)
     wall = time.perf_counter() - started
-    return json.loads((out / "summary.json").read_text()), wall
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+    return json.loads((out / "summary.json").read_text()), wall, cpu
 
 
 def speed(duration: float, repeats: int) -> None:
     print(f"load before: {uptime()}")
-    figures: dict[str, list[tuple[float, float, float, bool]]] = {"pybullet": [], "mujoco": []}
+    figures: dict[str, list[tuple[float, float, float, bool, float]]] = {"pybullet": [], "mujoco": []}
     with tempfile.TemporaryDirectory() as folder:
         for repeat in range(repeats):
             for engine in ("mujoco", "pybullet") if repeat % 2 else ("pybullet", "mujoco"):
-                summary, wall = simulate(engine, duration, Path(folder) / f"{engine}{repeat}")
-                loop = float(summary["sim_time_s"]) / float(summary["wall_time_s"])  # type: ignore[arg-type]
-                figures[engine].append((loop, float(summary["sim_time_s"]) / wall,  # type: ignore[arg-type]
-                                        float(summary["mean_speed_mps"]), bool(summary["fell"])))  # type: ignore[arg-type]
+                summary, wall, cpu = simulate(engine, duration, Path(folder) / f"{engine}{repeat}")
+                simulated = float(summary["sim_time_s"])  # type: ignore[arg-type]
+                loop = simulated / float(summary["wall_time_s"])  # type: ignore[arg-type]
+                figures[engine].append((loop, simulated / wall, float(summary["mean_speed_mps"]),  # type: ignore[arg-type]
+                                        bool(summary["fell"]), simulated / cpu))
                 print(f"  {engine:8s} run {repeat}: loop {loop:6.1f}× real time, whole command "
-                      f"{figures[engine][-1][1]:5.1f}×, {figures[engine][-1][2]:.4f} m/s, fell {summary['fell']}")
+                      f"{figures[engine][-1][1]:5.1f}× (÷ its CPU time {simulated / cpu:5.1f}×), "
+                      f"{figures[engine][-1][2]:.4f} m/s, fell {summary['fell']}", flush=True)
     print(f"load after:  {uptime()}")
     for engine, rows in figures.items():
         print(f"{engine:8s} median: loop {statistics.median(r[0] for r in rows):6.1f}× real time, whole command "
-              f"{statistics.median(r[1] for r in rows):5.1f}×, speed {statistics.median(r[2] for r in rows):.4f} m/s, "
-              f"fell {any(r[3] for r in rows)}")
+              f"{statistics.median(r[1] for r in rows):5.1f}× "
+              f"(÷ CPU time {statistics.median(r[4] for r in rows):5.1f}×), "
+              f"speed {statistics.median(r[2] for r in rows):.4f} m/s, fell {any(r[3] for r in rows)}")
     ratios = [m[0] / p[0] for m, p in zip(figures["mujoco"], figures["pybullet"], strict=True)]
     print(f"MuJoCo ÷ PyBullet, loop, paired runs: {', '.join(f'{r:.1f}' for r in ratios)} "
           f"(median {statistics.median(ratios):.1f})")
