@@ -309,8 +309,8 @@ def import_urdf(
     clearance: Annotated[float | None, typer.Option(help="Body clearance [m] [default: from the zero pose].")] = None,
     reach: Annotated[float | None, typer.Option(help="Stance distance from the hip, as a share of the leg's "
                                                      "length [default: from the zero pose].")] = None,
-    snap: Annotated[float, typer.Option(help="Snap rpy values this close to a multiple of pi/2 [rad]; 0: "
-                                             "off.")] = 0.001,
+    snap: Annotated[float, typer.Option(help="Snap rpy values this close to a multiple of pi/2 [rad] (for "
+                                             "axes meant to be parallel that are not quite).")] = 0.0,
     arg: Annotated[list[str] | None, typer.Option(help="xacro argument NAME=VALUE. Repeatable.")] = None,
 ) -> None:
     """Turn a legged robot's URDF or xacro into an shc robot file and a joint map (URDF joint → leg, joint)."""
@@ -325,7 +325,7 @@ def import_urdf(
         mappings[key] = value
     result = convert(file, out, name, legs, tip, clearance, reach, snap, mappings)
     for note in result.notes:
-        typer.echo(f"assumed: {note}")
+        typer.echo(f"note: {note}")
     typer.echo(f"forward kinematics: largest tip difference to the URDF {result.fk_error:.2g} m at 200 random joint "
                "vectors per leg" + (f" ({result.fk_error_unsnapped:.2g} m to the URDF before snapping rpy values, "
                                     f"largest snap {result.snap:.2g} rad)" if result.snap > 0 else ""))

@@ -45,7 +45,7 @@ from numpy.typing import NDArray
 
 from shc_cli.errors import Issue, SpecError
 from shc_cli.interop.urdf_import_dh import Axis, NearlyParallel, Row, chain_dh
-from shc_cli.interop.urdf_import_source import DEFAULT_SNAP, parse_urdf, read_source
+from shc_cli.interop.urdf_import_source import SUGGESTED_SNAP, parse_urdf, read_source
 from shc_cli.spec.toml_out import dump_toml
 
 FloatArray = NDArray[np.float64]
@@ -305,9 +305,9 @@ def joint_names(legs: list[list[str]]) -> list[list[str]]:
         chosen.append(counts.most_common(1)[0][0] if counts else "")
     out = []
     for names in short:
-        picked = [chosen[k] if chosen[k] else f"joint{k + 1}" for k in range(len(names))]
+        picked = [chosen[k] or f"joint{k + 1}" for k in range(len(names))]
         picked = [re.sub(r"[^A-Za-z0-9_]", "_", name) for name in picked]
-        if len(set(picked)) < len(picked):
+        if len(set(picked)) < len(picked) or not all(name[0].isalpha() for name in picked):
             picked = [f"joint{k + 1}" for k in range(len(names))]
         out.append(picked)
     return out
@@ -472,8 +472,12 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
             names = ["base_link z", *[j.name for j in chain.joints]]
             raise _fail(file, f"axes of {names[error.index]} and {names[error.index + 1]} are {error.angle:.2g} rad "
                         f"from parallel: the DH table would need an offset of {error.offset:.3g} m",
-                        f"snap the URDF's angles with --snap {max(error.angle * 2, DEFAULT_SNAP):.1g} or fix them")\
+                        f"snap the URDF's angles with --snap {max(error.angle * 2, SUGGESTED_SNAP):.1g} or fix them")\
                 from None
+    on_axis = [chain.end for chain in chains if abs(chain.rows[-1].r) < 1e-6]
+    if on_axis:
+        notes.append(f"the tips of {', '.join(on_axis)} lie on the axes of their legs' last joints, which then do "
+                     "not move them: name the tips with --tip 'LINK@X,Y,Z' (LINK may be a glob pattern)")
     ids, order = leg_ids([chain.hip for chain in chains])
     for (given, chain), leg_id in zip(found, ids, strict=True):
         chain.leg_id = given or leg_id
@@ -609,6 +613,14 @@ def fk_error(model: Any, legs: list[LegChain], base_frame: str, robot: Any, samp
     return worst
 
 
+def _tip_lines(legs: list[LegChain]) -> list[str]:
+    """Header lines saying where each tip is; one line when every leg's is the same point of its own link."""
+    generic = {leg.tip_source.replace(leg.end, "its leg's last link") for leg in legs}
+    if len(generic) == 1:
+        return [f"# Tip of every leg: {generic.pop()}."]
+    return [f"# Tip of {leg.leg_id}: {leg.tip_source}." for leg in legs]
+
+
 @dataclass(frozen=True)
 class Result:
     """Files written and figures of one import."""
@@ -623,7 +635,7 @@ class Result:
 
 def import_urdf(file: Path, out: Path | None = None, name: str | None = None, legs: str = "auto",
                 tips: list[str] | None = None, clearance: float | None = None, reach: float | None = None,
-                snap: float = DEFAULT_SNAP, args: dict[str, str] | None = None) -> Result:
+                snap: float = 0.0, args: dict[str, str] | None = None) -> Result:
     """Write ``OUT/robots/NAME.toml`` and ``OUT/joint_map.csv`` from a URDF or xacro file; check the robot
     (``shc validate``'s checks) and its forward kinematics against the URDF before returning."""
     from shc_cli.outputs import write_text
@@ -641,8 +653,8 @@ def import_urdf(file: Path, out: Path | None = None, name: str | None = None, le
                                                 "templates", "legs")}
     header = [f"# Imported by `shc import urdf` from {file.name}. Units: m, rad, s, kg.",
               f"# base_link is the URDF link '{imported.base_frame}'. Joint angles are the URDF's (joint_map.csv).",
-              *(f"# Tip of {c.leg_id}: {c.tip_source}." for c in imported.legs),
-              *(f"# Assumed: {note}." for note in imported.notes)]
+              *_tip_lines(imported.legs),
+              *(f"# Note: {note}." for note in imported.notes)]
     if source.snap > 0.0:
         header.append(f"# rpy values within {snap:g} rad of a multiple of pi/2 snapped to it (largest change "
                       f"{source.snap:.2g} rad).")

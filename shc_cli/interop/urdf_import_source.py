@@ -6,8 +6,10 @@ nearest folder above the file (the file's own folder included) that is named ``P
 colcon workspace). An included file that does not exist under the resolved path is looked for by name beside
 the file that includes it (a package's files copied flat into one folder, as ``shared/reference/bullet_syropod``).
 
-Angles in ``<origin rpy>`` within :data:`DEFAULT_SNAP` of a multiple of π/2 are snapped to it before parsing
-(``1.5708`` means π/2): otherwise two axes meant to be parallel meet kilometres away and the DH table says so.
+With ``--snap TOL``, angles in ``<origin rpy>`` within TOL of a multiple of π/2 are snapped to it before
+parsing (``1.57`` meant as π/2). Off by default, since it moves the tips (by up to TOL × the leg's length):
+it is needed only when two axes meant to be parallel are not quite, which the import reports (the common
+normal of nearly parallel axes is far away, and the DH offsets with it).
 """
 
 from __future__ import annotations
@@ -23,8 +25,8 @@ from typing import Any
 
 from shc_cli.errors import Issue, SpecError
 
-DEFAULT_SNAP = 0.001
-"""rpy values this close to a multiple of π/2 are snapped to it [rad] (1.57 is 0.0008 from π/2)."""
+SUGGESTED_SNAP = 0.001
+"""Smallest ``--snap`` suggested when axes are nearly parallel [rad] (1.57 is 0.0008 from π/2)."""
 
 
 @dataclass(frozen=True)
@@ -116,9 +118,9 @@ def snap_rpy(text: str, tolerance: float) -> tuple[str, float]:
     """The URDF text with every ``origin rpy`` value within ``tolerance`` of a multiple of π/2 snapped to it.
 
     Returns the new text and the largest change [rad]."""
+    root = ET.fromstring(text)  # also the well-formedness check: yourdfpy would recover from broken XML
     if tolerance <= 0.0:
         return text, 0.0
-    root = ET.fromstring(text)
     largest = 0.0
     for origin in root.iter("origin"):
         rpy = origin.get("rpy")
