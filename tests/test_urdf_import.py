@@ -23,7 +23,7 @@ from shc_cli.spec.robot import Robot
 
 from .conftest import GOLDEN
 from .test_cli import run
-from .urdf_robots import Element, LegSpec, insect_leg, robot_urdf
+from .urdf_robots import Element, LegSpec, dog_leg, insect_leg, robot_urdf
 
 pytest.importorskip("yourdfpy", reason="shc import urdf needs the 'urdf' extra")
 pytest.importorskip("xacro", reason="shc import urdf needs the 'urdf' extra")
@@ -189,6 +189,34 @@ def test_quadruped_standing_at_its_zero_pose_imports_validates_and_plans(tmp_pat
     assert "IK deviations 0" in out
 
 
+def test_dog_with_straight_legs_and_a_free_root_stands_lower_and_plans(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                     monkeypatch) -> None:
+    """Legs straight down at the zero pose (a singular pose, and outside the knee limits): the body is lowered to
+    the largest walkspace; a 'world' root holding the robot by a floating joint is skipped."""
+    specs = [dog_leg(f"{name}", x, y) for name, x, y in
+             [("FR", 0.19, -0.05), ("RR", -0.19, -0.05), ("RL", -0.19, 0.05), ("FL", 0.19, 0.05)]]
+    text = robot_urdf(specs, name="dog").replace(
+        '<link name="root_link"/>', '<link name="world"/><joint name="free" type="floating"><parent link="world"/>'
+        '<child link="root_link"/></joint><link name="root_link"/>')
+    urdf = tmp_path / "dog.urdf"
+    urdf.write_text(text)
+    code, out, err = run(["import", "urdf", str(urdf), "--out", str(tmp_path)], capsys, monkeypatch)
+    assert code == 0, err
+    assert "the body lowered to 0.7 of their depth" in out and "holds the robot by a free joint" in out
+    data = tomllib.loads((tmp_path / "robots" / "dog.toml").read_text())
+    assert data["walker"]["body_clearance"] == pytest.approx(0.28)  # 0.9 and 0.8 of 0.4 m: smaller walkspaces
+    assert data["walker"]["gait"] == "quad_wave"
+    assert list(data["legs"]) == ["AR", "BR", "BL", "AL"]
+    assert list(data["templates"]["leg"]["joints"]) == ["joint0", "joint1", "joint2"]
+    rows = list(csv.DictReader((tmp_path / "joint_map.csv").open()))
+    assert [(r["urdf_joint"], r["leg"], r["joint"]) for r in rows[:3]] == \
+        [("FR_joint0", "AR", "joint0"), ("FR_joint1", "AR", "joint1"), ("FR_joint2", "AR", "joint2")]
+    code, out, err = run(["plan", str(tmp_path / "robots" / "dog.toml"), "--duration", "3", "--no-plots", "--out",
+                          str(tmp_path / "run")], capsys, monkeypatch)
+    assert code == 0, err
+    assert "IK deviations 0" in out
+
+
 def test_flat_hexapod_gets_a_standing_pose_it_reaches(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     specs = [insect_leg(f"leg{i}", x, y, standing=False)
              for i, (x, y) in enumerate([(0.12, -0.08), (0.0, -0.1), (-0.12, -0.08),
@@ -281,9 +309,12 @@ def test_bullet_import_masses_and_limits(bullet_import) -> None:  # type: ignore
     assert (joint.min, joint.max, joint.max_vel) == (-2.4, 2.4, 2.35619449)
 
 
-def test_bullet_import_walks_in_plan_and_simulate(bullet_import, tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+def test_bullet_import_validates_and_walks_in_plan_and_simulate(bullet_import, tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
                                                   monkeypatch) -> None:
     _, result = bullet_import
+    code, out, err = run(["validate", str(result.robot_path)], capsys, monkeypatch)
+    assert code == 0, err
+    assert "6 legs, 5 DOF per leg" in out
     code, out, err = run(["plan", str(result.robot_path), "--duration", "3", "--no-plots", "--out",
                           str(tmp_path / "plan")], capsys, monkeypatch)
     assert code == 0, err

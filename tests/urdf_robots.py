@@ -83,3 +83,15 @@ def insect_leg(name: str, x: float, y: float, standing: bool) -> LegSpec:
         Element("revolute", (0.08, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), -2.4, 2.4),
         Element("fixed", (0.0, 0.0, 0.0), (0.0, 0.0, tibia_pitch)),
     ], sphere=(0.12, 0.0, 0.0), masses=[0.05, 0.08, 0.06, 0.01])
+
+
+def dog_leg(name: str, x: float, y: float) -> LegSpec:
+    """A mammal leg at hip (x, y): abduction about x, thigh and calf pitch about y, straight down at the zero pose,
+    the calf limited to a bent knee (−2.7 … −0.9 rad, as many quadruped URDFs have it)."""
+    side = -1.0 if y < 0 else 1.0
+    return LegSpec(name, [
+        Element("revolute", (x, y, 0.0), (0.0, 0.0, 0.0), (1.0, 0.0, 0.0), -0.8, 0.8),
+        Element("revolute", (0.0, side * 0.08, 0.0), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), -1.0, 2.5),
+        Element("revolute", (0.0, 0.0, -0.2), (0.0, 0.0, 0.0), (0.0, 1.0, 0.0), -2.7, -0.9),
+        Element("fixed", (0.0, 0.0, -0.2)),
+    ], sphere=(0.0, 0.0, 0.0), radius=0.02, masses=[0.5, 1.0, 0.2, 0.05])

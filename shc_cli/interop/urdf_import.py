@@ -19,11 +19,14 @@
 * **Limits**: URDF ``lower``/``upper``, ``velocity`` → ``max_vel``, the most common ``effort`` and ``velocity``
   → ``servo.stall_torque`` and ``servo.no_load_speed``. **Masses**: each joint carries the links it moves
   up to the next joint of its leg; links moved by joints that are in no leg count as body (listed).
-* **Stance**: the zero pose's feet if they stand below the hips (at least a quarter of the leg's length),
-  the body clearance the mean height of the feet; otherwise each foot is put half the leg's length out from
-  its hip (along the zero pose's leg direction) and the body half a leg's length above the hips, shrinking
-  or growing both in steps of 0.1 until every leg reaches its foot within its limits. ``--clearance`` and
-  ``--reach`` give them. ``unpacked`` is the pose the IK finds there from every joint at 0.
+* **Stance**: candidates are tried in order and the first whose walkspace (``shc workspace``'s smallest radius)
+  is within 5 % of the best is taken; every leg must reach its foot, and the swing apex a fifth of the
+  clearance above it, within its limits. If the zero pose's feet stand below the hips (by at least a quarter
+  of the leg's length), the candidates are the zero pose and the body lowered to 0.9 … 0.6 of the feet's depth
+  (not the zero pose itself if a leg is straight there: a singular pose). Otherwise, or if none of those is
+  reachable, each foot is put 0.5, 0.4, 0.6, 0.3, 0.7 or 0.2 of the leg's length out from its hip (along the
+  zero pose's leg direction) with the body as many shares of a leg's length above the hips. ``--clearance``
+  and ``--reach`` fix either. ``unpacked`` is the pose the IK finds there from every joint at 0.
 """
 
 from __future__ import annotations
@@ -52,6 +55,12 @@ FloatArray = NDArray[np.float64]
 
 STANDING = 0.25
 """The zero pose stands if every foot is at least this share of its leg's length below its hip."""
+STRAIGHT = 0.97
+"""A leg whose zero-pose tip is this share of its length from its hip is straight (a singular pose)."""
+SWING_SHARE = 0.2
+"""Swing height written, as a share of the body clearance; a stance must reach this much higher too."""
+TIE = 0.95
+"""Stances whose walkspace is at least this share of the best are as good: the first (most natural) is taken."""
 GAITS = {4: "quad_wave", 6: "tripod", 8: "octo_alternating"}
 """Gait written for a robot with this many legs (others get ``wave``, which fits none but six legs)."""
 FK_SAMPLES = 200
@@ -129,6 +138,10 @@ class Tree:
         for joint in model.robot.joints:
             self.children.setdefault(joint.parent, []).append(joint)
         self.root = str(model.base_link)
+        self.skipped: list[str] = []
+        while len(self.children.get(self.root, [])) == 1 and self.children[self.root][0].type in ("floating", "planar"):
+            self.skipped.append(self.root)  # a 'world' link holding the robot by a free joint
+            self.root = self.children[self.root][0].child
         self.body = self._fixed_set(self.root)
         self.base_frame = "base_link" if "base_link" in self.body else self.root
         world = self._world()
@@ -144,7 +157,8 @@ class Tree:
         return out
 
     def _world(self) -> dict[str, FloatArray]:
-        world = {self.root: np.eye(4)}
+        world = {name: np.eye(4) for name in self.skipped}
+        world[self.root] = np.eye(4)
         stack = [self.root]
         while stack:
             link = stack.pop()
@@ -168,7 +182,8 @@ class Tree:
         return self.pose[joint.child]
 
     def leaves(self) -> list[str]:
-        return [name for name in self.links if not self.children.get(name) and name not in self.body]
+        return [name for name in self.links
+                if not self.children.get(name) and name not in self.body and name not in self.skipped]
 
 
 def _sphere(link: Any) -> tuple[FloatArray, float] | None:
@@ -384,19 +399,20 @@ def _moved_by(tree: Tree, link: str) -> str | None:
 
 @dataclass(frozen=True)
 class Stance:
-    """The standing pose: per-leg stance (x, y) [m], body clearance [m], unpacked joints [rad], and how."""
+    """The standing pose: per-leg stance (x, y) [m], body clearance [m], unpacked joints [rad], how it was chosen
+    and its walkspace (the smallest radius over the bearings) [m]."""
 
     xy: list[tuple[float, float]]
     clearance: float
     unpacked: FloatArray
     how: str
+    walkspace: float
 
 
 def choose_stance(robot_tree: dict[str, Any], legs: list[LegChain], clearance: float | None,
                   reach: float | None, time_delta: float) -> Stance | None:
     """The standing pose (module docstring); None if no candidate is reachable by every leg."""
     from shc_cli.model.chains import Chains
-    from shc_cli.model.ik import solve
     from shc_cli.spec.robot import Robot
 
     stub = {**robot_tree, "legs": {leg.leg_id: {**robot_tree["legs"][leg.leg_id], "stance": {"x": 0.0, "y": 0.0}}
@@ -406,36 +422,67 @@ def choose_stance(robot_tree: dict[str, Any], legs: list[LegChain], clearance: f
     hips = np.array([leg.hip for leg in legs])
     zero_tips = np.array([leg.tip for leg in legs])
     drop = hips[:, 2] - zero_tips[:, 2]
+    candidates: list[tuple[FloatArray, float, str]] = []
     if clearance is None and reach is None and (drop >= STANDING * lengths).all():
-        candidates = [(zero_tips[:, :2], float(-zero_tips[:, 2].mean()), "the URDF's zero pose")]
-    else:
-        outward = zero_tips[:, :2] - hips[:, :2]
-        norms = np.linalg.norm(outward, axis=1)
-        fallback = hips[:, :2] / np.maximum(np.linalg.norm(hips[:, :2], axis=1), 1e-9)[:, None]
-        direction = np.where((norms > 0.1 * lengths)[:, None], outward / np.maximum(norms, 1e-9)[:, None], fallback)
-        fractions = [0.5, 0.4, 0.6, 0.3, 0.7, 0.2]
-        candidates = []
-        length, hip_z = float(np.median(lengths)), float(np.median(hips[:, 2]))
-        for f_reach in [reach] if reach is not None else fractions:
-            for f_height in [None] if clearance is not None else fractions:
-                height = clearance if clearance is not None else f_height * length - hip_z  # type: ignore[operator]
-                if height <= 0.0:
-                    continue
-                xy = hips[:, :2] + direction * (f_reach * lengths)[:, None]
-                what = (f"feet {f_reach:g} of the leg's length out from the hips"
-                        + ("" if clearance is not None else f", body {f_height:g} of it above the hips"))
-                candidates.append((xy, float(height), what))
-    for xy, height, what in candidates:
-        xy = np.round(xy, 4)
-        height = round(height, 4)
-        targets = np.column_stack([xy, np.full(len(legs), -height)])
-        q, error = solve(chains, chains.default_joints(), targets, tolerance=1e-5, max_steps=600, dt=time_delta)
-        if (error < 1e-4).all():
-            spread = np.linalg.norm(xy[:, None] - xy[None], axis=2) + np.eye(len(legs))
-            if spread.min() < 0.03:
+        # Legs straight at the zero pose (common for quadrupeds) stand at a singularity: lower the body first.
+        straight = bool((np.linalg.norm(zero_tips - hips, axis=1) >= STRAIGHT * lengths).any())
+        depth, hip_z = float(drop.mean()), float(hips[:, 2].mean())
+        for share in ([] if straight else [1.0]) + [0.9, 0.8, 0.7, 0.6]:
+            what = ("the URDF's zero pose" if share == 1.0 else
+                    f"the zero pose's feet, the body lowered to {share:g} of their depth below the hips")
+            candidates.append((zero_tips[:, :2], share * depth - hip_z, what))
+    groups = [candidates]
+    candidates = []
+    groups.append(candidates)
+    # The search (also the fallback of a zero pose no leg can stand in).
+    outward = zero_tips[:, :2] - hips[:, :2]
+    norms = np.linalg.norm(outward, axis=1)
+    fallback = hips[:, :2] / np.maximum(np.linalg.norm(hips[:, :2], axis=1), 1e-9)[:, None]
+    direction = np.where((norms > 0.1 * lengths)[:, None], outward / np.maximum(norms, 1e-9)[:, None], fallback)
+    fractions = [0.5, 0.4, 0.6, 0.3, 0.7, 0.2]
+    length, hip_z = float(np.median(lengths)), float(np.median(hips[:, 2]))
+    for f_reach in [reach] if reach is not None else fractions:
+        for f_height in [None] if clearance is not None else fractions:
+            height = clearance if clearance is not None else f_height * length - hip_z  # type: ignore[operator]
+            if height <= 0.0:
                 continue
-            return Stance([(float(x), float(y)) for x, y in xy], height, q, what)
+            xy = hips[:, :2] + direction * (f_reach * lengths)[:, None]
+            what = (f"feet {f_reach:g} of the leg's length out from the hips"
+                    + ("" if clearance is not None else f", body {f_height:g} of it above the hips"))
+            candidates.append((xy, float(height), what))
+    for group in groups:
+        scored = [stance for stance in (_try(chains, xy, height, what, time_delta) for xy, height, what in group)
+                  if stance is not None]
+        if scored:
+            best = max(stance.walkspace for stance in scored)
+            return next(stance for stance in scored if stance.walkspace >= TIE * best)
     return None
+
+
+def _try(chains: Any, xy: FloatArray, height: float, what: str, time_delta: float) -> Stance | None:
+    """The stance if every leg reaches it and its swing apex (:data:`SWING_SHARE` of the clearance higher) within
+    its limits, with its walkspace; None otherwise."""
+    from shc_cli.model.ik import solve
+    from shc_cli.model.workspace import search_workspaces, walkspace
+
+    xy, height = np.round(xy, 4), round(height, 4)
+    if height <= 0.0:
+        return None
+    spread = np.linalg.norm(xy[:, None] - xy[None], axis=2) + np.eye(len(xy))
+    if spread.min() < 0.03:
+        return None
+    targets = np.column_stack([xy, np.full(len(xy), -height)])
+    q, error = solve(chains, chains.default_joints(), targets, tolerance=1e-5, max_steps=600, dt=time_delta)
+    if not (error < 1e-4).all():
+        return None
+    apex = targets + np.array([0.0, 0.0, SWING_SHARE * height])
+    _, lifted = solve(chains, q, apex, tolerance=1e-5, max_steps=300, dt=time_delta)
+    if not (lifted < 1e-4).all():
+        return None
+    planes = search_workspaces(chains, q, targets, time_delta).planes
+    radius = min(walkspace(planes, {leg: (float(x), float(y)) for leg, (x, y) in zip(chains.names, xy,
+                                                                                      strict=True)}).values())
+    return Stance([(float(x), float(y)) for x, y in xy], height, q, what, radius)
 
 
 def _length(leg: LegChain) -> float:
@@ -453,6 +500,8 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
     tree = Tree(model)
     found = find_legs(tree, legs, tips or [], file)
     notes: list[str] = []
+    if tree.skipped:
+        notes.append(f"the root {tree.skipped[0]} holds the robot by a free joint: the body starts at {tree.root}")
     chains = [chain for _, chain in found]
     for chain in chains:
         axes = []
@@ -548,7 +597,7 @@ def _finish(imported: Imported, clearance: float | None, reach: float | None, fi
                     "give one with --clearance M and --reach FRACTION (of the leg's length, from the hip)")
     walker = imported.tree["walker"]
     walker["body_clearance"] = stance.clearance
-    swing = round(min(max(0.2 * stance.clearance, 0.01), 0.2), 3)
+    swing = round(min(max(SWING_SHARE * stance.clearance, 0.01), 0.2), 3)
     walker["swing_height"] = {"default": swing, "min": 0.01, "max": max(0.05, round(2 * swing, 3)), "step": 0.005}
     for i, chain in enumerate(imported.legs):
         leg = imported.tree["legs"][chain.leg_id]
