@@ -113,6 +113,44 @@ def test_random_chains_have_the_urdfs_forward_kinematics(legs: tuple[LegSpec, ..
     assert _fk_difference(model, imported, np.random.default_rng(seed)) < 1e-6
 
 
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
+                                                                  HealthCheck.too_slow])
+@given(leg=chains("p"), seed=st.integers(0, 2**31))
+def test_random_chains_have_pybullets_forward_kinematics(leg: LegSpec, seed: int, tmp_path: Path) -> None:
+    """The same, against PyBullet's forward kinematics of the URDF (link frames relative to base_link)."""
+    import pybullet
+
+    text = robot_urdf([leg])
+    _, imported = _import_text(text, tmp_path)
+    (tmp_path / "robot.urdf").write_text(text)
+    client = pybullet.connect(pybullet.DIRECT)
+    try:
+        body = pybullet.loadURDF(str(tmp_path / "robot.urdf"), useFixedBase=True, physicsClientId=client)
+        index = {pybullet.getJointInfo(body, i, physicsClientId=client)[12].decode(): i
+                 for i in range(pybullet.getNumJoints(body, physicsClientId=client))}
+        joint_index = {pybullet.getJointInfo(body, i, physicsClientId=client)[1].decode(): i for i in index.values()}
+        chains_ = _chains(imported.tree)
+        rng = np.random.default_rng(seed)
+        chain = imported.legs[0]
+        for _ in range(5):
+            q = rng.uniform(chains_.lower, chains_.upper)
+            for k, joint in enumerate(chain.joints):
+                pybullet.resetJointState(body, joint_index[joint.name], float(q[0, k]), physicsClientId=client)
+
+            def frame(link: str) -> np.ndarray:
+                state = pybullet.getLinkState(body, index[link], computeForwardKinematics=True,
+                                              physicsClientId=client)
+                out = np.eye(4)
+                out[:3, :3] = np.reshape(pybullet.getMatrixFromQuaternion(state[5]), (3, 3))
+                out[:3, 3] = state[4]
+                return out
+
+            tip = np.linalg.inv(frame("base_link")) @ frame(chain.end) @ np.append(chain.tip_local, 1.0)
+            assert np.abs(chains_.tips(q)[0] - tip[:3]).max() < 1e-6
+    finally:
+        pybullet.disconnect(client)
+
+
 def test_tip_is_the_leaf_sphere_centre_else_its_origin(tmp_path: Path) -> None:
     with_sphere = LegSpec("p", [Element("revolute", (0.1, -0.1, 0.0))], sphere=(0.2, 0.0, -0.05), radius=0.02)
     without = LegSpec("q", [Element("revolute", (0.1, 0.1, 0.0)), Element("fixed", (0.3, 0.0, 0.0))])
@@ -215,6 +253,28 @@ def test_dog_with_straight_legs_and_a_free_root_stands_lower_and_plans(tmp_path:
                           str(tmp_path / "run")], capsys, monkeypatch)
     assert code == 0, err
     assert "IK deviations 0" in out
+
+
+def test_legs_named_and_ordered_by_hand_and_xacro_arguments(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """`--legs ID=LINK,…` gives ids and order; `--arg NAME=VALUE` reaches the xacro; xacro errors are one line."""
+    specs = [insect_leg(f"leg{i}", x, y, standing=True)
+             for i, (x, y) in enumerate([(0.12, -0.08), (-0.12, -0.08), (-0.12, 0.08), (0.12, 0.08)])]
+    body = robot_urdf(specs, name="quad").split("\n", 2)[2].replace("</robot>", "")
+    xacro_file = tmp_path / "quad.xacro"
+    xacro_file.write_text('<?xml version="1.0"?>\n<robot name="$(arg name)" xmlns:xacro="http://www.ros.org/wiki/xacro">'
+                          '<xacro:arg name="name" default="quad"/>\n' + body + "</robot>\n")
+    legs = "FL=leg3_link3,FR=leg0_link3,RR=leg1_link3,RL=leg2_link3"  # not the automatic ids, nor their order
+    code, out, err = run(["import", "urdf", str(xacro_file), "--out", str(tmp_path), "--arg", "name=fido",
+                          "--legs", legs], capsys, monkeypatch)
+    assert code == 0, err
+    assert "walker.gait 'quad_wave' names legs AR, BR, BL, AL, not these" in out
+    rows = list(csv.DictReader((tmp_path / "joint_map.csv").open()))
+    assert [row["leg"] for row in rows[::3]] == ["FL", "FR", "RR", "RL"]
+    assert [row["urdf_joint"] for row in rows[::3]] == ["leg3_joint0", "leg0_joint0", "leg1_joint0", "leg2_joint0"]
+    assert list(tomllib.loads((tmp_path / "robots" / "fido.toml").read_text())["legs"]) == ["FL", "FR", "RR", "RL"]
+    xacro_file.write_text(xacro_file.read_text().replace("$(arg name)", "${undefined_thing}"))
+    code, _, err = run(["import", "urdf", str(xacro_file), "--out", str(tmp_path / "bad")], capsys, monkeypatch)
+    assert code == 2 and err.count("\n") == 1 and "xacro:" in err and "undefined_thing" in err, err
 
 
 def test_flat_hexapod_gets_a_standing_pose_it_reaches(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]

@@ -583,6 +583,12 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
         legs_out[chain.leg_id] = {"base": _dh_values(chain.base),
                                   "foot_radius": _round(chain.sphere, 6), "joints": joints}
     gait = GAITS.get(len(chains), "wave")
+    from shc_cli.spec.loading import load_gait
+
+    named = load_gait(gait).gait
+    if named is not None and set(named.offset_multiplier) != {c.leg_id for c in chains}:
+        notes.append(f"walker.gait '{gait}' names legs {', '.join(named.offset_multiplier)}, not these: write a gait "
+                     "file for them (docs/robot-files.md section 5) before shc validate, plan or simulate")
     tree_out: dict[str, Any] = {"name": name, "description": f"imported from {file.name} by shc import urdf",
                                 "time_delta": 0.01, "body": body, "walker": {"gait": gait}, "servo": servo,
                                 "legs": legs_out}
