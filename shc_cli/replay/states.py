@@ -1,0 +1,127 @@
+"""The robot-state requests of a recorded run, inferred from the data so that stalls do not shift them.
+
+OpenSHC counts cycles, not seconds: its start-up takes ``time_to_start / time_delta`` cycles however long they
+last. But when it enters RUNNING depends on more than the start-up's length: the Bullet mammalian recording holds
+the start-up's last pose for five cycles after a ~52 ms stall (the cycle that generates the workspaces) and starts
+walking at cycle 507, not at 502. Requesting RUNNING five cycles early puts the 5-DOF legs into another redundant
+posture (joints up to 32 mrad apart for ~15 s, tips still equal). So the requests follow what the data shows:
+
+* the start-up (PACKED → READY) is requested in the cycle of the first joint motion;
+* RUNNING is requested in the first cycle, at least a start-up's length later, that shows the robot RUNNING: its
+  joints move again, or a leg reports a stance or swing progress (LegState; −1 outside RUNNING);
+* later, the recorded ``/syropod_remote/robot_state`` requests (when the source holds them) with the input latency.
+
+Until RUNNING the request is held at READY, so the controller waits however long the recording waited. With the
+start-up *sequence* (``start_up.sequence``) RUNNING is requested at the first motion (its length depends on the
+joints, so no plateau can be located from the data; see docs/migrating-from-openshc.md).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from shc_cli.control.controller import RobotState
+from shc_cli.control.startup import iterations
+from shc_cli.replay.source import Recorded, usable
+from shc_cli.spec.robot import Robot
+
+INPUT_LATENCY_CYCLES = 1
+"""Cycles between the recorder seeing an input and OpenSHC using it (OpenSHC reads its topics after publishing;
+measured at all five velocity changes of the insectoid recording)."""
+
+
+@dataclass(frozen=True)
+class StatePlan:
+    """Per-cycle state requests and where they came from.
+
+    Attributes:
+        requests: the request sent in each cycle (``None``: none), ``(N,)``.
+        first_motion: cycle of the start-up's first joint motion, or ``None`` if the joints never move.
+        running: cycle in which RUNNING is requested, or ``None`` if the data never shows RUNNING.
+        evidence: what showed RUNNING (``"joints move"``, ``"leg progress"``) or ``""``.
+        later: cycles of later requests taken from the recorded robot-state input.
+    """
+
+    requests: list[RobotState | None]
+    first_motion: int | None
+    running: int | None
+    evidence: str
+    later: list[tuple[int, RobotState]]
+
+    def describe(self) -> str:
+        """One line for the report."""
+        if self.first_motion is None:
+            return "states: the joints never move (no start-up requested)"
+        text = f"states: start-up from cycle {self.first_motion} (first joint motion)"
+        if self.running is None:
+            text += ", RUNNING never shown"
+        else:
+            text += f", RUNNING from cycle {self.running} ({self.evidence})"
+        for cycle, state in self.later:
+            text += f", {state.name} requested at cycle {cycle}"
+        return text
+
+
+def moving(joints: np.ndarray) -> np.ndarray:
+    """Per cycle: did any joint change since the previous cycle (``(N,)``, False for cycle 0)? Values that are not
+    usable (non-finite, absurd) are ignored."""
+    ok = usable(joints)
+    out = np.zeros(len(joints), dtype=bool)
+    if len(joints) > 1:
+        both = ok[1:] & ok[:-1]
+        out[1:] = (np.where(both, np.abs(joints[1:] - joints[:-1]), 0.0) > 0.0).any(axis=1)
+    return out
+
+
+def running_shown(recorded: Recorded) -> np.ndarray:
+    """Per cycle: does a leg report a stance or swing progress (≥ 0; OpenSHC publishes −1 outside RUNNING)?"""
+    if recorded.progress is None:
+        return np.zeros(recorded.cycles, dtype=bool)
+    progress = recorded.progress
+    with np.errstate(invalid="ignore"):
+        shown: np.ndarray = np.asarray((usable(progress) & (progress >= 0.0)).any(axis=(1, 2)))
+    return shown
+
+
+def infer_states(recorded: Recorded, robot: Robot, latency: int = INPUT_LATENCY_CYCLES) -> StatePlan:
+    """The state requests that reproduce the recorded run's state changes (module docstring)."""
+    n = recorded.cycles
+    requests: list[RobotState | None] = [None] * n
+    if n == 0:
+        return StatePlan(requests, None, None, "", [])
+    requests[0] = RobotState.RUNNING  # the remote's request: the controller estimates its state (UNKNOWN → PACKED)
+    motion = moving(recorded.joints)
+    shown = running_shown(recorded)
+    first = int(np.argmax(motion)) if motion.any() else None
+    if first is None:
+        return StatePlan(requests, None, None, "", [])
+    if robot.start_up.sequence:
+        running: int | None = first
+        evidence = "start-up sequence from the first motion"
+        hold = RobotState.RUNNING
+    else:
+        earliest = first + iterations(robot.start_up.time_to_start, robot.time_delta)
+        candidates = [(int(np.argmax(flags[earliest:])) + earliest, name)
+                      for flags, name in ((motion, "joints move"), (shown, "leg progress"))
+                      if flags[earliest:].any()]
+        running, evidence = min(candidates) if candidates else (None, "")
+        if len(candidates) == 2 and candidates[0][0] == candidates[1][0]:
+            evidence = "joints move, leg progress"
+        hold = RobotState.READY
+    end = running if running is not None else n
+    for cycle in range(first, end):
+        requests[cycle] = hold
+    later: list[tuple[int, RobotState]] = []
+    if running is not None:
+        current = RobotState.RUNNING
+        for cycle in range(running, n):
+            source = cycle - latency
+            if recorded.robot_state is not None and source >= running:
+                value = recorded.robot_state[source]
+                if np.isfinite(value) and int(value) in (0, 1, 2) and int(value) != current:
+                    current = RobotState(int(value))
+                    later.append((cycle, current))
+            requests[cycle] = current
+    return StatePlan(requests, first, running, evidence, later)
