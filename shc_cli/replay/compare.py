@@ -64,11 +64,13 @@ class Comparer:
     def __init__(self, recorded: Recorded, robot: Robot) -> None:
         names = joint_names(robot)
         missing = [name for name in names if name not in recorded.joint_names]
-        if missing:
+        extra = [name for name in recorded.joint_names if name not in names]
+        if missing or extra:
             shown = ", ".join(recorded.joint_names[:3]) + (", …" if len(recorded.joint_names) > 3 else "")
-            raise ShcError(f"{recorded.source}: the recorded joints ({shown}) are not robot '{robot.name}''s: "
-                           f"{len(missing)} of its {len(names)} joints are missing, e.g. {missing[0]} (replay with "
-                           "the robot that was recorded: --robot)")
+            what = (f"{len(missing)} of its {len(names)} joints are missing, e.g. {missing[0]}" if missing else
+                    f"{len(extra)} of the {len(recorded.joint_names)} recorded joints are not its, e.g. {extra[0]}")
+            raise ShcError(f"{recorded.source}: the recorded joints ({shown}) are not those of robot "
+                           f"'{robot.name}': {what} (replay with the robot that was recorded: --robot)")
         n = recorded.cycles
         self.recorded = recorded
         columns = [recorded.joint_names.index(name) for name in names]
