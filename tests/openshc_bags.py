@@ -32,9 +32,10 @@ def typestore(ros1: bool) -> Any:
     return store
 
 
-def write_openshc_bag(recorded: Recorded, path: Path, ros1: bool, topics: set[str] | None = None) -> Path:
+def write_openshc_bag(recorded: Recorded, path: Path, ros1: bool, topics: set[str] | None = None,
+                      more_inputs: tuple[str, ...] = ()) -> Path:
     """Write ``recorded`` as OpenSHC's topics (all, or only ``topics``) into a ROS 1 ``.bag`` file or a ROS 2 mcap
-    bag directory at ``path``."""
+    bag directory at ``path``; ``more_inputs``: Int8 remote topics with one message (0) at cycle 0."""
     store = typestore(ros1)
     T = store.types
     assert recorded.tips is not None and recorded.progress is not None
@@ -117,6 +118,9 @@ def write_openshc_bag(recorded: Recorded, path: Path, ros1: bool, topics: set[st
     streams.append(("/desired_joint_states", "sensor_msgs/msg/JointState", joints_at))
     if topics is not None:
         streams = [s for s in streams if s[0] in topics]
+    for topic in more_inputs:
+        streams.insert(0, (topic, "std_msgs/msg/Int8",
+                           lambda c: [(BASE_NS - PERIOD_NS // 2, T["std_msgs/msg/Int8"](data=0))] if c == 0 else []))
     if ros1:
         from rosbags.rosbag1 import Writer as Writer1
 

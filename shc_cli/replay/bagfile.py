@@ -60,6 +60,9 @@ def read_bag(path: Path) -> Recorded:
             if VELOCITY_INPUT not in by_topic:
                 raise ShcError(f"{path}: no {VELOCITY_INPUT} in the bag, so the velocity inputs are unknown "
                                f"(topics: {_listing(by_topic)}; {RECORD_HINT})")
+            not_replayed = sorted(topic for topic in by_topic if topic.startswith("/syropod_remote/")
+                                  and topic not in (VELOCITY_INPUT, STATE_INPUT, "/syropod_remote/system_state")
+                                  and any(c.msgcount for c in by_topic[topic]))
             wanted = [JOINTS, VELOCITY_INPUT, STATE_INPUT, VELOCITY, POSE]
             legs = [m.group(1) for topic in by_topic if (m := LEG_STATE.match(topic))
                     and all(c.msgtype.endswith("LegState") for c in by_topic[topic])]
@@ -72,7 +75,9 @@ def read_bag(path: Path) -> Recorded:
         raise
     except Exception as error:  # rosbags' reader and deserialisation errors: the file is not a readable bag
         raise ShcError(f"{path}: not a readable {kind} ({type(error).__name__}: {error})") from None
-    return _arrays(path, kind, messages, legs, topics)
+    recorded = _arrays(path, kind, messages, legs, topics)
+    recorded.not_replayed = not_replayed
+    return recorded
 
 
 def _listing(by_topic: dict[str, Any]) -> str:

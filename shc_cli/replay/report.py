@@ -36,6 +36,7 @@ def summary(result: Replay, robot: str, gait: str) -> dict[str, Any]:
         "topics": result.recorded.topics,
         "compared": comparison.compared,
         "not_compared": comparison.missing,
+        "not_replayed": result.recorded.not_replayed,
         "states": {"first_motion": plan.first_motion, "running": plan.running, "evidence": plan.evidence,
                    "later": [[cycle, state.name] for cycle, state in plan.later]},
     }
@@ -50,6 +51,8 @@ def text(result: Replay, robot: str, gait: str) -> str:
              f"compared: {', '.join(comparison.compared)}"]
     if comparison.missing:
         lines.append(f"not in the source: {', '.join(comparison.missing)}")
+    if recorded.not_replayed:
+        lines.append(f"inputs not replayed (expect differences where they act): {', '.join(recorded.not_replayed)}")
     lines.append(result.plan.describe())
     worst, at = comparison.worst, comparison.at_cycle
     rows = [(LABELS[q][0], f"{worst[q]:.3g}", LABELS[q][1], str(at[q])) for q in comparison.quantities if q in worst]

@@ -46,6 +46,8 @@ class Recorded:
             or ``None``.
         pose: OpenSHC's body pose (``/shc/pose``: x, y, z [m], roll, pitch, yaw [rad]) ``(N, 6)``, or ``None``.
         topics: the topics (or CSV files) that were read, for the report.
+        not_replayed: other ``/syropod_remote/…`` inputs the source holds messages of (posing, gait selection, …),
+            which the replay does not feed to the controller.
     """
 
     source: Path
@@ -61,6 +63,7 @@ class Recorded:
     velocity: np.ndarray | None = None
     pose: np.ndarray | None = None
     topics: list[str] = field(default_factory=list)
+    not_replayed: list[str] = field(default_factory=list)
 
     @property
     def cycles(self) -> int:
@@ -74,7 +77,7 @@ class Recorded:
         return Recorded(self.source, self.kind, self.t[:cycles], self.joint_names, self.joints[:cycles],
                         self.command[:cycles], cut(self.robot_state), self.legs,
                         None if self.tips is None else {k: v[:cycles] for k, v in self.tips.items()},
-                        cut(self.progress), cut(self.velocity), cut(self.pose), self.topics)
+                        cut(self.progress), cut(self.velocity), cut(self.pose), self.topics, self.not_replayed)
 
 
 def usable(values: np.ndarray) -> np.ndarray:
