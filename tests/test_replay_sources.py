@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from shc_cli.control.controller import RobotState
+from shc_cli.errors import ShcError
 from shc_cli.interop.bag import LEG_STATE_MSG
 from shc_cli.replay import replay
 from shc_cli.replay.source import Recorded, open_source
@@ -157,6 +158,11 @@ def test_later_state_requests_come_from_the_recorded_input(head: Recorded, bulle
                                  head.legs, head.tips, head.progress), bullet)
     assert plan.later == [(801, RobotState.READY)]  # used one cycle after the recorder saw it
     assert plan.requests[800] == RobotState.RUNNING and plan.requests[801] == RobotState.READY
+
+
+def test_a_source_that_starts_while_running_is_refused(head: Recorded, bullet: Robot) -> None:
+    with pytest.raises(ShcError, match="already RUNNING in the first recorded cycle"):
+        infer_states(head.rows(600, 700), bullet)
 
 
 def _one_line_exit_2(argv: list[str], capsys, monkeypatch) -> str:  # type: ignore[no-untyped-def]

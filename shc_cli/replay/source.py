@@ -71,12 +71,16 @@ class Recorded:
 
     def head(self, cycles: int) -> Recorded:
         """The first ``cycles`` cycles only."""
-        def cut(a: np.ndarray | None) -> np.ndarray | None:
-            return None if a is None else a[:cycles]
+        return self.rows(0, cycles)
 
-        return Recorded(self.source, self.kind, self.t[:cycles], self.joint_names, self.joints[:cycles],
-                        self.command[:cycles], cut(self.robot_state), self.legs,
-                        None if self.tips is None else {k: v[:cycles] for k, v in self.tips.items()},
+    def rows(self, start: int, stop: int) -> Recorded:
+        """Cycles ``start`` to ``stop − 1`` (times as recorded)."""
+        def cut(a: np.ndarray | None) -> np.ndarray | None:
+            return None if a is None else a[start:stop]
+
+        return Recorded(self.source, self.kind, self.t[start:stop], self.joint_names, self.joints[start:stop],
+                        self.command[start:stop], cut(self.robot_state), self.legs,
+                        None if self.tips is None else {k: v[start:stop] for k, v in self.tips.items()},
                         cut(self.progress), cut(self.velocity), cut(self.pose), self.topics, self.not_replayed)
 
 

@@ -24,6 +24,7 @@ import numpy as np
 
 from shc_cli.control.controller import RobotState
 from shc_cli.control.startup import iterations
+from shc_cli.errors import ShcError
 from shc_cli.replay.source import Recorded, usable
 from shc_cli.spec.robot import Robot
 
@@ -91,9 +92,13 @@ def infer_states(recorded: Recorded, robot: Robot, latency: int = INPUT_LATENCY_
     requests: list[RobotState | None] = [None] * n
     if n == 0:
         return StatePlan(requests, None, None, "", [])
+    shown = running_shown(recorded)
+    if shown[0]:
+        raise ShcError(f"{recorded.source}: the robot is already RUNNING in the first recorded cycle (its legs report "
+                       "a stance or swing progress), so the replay cannot start where OpenSHC was (record from before "
+                       "the controller starts up)")
     requests[0] = RobotState.RUNNING  # the remote's request: the controller estimates its state (UNKNOWN → PACKED)
     motion = moving(recorded.joints)
-    shown = running_shown(recorded)
     first = int(np.argmax(motion)) if motion.any() else None
     if first is None:
         return StatePlan(requests, None, None, "", [])
