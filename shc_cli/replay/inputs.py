@@ -6,6 +6,8 @@ cycle, so any loop that steps a :class:`~shc_cli.control.controller.Controller` 
 
 from __future__ import annotations
 
+import numpy as np
+
 from shc_cli.control.controller import Command
 from shc_cli.replay.source import Recorded, usable
 from shc_cli.replay.states import INPUT_LATENCY_CYCLES, StatePlan
@@ -16,8 +18,8 @@ class ReplayInputs:
     in cycle ``c`` (OpenSHC reads its topics after publishing); unusable recorded inputs count as 0."""
 
     def __init__(self, recorded: Recorded, plan: StatePlan, latency: int = INPUT_LATENCY_CYCLES) -> None:
-        self.velocity = [tuple(float(v) if ok else 0.0 for v, ok in zip(row, flags, strict=True))
-                         for row, flags in zip(recorded.command, usable(recorded.command), strict=True)]
+        values = np.where(usable(recorded.command), recorded.command, 0.0)
+        self.velocity: list[tuple[float, float, float]] = [(float(x), float(y), float(w)) for x, y, w in values]
         self.requests = plan.requests
         self.latency = latency
 
@@ -27,4 +29,4 @@ class ReplayInputs:
     def command(self, cycle: int) -> Command:
         source = cycle - self.latency
         velocity = self.velocity[source] if source >= 0 else (0.0, 0.0, 0.0)
-        return Command(velocity=velocity, state_request=self.requests[cycle])  # type: ignore[arg-type]
+        return Command(velocity=velocity, state_request=self.requests[cycle])
