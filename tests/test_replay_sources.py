@@ -232,3 +232,23 @@ def test_unusable_paths_and_files_are_one_line(csv_prefix: Path, tmp_path: Path,
     err = _one_line_exit_2(["replay", str(csv_prefix), "--robot", "bullet", "--tolerance-joints", "-1"],
                            capsys, monkeypatch)
     assert "--tolerance-joints" in err
+
+
+def test_a_start_up_hidden_by_the_print_precision_is_found(head: Recorded, bullet: Robot) -> None:
+    """A small start-up move printed with 6 decimals shows nothing in its first cycle; the start (and so RUNNING,
+    a start-up's length later) is found from the fit of OpenSHC's cubic move, not from the first visible change."""
+    steps, start = 500, 9
+    n = start + steps + 20
+    q0, target = np.zeros(30), np.linspace(-0.03, 0.03, 30)  # the largest joint move is 0.03 rad
+    joints = np.tile(target, (n, 1))
+    joints[:start] = q0
+    u = np.arange(1, steps + 1) / steps
+    joints[start:start + steps] = q0 + np.outer(3 * u**2 - 2 * u**3, target - q0)
+    joints = np.round(joints, 6)
+    assert np.flatnonzero(np.abs(np.diff(joints, axis=0)).max(axis=1) > 0)[0] + 1 == start + 1  # first visible: 10
+    progress = np.full((n, 6, 2), -1.0)
+    progress[start + steps:, :, 0] = 0.0  # RUNNING from 509, its joints still (a 3-DOF robot would not move them)
+    recorded = Recorded(head.source, head.kind, np.arange(n) * 0.01, head.joint_names, joints, np.zeros((n, 3)),
+                        None, head.legs, None, progress)
+    plan = infer_states(recorded, bullet)
+    assert (plan.first_motion, plan.running, plan.evidence) == (start, start + steps, "leg progress")

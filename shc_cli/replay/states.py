@@ -6,7 +6,8 @@ the start-up's last pose for five cycles after a ~52 ms stall (the cycle that ge
 walking at cycle 507, not at 502. Requesting RUNNING five cycles early puts the 5-DOF legs into another redundant
 posture (joints up to 32 mrad apart for ~15 s, tips still equal). So the requests follow what the data shows:
 
-* the start-up (PACKED → READY) is requested in the cycle of the first joint motion;
+* the start-up (PACKED → READY) is requested in the cycle of the first joint motion (for the direct start-up,
+  up to two cycles earlier when the fit of its cubic move shows that printed decimals hid its beginning);
 * RUNNING is requested in the first cycle, at least a start-up's length later, that shows the robot RUNNING: its
   joints move again, or a leg reports a stance or swing progress (LegState; −1 outside RUNNING);
 * later, the recorded ``/syropod_remote/robot_state`` requests (when the source holds them) with the input latency.
@@ -86,6 +87,34 @@ def running_shown(recorded: Recorded) -> np.ndarray:
     return shown
 
 
+HIDDEN_START_CYCLES = 2
+"""How many cycles the printed joints can hide the direct start-up's beginning (at 6 decimals a cubic move of less
+than ~0.08 rad shows nothing in its first cycle, ~0.02 rad nothing in its first two)."""
+
+
+def direct_start(joints: np.ndarray, first: int, steps: int) -> int:
+    """The direct start-up's first cycle: the first visible motion, or up to :data:`HIDDEN_START_CYCLES` earlier when
+    rounding hid the slow beginning of OpenSHC's cubic joint move ``q0 + Δ·(3u² − 2u³)``, ``u = k / steps`` in its
+    ``k``-th cycle — whichever start fits the joint that moves most best (least squares)."""
+    n = len(joints)
+    q0 = joints[0]
+    delta = np.where(usable(joints[min(first + steps - 1, n - 1)]) & usable(q0),
+                     joints[min(first + steps - 1, n - 1)] - q0, 0.0)
+    j = int(np.argmax(np.abs(delta)))
+    if delta[j] == 0.0:
+        return first
+
+    def misfit(start: int) -> float:
+        cycles = np.arange(start, min(start + steps, n))
+        u = (cycles - start + 1) / steps
+        predicted = q0[j] + delta[j] * (3.0 * u**2 - 2.0 * u**3)
+        recorded = joints[cycles, j]
+        ok = usable(recorded)
+        return float(np.sum((recorded[ok] - predicted[ok]) ** 2))
+
+    return min(range(max(1, first - HIDDEN_START_CYCLES), first + 1), key=lambda start: (misfit(start), -start))
+
+
 def infer_states(recorded: Recorded, robot: Robot, latency: int = INPUT_LATENCY_CYCLES) -> StatePlan:
     """The state requests that reproduce the recorded run's state changes (module docstring)."""
     n = recorded.cycles
@@ -107,7 +136,9 @@ def infer_states(recorded: Recorded, robot: Robot, latency: int = INPUT_LATENCY_
         evidence = "start-up sequence from the first motion"
         hold = RobotState.RUNNING
     else:
-        earliest = first + iterations(robot.start_up.time_to_start, robot.time_delta)
+        steps = iterations(robot.start_up.time_to_start, robot.time_delta)
+        first = direct_start(recorded.joints, first, steps)
+        earliest = first + steps
         candidates = [(int(np.argmax(flags[earliest:])) + earliest, name)
                       for flags, name in ((motion, "joints move"), (shown, "leg progress"))
                       if flags[earliest:].any()]
