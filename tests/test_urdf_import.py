@@ -425,6 +425,8 @@ def _continuous() -> str:
     (robot_urdf([LegSpec("p", [Element("fixed", (0.1, 0.0, 0.0))])]), "no legs found"),
     (_prismatic(), "is prismatic (it slides)"),
     (_continuous(), "is continuous (it has no limits)"),
+    (robot_urdf([LegSpec("p", [Element("revolute", (0.1, -0.1, 0.0), lower=0.5, upper=0.5)])]),
+     "has lower 0.5 >= upper 0.5"),
 ])
 def test_bad_urdfs_are_one_line_and_exit_2(content: str | None, message: str, tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
                                            monkeypatch) -> None:

@@ -242,6 +242,9 @@ def _chain(tree: Tree, end: str, tip: TipSpec | None, file: Path) -> LegChain:
                         "independent joints", "leave this leg out with --legs")
         if joint.type == "revolute" and joint.limit is None:
             raise _fail(file, f"revolute joint {joint.name} has no <limit>", "give it lower and upper limits")
+        if joint.type == "revolute" and not (joint.limit.lower or 0.0) < (joint.limit.upper or 0.0):
+            raise _fail(file, f"revolute joint {joint.name} has lower {joint.limit.lower} >= upper "
+                        f"{joint.limit.upper}", "give it a range (lower < upper), or make it fixed")
     moving = _moving(path)
     if not moving:
         raise _fail(file, f"no revolute joint between the body and {end}", "name a link of a leg")
@@ -507,7 +510,9 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
         axes = []
         for joint in chain.joints:
             frame = tree.joint_frame(joint)
-            axis = np.array([0.0, 0.0, 1.0]) if joint.axis is None else np.asarray(joint.axis, dtype=float)
+            axis = np.array([1.0, 0.0, 0.0]) if joint.axis is None else np.asarray(joint.axis, dtype=float)
+            if not np.linalg.norm(axis) > 0.0:
+                raise _fail(file, f"joint {joint.name} has the axis (0, 0, 0)", "give it a direction, e.g. xyz=\"0 0 1\"")
             axes.append(Axis(frame[:3, 3].copy(), frame[:3, :3] @ (axis / np.linalg.norm(axis))))
         chain.tip = (tree.pose[chain.end] @ np.append(chain.tip_local, 1.0))[:3]
         chain.hip = axes[0].point
@@ -573,8 +578,8 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
     for chain in chains:
         joints = {}
         for joint_name, joint, row, mass in zip(chain.names, chain.joints, chain.rows, chain.masses, strict=True):
-            entry: dict[str, Any] = {**_dh_values(row), "min": float(joint.limit.lower),
-                                     "max": float(joint.limit.upper)}
+            entry: dict[str, Any] = {**_dh_values(row), "min": float(joint.limit.lower or 0.0),
+                                     "max": float(joint.limit.upper or 0.0)}
             if joint.limit.velocity:
                 entry["max_vel"] = float(joint.limit.velocity)
             entry["mass"] = _round(mass, 6)
