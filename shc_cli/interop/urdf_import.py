@@ -512,7 +512,8 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
             frame = tree.joint_frame(joint)
             axis = np.array([1.0, 0.0, 0.0]) if joint.axis is None else np.asarray(joint.axis, dtype=float)
             if not np.linalg.norm(axis) > 0.0:
-                raise _fail(file, f"joint {joint.name} has the axis (0, 0, 0)", "give it a direction, e.g. xyz=\"0 0 1\"")
+                raise _fail(file, f"joint {joint.name} has the axis (0, 0, 0)",
+                            "give it a direction, e.g. xyz=\"0 0 1\"")
             axes.append(Axis(frame[:3, 3].copy(), frame[:3, :3] @ (axis / np.linalg.norm(axis))))
         chain.tip = (tree.pose[chain.end] @ np.append(chain.tip_local, 1.0))[:3]
         chain.hip = axes[0].point
