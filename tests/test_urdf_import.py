@@ -358,6 +358,29 @@ def test_bullet_xacro_gives_bullet_toml_tips(bullet_import) -> None:  # type: ig
     assert worst < 1e-5
 
 
+def test_our_own_exported_urdf_comes_back_as_the_robot(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """`shc export urdf bullet` imported: the same legs, joint names, tips (to 1e-9 m), masses and limits."""
+    urdf = tmp_path / "bullet.urdf"
+    code, _, err = run(["export", "urdf", "bullet", "--out", str(urdf)], capsys, monkeypatch)
+    assert code == 0, err
+    code, out, err = run(["import", "urdf", str(urdf), "--out", str(tmp_path)], capsys, monkeypatch)
+    assert code == 0, err
+    assert "the centre of its leg's last link's collision sphere" in (tmp_path / "robots" / "bullet.toml").read_text()
+    ours, back = load_robot("bullet").robot, load_robot(tmp_path / "robots" / "bullet.toml").robot
+    assert ours is not None and back is not None
+    assert list(back.legs) == list(ours.legs)
+    assert [list(leg.joints) for leg in back.legs.values()] == [list(leg.joints) for leg in ours.legs.values()]
+    mine, theirs = Chains.from_robot(ours), Chains.from_robot(back)
+    assert np.array_equal(mine.lower, theirs.lower) and np.array_equal(mine.upper, theirs.upper)
+    q = np.random.default_rng(3).uniform(mine.lower, mine.upper, size=(100, *mine.lower.shape))
+    assert max(float(np.abs(mine.tips(x) - theirs.tips(x)).max()) for x in q) < 1e-9
+    assert back.body.mass == ours.body.mass and back.legs["AR"].foot_radius == ours.legs["AR"].foot_radius
+    # every link's mass comes back; the foot sphere's 1 g (FOOT_MASS) rides on the last joint
+    assert [j.mass for j in back.legs["CL"].joints.values()] == \
+        pytest.approx([0.2, 0.2, 0.4, 0.152, 0.076035 + 0.001])
+    assert back.servo.stall_torque == ours.servo.stall_torque
+
+
 def test_bullet_import_masses_and_limits(bullet_import) -> None:  # type: ignore[no-untyped-def]
     _, result = bullet_import
     imported, ours = load_robot(result.robot_path).robot, load_robot("bullet").robot

@@ -11,8 +11,9 @@
   names tip links by glob pattern and the tip point in their frame.
 * **Tip**: the centre of the tip link's first collision sphere, else its frame origin (``--tip`` names it).
 * **DH**: :mod:`shc_cli.interop.urdf_import_dh`: exact for any axes; URDF angle = shc angle.
-* **Leg ids** by hip position (the first joint's origin), clockwise from the front right: with as many hips
-  on the right (y < 0) as on the left, ``AR, BR, …`` down the right side and ``…, BL, AL`` up the left
+* **Leg ids** by position (the mean of the leg's joint origins and tip at the zero pose: a joint's origin may
+  be anywhere on its axis), clockwise from the front right: with as many legs on the right (y < 0) as on the
+  left, ``AR, BR, …`` down the right side and ``…, BL, AL`` up the left
   (4 legs: AR BR BL AL, 6: AR BR CR CL BL AL, 8: AR BR CR DR DL CL BL AL); otherwise ``L1 … Ln`` in that order.
 * **Joint names**: the URDF names without what all joints of the leg share (``AR_coxa_joint`` → ``coxa``), else
   ``joint1 …``.
@@ -285,7 +286,7 @@ def find_legs(tree: Tree, legs: str, tips: list[TipSpec], file: Path) -> list[tu
 
 
 def leg_ids(hips: list[FloatArray]) -> tuple[list[str], list[int]]:
-    """Ids and file order of legs with hips at ``hips`` (module docstring): ``(ids by leg, order)``."""
+    """Ids and file order of legs at ``hips`` (module docstring): ``(ids by leg, order)``."""
     key = [(-math.atan2(float(h[1]), float(h[0]))) % (2.0 * math.pi) for h in hips]
     order = sorted(range(len(hips)), key=lambda i: key[i])
     count = len(hips)
@@ -533,7 +534,7 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
     if on_axis:
         notes.append(f"the tips of {', '.join(on_axis)} lie on the axes of their legs' last joints, which then do "
                      "not move them: name the tips with --tip 'LINK@X,Y,Z' (LINK may be a glob pattern)")
-    ids, order = leg_ids([chain.hip for chain in chains])
+    ids, order = leg_ids([np.mean([chain.hip, *chain.points, chain.tip], axis=0) for chain in chains])
     for (given, chain), leg_id in zip(found, ids, strict=True):
         chain.leg_id = given or leg_id
     if legs != "auto" and all(given for given, _ in found):

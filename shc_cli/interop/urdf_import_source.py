@@ -35,7 +35,7 @@ class Source:
 
     Attributes:
         path: the file given.
-        text: URDF text after xacro expansion, before snapping.
+        text: URDF text after xacro expansion (capsules as cylinders), before snapping.
         snapped_text: the text parsed, rpy values snapped.
         snap: largest change made to an rpy value [rad].
     """
@@ -149,6 +149,18 @@ def require() -> None:
         raise BackendError(f"shc import urdf needs {' and '.join(missing)} (pip install 'shc[urdf]')")
 
 
+def _known_geometry(text: str) -> str:
+    """PyBullet's ``<capsule>`` (which ``shc export urdf`` writes) as a ``<cylinder>``: yourdfpy knows no capsule,
+    and the import reads no geometry but foot spheres and the body's box."""
+    if "<capsule" not in text:
+        return text
+    root = ET.fromstring(text)
+    for geometry in root.iter("geometry"):
+        for shape in geometry.findall("capsule"):
+            shape.tag = "cylinder"
+    return ET.tostring(root, encoding="unicode")
+
+
 def read_source(path: Path, args: dict[str, str], snap: float) -> Source:
     """Read ``path`` (``.xacro`` expanded, anything else as URDF) and snap its rpy values.
 
@@ -163,6 +175,7 @@ def read_source(path: Path, args: dict[str, str], snap: float) -> Source:
     else:
         text = path.read_text(encoding="utf-8", errors="replace")
     try:
+        text = _known_geometry(text)
         snapped, largest = snap_rpy(text, snap)
     except ET.ParseError as error:
         line = error.position[0] if hasattr(error, "position") else None
