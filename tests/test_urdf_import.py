@@ -363,7 +363,7 @@ def test_our_own_exported_urdf_comes_back_as_the_robot(tmp_path: Path, capsys, m
     urdf = tmp_path / "bullet.urdf"
     code, _, err = run(["export", "urdf", "bullet", "--out", str(urdf)], capsys, monkeypatch)
     assert code == 0, err
-    code, out, err = run(["import", "urdf", str(urdf), "--out", str(tmp_path)], capsys, monkeypatch)
+    code, _, err = run(["import", "urdf", str(urdf), "--out", str(tmp_path)], capsys, monkeypatch)
     assert code == 0, err
     assert "the centre of its leg's last link's collision sphere" in (tmp_path / "robots" / "bullet.toml").read_text()
     ours, back = load_robot("bullet").robot, load_robot(tmp_path / "robots" / "bullet.toml").robot
