@@ -618,6 +618,8 @@ def _finish(imported: Imported, clearance: float | None, reach: float | None, fi
         for k, joint in enumerate(leg["joints"].values()):
             joint["unpacked"] = float(np.clip(round(float(stance.unpacked[i, k]), 4), joint["min"], joint["max"]))
     imported.notes.insert(0, f"stance and body clearance: {stance.how}")
+    imported.notes.insert(1, f"gait {walker['gait']}, swing height {swing:g} m (a fifth of the clearance), control "
+                             "period 0.01 s, everything else shc's defaults")
 
 
 def factor_legs(legs: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
