@@ -252,7 +252,7 @@ def _chain(tree: Tree, end: str, tip: TipSpec | None, file: Path) -> LegChain:
     sphere = _sphere(tree.links[end])
     if tip is not None and tip.point is not None:
         local, source, radius = np.array(tip.point), f"the point {tip.point} in {end} (--tip)", 0.0
-    elif tip is None and sphere is not None:
+    elif sphere is not None:
         local, source, radius = sphere[0], f"the centre of {end}'s collision sphere", sphere[1]
     else:
         local, source, radius = np.zeros(3), f"the origin of {end}", 0.0
