@@ -237,7 +237,8 @@ def _chain(tree: Tree, end: str, tip: TipSpec | None, file: Path) -> LegChain:
         if joint.type in UNSUPPORTED:
             raise _fail(file, f"joint {joint.name} on the leg to {end} is {joint.type} (it {UNSUPPORTED[joint.type]})"
                         ": shc legs have revolute joints only",
-                        "make it revolute with <limit lower upper>, or leave this leg out with --legs")
+                        "make it revolute with <limit lower upper>, end the leg before it with --tip LINK, or "
+                        "leave the leg out with --legs")
         if joint.mimic is not None:
             raise _fail(file, f"joint {joint.name} on the leg to {end} mimics {joint.mimic.joint}: shc legs have "
                         "independent joints", "leave this leg out with --legs")
