@@ -7,6 +7,7 @@ for the Bullet xacro, our hand-written ``robots/bullet.toml`` (from CSIRO's Open
 from __future__ import annotations
 
 import csv
+import json
 import math
 import shutil
 import tomllib
@@ -392,12 +393,16 @@ def test_bullet_import_masses_and_limits(bullet_import) -> None:  # type: ignore
     assert (joint.min, joint.max, joint.max_vel) == (-2.4, 2.4, 2.35619449)
 
 
-def test_bullet_import_validates_and_walks_in_plan_and_simulate(bullet_import, tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+def test_bullet_import_validates_has_a_workspace_and_walks(bullet_import, tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
                                                   monkeypatch) -> None:
     _, result = bullet_import
     code, out, err = run(["validate", str(result.robot_path)], capsys, monkeypatch)
     assert code == 0, err
     assert "6 legs, 5 DOF per leg" in out
+    code, out, err = run(["workspace", str(result.robot_path), "--json"], capsys, monkeypatch)
+    assert code == 0, err
+    walkspace = json.loads(out)["walkspace"]
+    assert min(walkspace.values()) > 0.1  # m, every bearing
     code, out, err = run(["plan", str(result.robot_path), "--duration", "3", "--no-plots", "--out",
                           str(tmp_path / "plan")], capsys, monkeypatch)
     assert code == 0, err
