@@ -181,9 +181,9 @@ def _video_check(video: Path | None) -> None:
 def _write_video(run: Path, video: Path | None) -> None:
     """``--video``: the finished run rendered as ``shc render RUN --out FILE`` would."""
     if video is not None:
-        from shc_cli.commands.render import run_render
+        from shc_cli.commands.render import render_video
 
-        run_render(run, video, 25.0, "960x540", "follow", 1.0)
+        render_video(run, video)
 
 
 def _write_bag(run: Path, fmt: str | None) -> None:

@@ -21,3 +21,13 @@ def run_render(run_path: Path, out: Path, fps: float, size: str, camera: str, sp
     typer.echo(f"wrote {result.path}: {result.frames} frames at {fps:g} fps, {width}x{height}, "
                f"{result.draw_s + result.encode_s:.1f} s")
     return result.path
+
+
+DEFAULTS: tuple[float, str, str, float] = (25.0, "960x540", "follow", 1.0)
+"""What ``--video`` on plan and simulate renders with: ``shc render``'s defaults (fps, size, camera, speed)."""
+
+
+def render_video(run_path: Path, out: Path) -> Path:
+    """``--video FILE``: the finished run rendered as ``shc render RUN --out FILE`` would."""
+    fps, size, camera, speed = DEFAULTS
+    return run_render(run_path, out, fps, size, camera, speed)

@@ -95,13 +95,13 @@ def scene_xml(shape: scene.Shapes, boxes: list[scene.Box], width: int, height: i
     """MJCF of the scene: ground, terrain boxes, and one mocap body per body box, link and foot."""
     parts = [
         '<mujoco model="shc-render"><compiler angle="radian"/>',
-        f'<visual><global offwidth="{width}" offheight="{height}"/><quality shadowsize="1024" offsamples="2"/>'
+        f'<visual><global offwidth="{width}" offheight="{height}"/><quality shadowsize="1024" offsamples="0"/>'
         '<headlight ambient="0.45 0.45 0.45" diffuse="0.5 0.5 0.5" specular="0.05 0.05 0.05"/>'
         '<map znear="0.01" zfar="50" haze="0.3"/><rgba haze="0.93 0.95 0.98 1"/></visual>',
         '<asset><texture name="ground" type="2d" builtin="checker" rgb1="0.92 0.92 0.90" rgb2="0.80 0.82 0.86" '
         'width="256" height="256"/><texture name="sky" type="skybox" builtin="gradient" rgb1="0.93 0.95 0.98" '
-        'rgb2="0.75 0.82 0.92" width="32" height="256"/><material name="ground" texture="ground" texrepeat="20 20" reflectance="0"/>'
-        "</asset>",
+        'rgb2="0.75 0.82 0.92" width="32" height="256"/>'
+        '<material name="ground" texture="ground" texrepeat="20 20" reflectance="0"/></asset>',
         "<worldbody>",
         '<light pos="2 -2 4" dir="-0.4 0.4 -1" directional="true" castshadow="true" diffuse="0.6 0.6 0.6"/>',
         '<geom type="plane" size="20 20 0.1" material="ground"/>',
@@ -222,9 +222,9 @@ def frame_rows(t: np.ndarray, fps: float, speed: float) -> np.ndarray:
     """Log row shown in each video frame: frame ``j`` shows run time ``t₀ + j·speed/fps`` (the last row at or
     before it). ``floor((t_end − t₀)·fps/speed) + 1`` frames."""
     span = float(t[-1] - t[0])
-    count = int(math.floor(span * fps / speed + 1e-9)) + 1
+    count = math.floor(span * fps / speed + 1e-9) + 1
     times = t[0] + np.arange(count) * speed / fps
-    return np.clip(np.searchsorted(t, times + 1e-9, side="right") - 1, 0, len(t) - 1)
+    return np.asarray(np.clip(np.searchsorted(t, times + 1e-9, side="right") - 1, 0, len(t) - 1))
 
 
 def measured_speed(run: RunLog) -> np.ndarray:
@@ -321,6 +321,12 @@ def render_frames(run: RunLog, options: RenderOptions) -> Iterator[np.ndarray]:
 def render_run(run: RunLog, out: Path, options: RenderOptions, progress: bool = False) -> RenderResult:
     """Render ``run`` into ``out`` (``.mp4`` or ``.gif``); the file appears only when complete."""
     check_options(out, options)
+    for module in ("PIL", "imageio_ffmpeg"):
+        try:
+            __import__(module)
+        except ImportError as error:
+            raise SpecError([Issue(None, None, "render", f"{module} is not installed ({error})",
+                                   "pip install 'shc[view]'")]) from None
     out.parent.mkdir(parents=True, exist_ok=True)
     partial = out.with_name(f".{out.name}.partial{out.suffix}")
     frames = render_frames(run, options)
@@ -330,11 +336,11 @@ def render_run(run: RunLog, out: Path, options: RenderOptions, progress: bool = 
     try:
         if out.suffix.lower() == ".gif":
             images = []
-            for image in _timed(frames):
+            for image, seconds in _timed(frames):
                 started = time.perf_counter()
-                images.append(_gif_frame(image[0]))
+                images.append(_gif_frame(image))
                 encode += time.perf_counter() - started
-                draw += image[1]
+                draw += seconds
                 count += 1
                 _tick(progress, count, total)
             started = time.perf_counter()

@@ -491,7 +491,13 @@ def is_run(target: str) -> bool:
 
 def serve(target: str, host: str, port: int) -> None:
     """Serve ``target`` at ``http://host:port`` until Ctrl-C."""
-    import viser
+    try:
+        import viser
+    except ImportError as error:
+        from shc_cli.errors import Issue, SpecError
+
+        raise SpecError([Issue(None, None, "view", f"viser is not installed ({error})",
+                               "pip install 'shc[view]'")]) from None
 
     from shc_cli.runread import read_run
     from shc_cli.spec.loading import load_robot
