@@ -156,3 +156,28 @@ def test_view_run_replays_and_the_timeline_moves_the_robot(plan_run: Path, brows
         changed = (np.abs(end - start).sum(axis=2) > 40).sum()
         assert changed > 300, f"scrubbing the timeline changed only {changed} pixels"
         assert _robot_pixels(end) > 300
+
+
+@needs_chromium
+def test_view_robot_reload_shows_the_edited_file(tmp_path: Path, browser: Any) -> None:
+    robot = tmp_path / "mine.toml"
+    text = (ROOT / "robots" / "bullet.toml").read_text(encoding="utf-8")
+    robot.write_text(text, encoding="utf-8")
+    with served(str(robot)) as url:
+        page = _open(browser, url, "AR coxa")
+        assert page.get_by_text("13.37 kg").count() == 1
+        before = _settle(page, 3.0)
+        wide = text.replace("size = [0.6, 0.14, 0.101]", "size = [0.6, 0.40, 0.101]")
+        wide = wide.replace("mass = 7.2", "mass = 9.2")
+        assert wide != text
+        robot.write_text(wide, encoding="utf-8")
+        page.reload()
+        page.get_by_text("15.37 kg").first.wait_for(timeout=60_000)  # the body's 2 kg more
+        after = _settle(page, 3.0)
+        assert _body_pixels(after) > _body_pixels(before) * 1.3, "the wider body is not drawn"
+
+
+def _body_pixels(image: np.ndarray) -> int:
+    """Pixels of the body's blue-grey (``BODY_RGB`` 0.35, 0.38, 0.42 under the viewer's lights)."""
+    r, b = image[..., 0], image[..., 2]
+    return int(((np.abs(r - 90) < 30) & (np.abs(b - 107) < 30) & (b >= r)).sum())
