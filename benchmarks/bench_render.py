@@ -96,19 +96,25 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=20)
     args = parser.parse_args()
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
-    walls = []
+    walls, cpus = [], []
     with tempfile.TemporaryDirectory() as directory:
         for repeat in range(args.repeats):
             out = Path(directory) / f"walk{repeat}.mp4"
+            children = resource.getrusage(resource.RUSAGE_CHILDREN)
             started = time.perf_counter()
             result = subprocess.run([sys.executable, "-m", "shc_cli.cli", "render", str(args.run), "--out", str(out)],
                                     check=True, capture_output=True, text=True)
             walls.append(time.perf_counter() - started)
-            print(f"  render {repeat}: {walls[-1]:.1f} s ({result.stdout.strip()}), {out.stat().st_size / 1e6:.1f} MB")
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpus.append(after.ru_utime + after.ru_stime - children.ru_utime - children.ru_stime)
+            print(f"  render {repeat}: {walls[-1]:.1f} s wall, {cpus[-1]:.1f} s CPU (render and ffmpeg) "
+                  f"({result.stdout.strip()}), {out.stat().st_size / 1e6:.1f} MB, load "
+                  f"{os.getloadavg()[0]:.1f}", flush=True)
     mujoco, mujoco_cpu = _mujoco_frames(args.run, args.frames)
     tiny, tiny_cpu = _tiny_frames(args.run, args.frames)
     m, t = statistics.median(mujoco), statistics.median(tiny)
-    print(f"shc render 25 fps 960x540: median {statistics.median(walls):.1f} s over {args.repeats}")
+    print(f"shc render 25 fps 960x540: median {statistics.median(walls):.1f} s wall, "
+          f"{statistics.median(cpus):.1f} s CPU over {args.repeats}")
     print(f"per 960x540 frame, wall (CPU): MuJoCo ({os.environ.get('MUJOCO_GL')}) {m * 1e3:.0f} ms "
           f"({mujoco_cpu * 1e3:.0f} ms), PyBullet TinyRenderer {t * 1e3:.0f} ms ({tiny_cpu * 1e3:.0f} ms); "
           f"TinyRenderer / MuJoCo ×{t / m:.1f} wall, ×{tiny_cpu / mujoco_cpu:.1f} CPU")

@@ -96,9 +96,9 @@ def scene_xml(shape: scene.Shapes, boxes: list[scene.Box], width: int, height: i
     parts = [
         '<mujoco model="shc-render"><compiler angle="radian"/>',
         f'<visual><global offwidth="{width}" offheight="{height}"/><quality shadowsize="1024" offsamples="0"/>'
-        '<headlight ambient="0.45 0.45 0.45" diffuse="0.5 0.5 0.5" specular="0.05 0.05 0.05"/>'
+        '<headlight ambient="0.5 0.5 0.5" diffuse="0.6 0.6 0.6" specular="0.05 0.05 0.05"/>'
         '<map znear="0.01" zfar="50" haze="0.3"/><rgba haze="0.93 0.95 0.98 1"/></visual>',
-        '<asset><texture name="ground" type="2d" builtin="checker" rgb1="0.92 0.92 0.90" rgb2="0.80 0.82 0.86" '
+        '<asset><texture name="ground" type="2d" builtin="checker" rgb1="1 1 1" rgb2="0.86 0.88 0.92" '
         'width="256" height="256"/><texture name="sky" type="skybox" builtin="gradient" rgb1="0.93 0.95 0.98" '
         'rgb2="0.75 0.82 0.92" width="32" height="256"/>'
         '<material name="ground" texture="ground" texrepeat="20 20" reflectance="0"/></asset>',
@@ -241,7 +241,7 @@ def _camera_path(run: RunLog, rows: np.ndarray, camera: str, body_length: float)
                                                                                                     float, float,
                                                                                                     float]]:
     """Camera target, distance, azimuth and elevation per frame."""
-    size = max(body_length * 4.0, 0.8)
+    size = max(body_length * 3.2, 0.8)
     if camera == "fixed":
         path = run.position[rows]
         low, high = path.min(axis=0), path.max(axis=0)

@@ -19,6 +19,8 @@ editing a robot file and reloading the page shows the change.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 import threading
 import time
@@ -391,6 +393,7 @@ class RunPage:
                                        initial_value=float(run.t[0]))
         buttons = gui.add_button_group("playback", ("Play", "Pause"))
         self.speed = gui.add_dropdown("speed", SPEEDS, initial_value="1")
+        self.follow = gui.add_checkbox("camera follows the body", initial_value=False)
         self.status = gui.add_markdown("")
         self.plot = gui.add_image(data.plot.at(float(run.t[0])), label="power and contacts", format="jpeg",
                                   jpeg_quality=85)
@@ -471,6 +474,12 @@ class RunPage:
             power = f", {run.power[row]:.0f} W" if run.power is not None else ""
             self.status.content = (f"t = {run.t[row]:.2f} s — {state} / {run.walk_state[row]}, commanded "
                                    f"{commanded:.3f} m/s{power}")
+        if self.follow.value:
+            camera = self.client.camera
+            target = np.array([run.position[row, 0], run.position[row, 1], 0.0])
+            offset = np.asarray(camera.position) - np.asarray(camera.look_at)
+            camera.look_at = tuple(target)
+            camera.position = tuple(target + offset)
         now = time.monotonic()
         if force_plot or not self.playing or now - self._last_plot >= 1.0 / PLOT_RATE:
             self._last_plot = now
@@ -511,7 +520,8 @@ def serve(target: str, host: str, port: int) -> None:
             from shc_cli.errors import Issue, SpecError
 
             raise SpecError([Issue(None, None, target, "does not load", "shc validate it")])
-    server = viser.ViserServer(host=host, port=port, label="shc view", verbose=False)
+    with contextlib.redirect_stdout(io.StringIO()):  # viser's own banner: shc prints one line instead
+        server = viser.ViserServer(host=host, port=port, label="shc view", verbose=False)
     pages: dict[int, Any] = {}
 
     def connect(client: Any) -> None:

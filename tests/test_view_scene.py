@@ -1,0 +1,94 @@
+"""The numbers behind `shc view` and `shc render`: poses of the model's shapes, frame timing, paths."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial.transform import Rotation
+
+from shc_cli.model.chains import Chains
+from shc_cli.spec.robot import Robot
+from shc_cli.view import scene
+from shc_cli.view.render import frame_rows, scene_xml
+
+angles = st.floats(-3.0, 3.0)
+
+
+@settings(max_examples=50, deadline=None)
+@given(angles, angles, angles)
+def test_rpy_quaternion_and_matrix_are_scipys_zyx(roll: float, pitch: float, yaw: float) -> None:
+    expected = Rotation.from_euler("ZYX", [yaw, pitch, roll])
+    x, y, z, w = expected.as_quat()
+    q = scene.rpy_quaternion(np.array([roll, pitch, yaw]))
+    assert np.allclose(q, [w, x, y, z]) or np.allclose(q, [-w, -x, -y, -z])
+    assert np.allclose(scene.rpy_matrix(np.array([roll, pitch, yaw])), expected.as_matrix())
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.tuples(st.floats(-1, 1), st.floats(-1, 1), st.floats(-1, 1)).filter(lambda v: np.linalg.norm(v) > 1e-3))
+def test_z_to_turns_z_onto_the_direction(direction: tuple[float, float, float]) -> None:
+    w, x, y, z = scene.z_to(np.array([direction]))[0]
+    turned = Rotation.from_quat([x, y, z, w]).apply([0.0, 0.0, 1.0])
+    assert np.allclose(turned, np.array(direction) / np.linalg.norm(direction), atol=1e-9)
+
+
+def test_z_to_straight_down_is_a_half_turn() -> None:
+    w, x, y, z = scene.z_to(np.array([[0.0, 0.0, -2.0]]))[0]
+    assert np.allclose(Rotation.from_quat([x, y, z, w]).apply([0, 0, 1]), [0, 0, -1])
+
+
+def test_poses_put_the_feet_at_the_chains_tips_in_the_world(bullet: Robot) -> None:
+    shape = scene.shapes(bullet)
+    chains = Chains.from_robot(bullet)
+    rng = np.random.default_rng(1)
+    q = rng.uniform(chains.lower, chains.upper, size=(3, *chains.lower.shape))
+    position = rng.normal(size=(3, 3))
+    rpy = rng.uniform(-0.5, 0.5, size=(3, 3))
+    pose = scene.poses(shape, q, position, rpy)
+    for n in range(3):
+        expected = Rotation.from_euler("ZYX", rpy[n, ::-1]).apply(chains.tips(q[n])) + position[n]
+        assert np.allclose(pose.feet[n], expected)
+    # every link keeps its DH length |(r, d)| whatever the joints
+    lengths = np.linalg.norm(np.diff(pose.origins, axis=2), axis=3)
+    for i, leg in enumerate(bullet.legs.values()):
+        for k, joint in enumerate(leg.joints.values()):
+            assert np.allclose(lengths[:, i, k], np.hypot(joint.r, joint.d))
+
+
+def test_at_limit_marks_joints_at_their_limits(bullet: Robot) -> None:
+    shape = scene.shapes(bullet)
+    q = shape.chains.default_joints()
+    q[0, 0] = shape.chains.upper[0, 0]
+    q[2, 1] = shape.chains.lower[2, 1] + 0.5 * scene.LIMIT_MARGIN
+    hit = scene.at_limit(shape, q)
+    assert hit[0, 0] and hit[2, 1]
+    q[0, 0] -= 0.01
+    assert not scene.at_limit(shape, q)[0, 0]
+
+
+def test_frame_rows_sample_time_at_fps_times_speed() -> None:
+    t = np.arange(0, 1001) * 0.01  # 10 s at 100 Hz
+    rows = frame_rows(t, 25.0, 1.0)
+    assert len(rows) == 251 and rows[1] == 4 and rows[-1] == 1000
+    fast = frame_rows(t, 25.0, 2.0)
+    assert len(fast) == 126 and fast[1] == 8
+
+
+def test_workplane_outline_is_closed_and_has_the_radii() -> None:
+    plane = {0: 0.1, 90: 0.2, 180: 0.3, 270: 0.4, 360: 0.1}
+    outline = scene.workplane_outline(plane, (1.0, 2.0), 0.0)
+    assert np.allclose(outline, [[1.1, 2, 0], [1, 2.2, 0], [0.7, 2, 0], [1, 1.6, 0], [1.1, 2, 0]])
+
+
+def test_scene_xml_has_one_mocap_body_per_link_and_foot(bullet: Robot) -> None:
+    xml = scene_xml(scene.shapes(bullet), [scene.Box((1, 0, 0.05), (0.1, 0.1, 0.1), 0.0, (0.5, 0.5, 0.5))], 64, 48)
+    assert xml.count('mocap="true"') == 1 + 30 + 6
+    assert xml.count('type="box"') == 2  # the body and the terrain block
+
+
+def test_terrain_boxes_follow_the_summary() -> None:
+    assert scene.terrain_boxes({}) == ("flat", [])
+    text, boxes = scene.terrain_boxes({"terrain": "stairs:0.05,0.3", "seed": 0})
+    assert text == "stairs:0.05,0.3" and len(boxes) > 3
+    assert max(b.centre[2] + b.size[2] / 2 for b in boxes) > 0.5
