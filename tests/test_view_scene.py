@@ -92,3 +92,51 @@ def test_terrain_boxes_follow_the_summary() -> None:
     text, boxes = scene.terrain_boxes({"terrain": "stairs:0.05,0.3", "seed": 0})
     assert text == "stairs:0.05,0.3" and len(boxes) > 3
     assert max(b.centre[2] + b.size[2] / 2 for b in boxes) > 0.5
+
+
+def _synthetic_run(robot: Robot, rows: int = 400) -> object:
+    """A run that walks a circle: forward 0.2 m/s while turning 0.5 rad/s, legs in the default joints."""
+    from pathlib import Path
+
+    from shc_cli.runread import RunLog
+
+    dt = robot.time_delta
+    t = np.arange(rows) * dt
+    desired = np.tile([0.2, 0.0, 0.5], (rows, 1))
+    yaw = 0.5 * t
+    position = np.column_stack([0.4 * np.sin(yaw), 0.4 * (1 - np.cos(yaw)), np.full(rows, 0.1)])
+    chains = Chains.from_robot(robot)
+    joints = np.tile(chains.default_joints(), (rows, 1, 1))
+    contact = np.zeros((rows, len(robot.legs)), dtype=bool)
+    contact[: rows // 2, ::2] = True
+    return RunLog(path=Path("synthetic"), kind="plan", summary={}, robot=robot, t=t, running=np.ones(rows, bool),
+                  walk_state=np.full(rows, "MOVING"), command=desired, desired=desired, position=position,
+                  rpy=np.column_stack([np.zeros(rows), np.zeros(rows), yaw]), joints=joints, contact=contact,
+                  power=np.linspace(10.0, 50.0, rows))
+
+
+def test_commanded_path_integrates_the_desired_velocity_along_the_heading(bullet: Robot) -> None:
+    from shc_cli.view.server import commanded_path
+
+    run = _synthetic_run(bullet)
+    path = commanded_path(run)  # type: ignore[arg-type]
+    # a circle of radius v/ω = 0.4 m, as the synthetic body path; forward Euler drifts by at most v·ω·dt·t/2 = 2 mm
+    assert np.abs(path[:, :2] - run.position[:, :2]).max() < 2e-3  # type: ignore[attr-defined]
+    assert np.abs(path[-1, :2] - run.position[-1, :2]).max() < 2e-3  # type: ignore[attr-defined]
+
+
+def test_plot_cursor_moves_with_time(bullet: Robot) -> None:
+    from shc_cli.view.server import PlotImage
+
+    run = _synthetic_run(bullet)
+    plot = PlotImage(run)  # type: ignore[arg-type]
+
+    def cursor_x(time_s: float) -> float:
+        red = (plot.at(time_s)[..., 0] > 200) & (plot.at(time_s)[..., 1] < 60) & (plot.at(time_s)[..., 2] < 60)
+        columns = np.flatnonzero(red.sum(axis=0) > 0.5 * (plot.bottom - plot.top))
+        assert len(columns)
+        return float(columns.mean())
+
+    start, middle, end = cursor_x(0.0), cursor_x(2.0), cursor_x(3.99)
+    assert start < middle < end
+    assert abs((middle - start) / (end - start) - 2.0 / 3.99) < 0.02

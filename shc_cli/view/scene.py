@@ -100,10 +100,13 @@ def z_to(direction: FloatArray) -> FloatArray:
     length = np.linalg.norm(v, axis=-1, keepdims=True)
     unit = np.divide(v, length, out=np.zeros_like(v), where=length > 0.0)
     unit[(length[..., 0] == 0.0)] = (0.0, 0.0, 1.0)
-    q = np.stack([1.0 + unit[..., 2], -unit[..., 1], unit[..., 0], np.zeros(unit.shape[:-1])], axis=-1)
-    flip = q[..., 0] < 1e-9
-    q[flip] = (0.0, 1.0, 0.0, 0.0)
-    return np.asarray(q / np.linalg.norm(q, axis=-1, keepdims=True))
+    axis = np.stack([-unit[..., 1], unit[..., 0], np.zeros(unit.shape[:-1])], axis=-1)  # z × u
+    sine = np.linalg.norm(axis, axis=-1)
+    angle = np.arctan2(sine, unit[..., 2])  # accurate near 0 and near a half turn
+    axis = np.divide(axis, sine[..., None], out=np.zeros_like(axis), where=sine[..., None] > 0.0)
+    axis[sine == 0.0] = (1.0, 0.0, 0.0)
+    half = angle / 2.0
+    return np.concatenate([np.cos(half)[..., None], axis * np.sin(half)[..., None]], axis=-1)
 
 
 @dataclass(frozen=True)

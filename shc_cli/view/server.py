@@ -198,10 +198,14 @@ class RobotPage:
         assert gait is not None
         report = analyse_workspace(robot, gait)
         state = self.state
+        state.updating = True  # the pose sliders go back to 0 without moving the legs
+        try:
+            for control in self.pose_inputs:
+                control.value = 0.0
+        finally:
+            state.updating = False
         state.robot, state.clearance = robot, robot.walker.body_clearance
         state.joints = np.array(report.default_joints, dtype=float)
-        for control in self.pose_inputs:
-            control.value = 0.0
         state.pose = np.zeros(6)
         self._draw_workspaces(report)
         self._set_sliders(state.joints)
@@ -254,7 +258,7 @@ class RobotPage:
         from shc_cli.model.ik import solve
 
         state = self.state
-        if state.feet is None:
+        if state.feet is None or state.updating:
             return
         state.pose = np.array([float(c.value) for c in self.pose_inputs])
         x, y, z, roll, pitch, yaw = state.pose
