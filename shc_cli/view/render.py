@@ -103,7 +103,7 @@ def scene_xml(shape: scene.Shapes, boxes: list[scene.Box], width: int, height: i
         'rgb2="0.75 0.82 0.92" width="32" height="256"/>'
         '<material name="ground" texture="ground" texrepeat="20 20" reflectance="0"/></asset>',
         "<worldbody>",
-        '<light pos="2 -2 4" dir="-0.4 0.4 -1" directional="true" castshadow="true" diffuse="0.6 0.6 0.6"/>',
+        '<light pos="2 -2 4" dir="-0.4 0.4 -1" directional="true" castshadow="false" diffuse="0.6 0.6 0.6"/>',
         '<geom type="plane" size="20 20 0.1" material="ground"/>',
     ]
     for box in boxes:
