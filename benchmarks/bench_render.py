@@ -81,7 +81,7 @@ def _tiny_frames(run_dir: Path, frames: int) -> tuple[list[float], float]:
         for i, k, index in joints:
             p.resetJointState(body, index, float(run.joints[row, i, k]), physicsClientId=client)
         view = p.computeViewMatrix(run.position[row] + np.array([-0.6, -1.0, 0.6]), run.position[row], [0, 0, 1])
-        p.getCameraImage(960, 540, view, projection, renderer=p.ER_TINY_RENDERER, shadow=1,
+        p.getCameraImage(960, 540, view, projection, renderer=p.ER_TINY_RENDERER, shadow=0,
                          physicsClientId=client)
         times.append(time.perf_counter() - started)
     cpu = (_cpu() - cpu) / frames

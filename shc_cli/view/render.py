@@ -3,8 +3,9 @@
 The scene (:mod:`shc_cli.view.scene`: the generated model's body box, link capsules and foot spheres, and the
 run's terrain) is built as a MuJoCo model of motion-capture bodies — nothing is simulated, each frame only places
 the bodies where the log says they were — and drawn by MuJoCo's offscreen OpenGL renderer through OSMesa
-(software, no display or GPU; ``libosmesa6``) or EGL. Measured against PyBullet's TinyRenderer on the same
-960×540 frame: 0.06 s against 0.37 s per frame (docs/performance.md). Time, commanded and measured speed and the
+(software, no display or GPU; ``libosmesa6``) or EGL, without anti-aliasing or shadows (each doubles the
+CPU time of a software frame). Measured against PyBullet's TinyRenderer on the same 960×540 frame: 24 ms against
+252 ms of CPU per frame (docs/performance.md). Time, commanded and measured speed and the
 walk state are written over each frame with Pillow. MP4 is encoded by the ffmpeg binary that ``imageio-ffmpeg``
 ships in its wheel (H.264, yuv420p), GIF by Pillow. The output is written beside its final name and moved into
 place when complete.
