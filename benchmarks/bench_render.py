@@ -39,7 +39,7 @@ def _mujoco_frames(run_dir: Path, frames: int) -> tuple[list[float], float]:
     shape = scene.shapes(run.robot)
     rows = np.linspace(0, len(run.t) - 1, frames).astype(int)
     pose = scene.poses(shape, run.joints[rows], run.position[rows], run.rpy[rows])
-    renderer = Renderer(shape, scene.terrain_boxes(run.summary)[1], 960, 540)
+    renderer = Renderer(shape, scene.terrain_shapes(run.summary), 960, 540)
     times = []
     cpu = _cpu()
     for i, row in enumerate(rows):

@@ -83,10 +83,19 @@ def _shot(page: Any) -> np.ndarray:
     return np.asarray(Image.open(io.BytesIO(page.screenshot())).convert("RGB"))[SCENE].astype(int)
 
 
-def _robot_pixels(image: np.ndarray) -> int:
+def _robot_mask(image: np.ndarray) -> np.ndarray:
     """Pixels of the links' orange (``LINK_RGB`` 0.85, 0.55, 0.15 under the viewer's lights): red well above blue."""
     r, g, b = image[..., 0], image[..., 1], image[..., 2]
-    return int(((r - b > 70) & (r > 110) & (g > b)).sum())
+    return np.asarray((r - b > 70) & (r > 110) & (g > b))
+
+
+def _robot_pixels(image: np.ndarray) -> int:
+    return int(_robot_mask(image).sum())
+
+
+def _robot_centre(image: np.ndarray) -> np.ndarray:
+    """Mean (row, column) of the robot's pixels."""
+    return np.argwhere(_robot_mask(image)).mean(axis=0)
 
 
 def _settle(page: Any, seconds: float = 2.5) -> np.ndarray:
@@ -156,6 +165,8 @@ def test_view_run_replays_and_the_timeline_moves_the_robot(plan_run: Path, brows
         changed = (np.abs(end - start).sum(axis=2) > 40).sum()
         assert changed > 300, f"scrubbing the timeline changed only {changed} pixels"
         assert _robot_pixels(end) > 300
+        moved = np.linalg.norm(_robot_centre(end) - _robot_centre(start))
+        assert moved > 10.0, f"the robot moved only {moved:.1f} px"
 
 
 @needs_chromium

@@ -82,16 +82,33 @@ def test_workplane_outline_is_closed_and_has_the_radii() -> None:
 
 
 def test_scene_xml_has_one_mocap_body_per_link_and_foot(bullet: Robot) -> None:
-    xml = scene_xml(scene.shapes(bullet), [scene.Box((1, 0, 0.05), (0.1, 0.1, 0.1), 0.0, (0.5, 0.5, 0.5))], 64, 48)
+    terrain = scene.TerrainShapes("blocks", [scene.Box((1, 0, 0.05), (0.1, 0.1, 0.1), 0.0, (0.5, 0.5, 0.5))])
+    xml = scene_xml(scene.shapes(bullet), terrain, 64, 48)
     assert xml.count('mocap="true"') == 1 + 30 + 6
     assert xml.count('type="box"') == 2  # the body and the terrain block
 
 
-def test_terrain_boxes_follow_the_summary() -> None:
-    assert scene.terrain_boxes({}) == ("flat", [])
-    text, boxes = scene.terrain_boxes({"terrain": "stairs:0.05,0.3", "seed": 0})
-    assert text == "stairs:0.05,0.3" and len(boxes) > 3
-    assert max(b.centre[2] + b.size[2] / 2 for b in boxes) > 0.5
+def test_terrain_shapes_follow_the_summary(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from shc_cli.backends.pybullet_.terrain import Terrain, parse_terrain
+
+    assert scene.terrain_shapes({}) == scene.TerrainShapes("flat", [])
+    stairs = scene.terrain_shapes({"terrain": "stairs:0.05,0.3", "seed": 0})
+    assert stairs.text == "stairs:0.05,0.3" and len(stairs.boxes) > 3 and stairs.mesh is None
+    assert max(b.centre[2] + b.size[2] / 2 for b in stairs.boxes) > 0.5
+    field = tmp_path / "field.csv"
+    field.write_text("0,0.1,0.2\n0.3,0.4,0.5\n", encoding="utf-8")
+    text = f"heightfield:{field},1,0.1"
+    shapes = scene.terrain_shapes({"terrain": text})
+    assert shapes.mesh is not None
+    vertices, faces = shapes.mesh
+    assert vertices.shape == (6, 3) and faces.shape == (4, 3)
+    # every triangle lies on the simulation's ground (Terrain.height_at, PyBullet's split of each cell): its
+    # centroid's height is the ground's there
+    terrain = Terrain(parse_terrain(text), 0)
+    centroids = vertices[faces].mean(axis=1)
+    assert all(abs(terrain.height_at(x, y) - z) < 1e-9 for x, y, z in centroids)
+    assert sorted(vertices[:, 2]) == sorted([0.0, 0.1, 0.2, 0.3, 0.4, 0.5])
+    assert scene.terrain_shapes({"terrain": "heightfield:/nowhere.csv"}).mesh is None
 
 
 def _synthetic_run(robot: Robot, rows: int = 400) -> object:

@@ -92,8 +92,8 @@ def _rgba(rgb: tuple[float, float, float]) -> str:
     return " ".join(f"{c:.3f}" for c in rgb) + " 1"
 
 
-def scene_xml(shape: scene.Shapes, boxes: list[scene.Box], width: int, height: int) -> str:
-    """MJCF of the scene: ground, terrain boxes, and one mocap body per body box, link and foot."""
+def scene_xml(shape: scene.Shapes, terrain: scene.TerrainShapes, width: int, height: int) -> str:
+    """MJCF of the scene: ground, terrain boxes and height field, and one mocap body per body box, link and foot."""
     parts = [
         '<mujoco model="shc-render"><compiler angle="radian"/>',
         f'<visual><global offwidth="{width}" offheight="{height}"/><quality shadowsize="1024" offsamples="0"/>'
@@ -102,12 +102,17 @@ def scene_xml(shape: scene.Shapes, boxes: list[scene.Box], width: int, height: i
         '<asset><texture name="ground" type="2d" builtin="checker" rgb1="1 1 1" rgb2="0.86 0.88 0.92" '
         'width="256" height="256"/><texture name="sky" type="skybox" builtin="gradient" rgb1="0.93 0.95 0.98" '
         'rgb2="0.75 0.82 0.92" width="32" height="256"/>'
-        '<material name="ground" texture="ground" texrepeat="20 20" reflectance="0"/></asset>',
+        '<material name="ground" texture="ground" texrepeat="20 20" reflectance="0"/>',
+        _mesh_asset(terrain.mesh),
+        "</asset>",
         "<worldbody>",
         '<light pos="2 -2 4" dir="-0.4 0.4 -1" directional="true" castshadow="false" diffuse="0.6 0.6 0.6"/>',
         '<geom type="plane" size="20 20 0.1" material="ground"/>',
     ]
-    for box in boxes:
+    if terrain.mesh is not None:
+        # half a millimetre up: where the field is 0 it would flicker against the ground plane
+        parts.append(f'<geom type="mesh" mesh="field" pos="0 0 0.0005" rgba="{_rgba(scene.TERRAIN_RGB)}"/>')
+    for box in terrain.boxes:
         half = " ".join(f"{s / 2.0:.6f}" for s in box.size)
         centre = " ".join(f"{c:.6f}" for c in box.centre)
         parts.append(f'<geom type="box" pos="{centre}" size="{half}" euler="0 {box.pitch:.6f} 0" '
@@ -135,6 +140,14 @@ def scene_xml(shape: scene.Shapes, boxes: list[scene.Box], width: int, height: i
     return "\n".join(parts)
 
 
+def _mesh_asset(mesh: tuple[np.ndarray, np.ndarray] | None) -> str:
+    if mesh is None:
+        return ""
+    vertices, faces = mesh
+    return (f'<mesh name="field" vertex="{" ".join(f"{v:.5f}" for v in vertices.ravel())}" '
+            f'face="{" ".join(str(int(f)) for f in faces.ravel())}"/>')
+
+
 def _gl_backend() -> None:
     """Pick MuJoCo's headless OpenGL: the user's ``MUJOCO_GL``, else OSMesa when libOSMesa is there, else EGL."""
     if "MUJOCO_GL" in os.environ:
@@ -149,7 +162,7 @@ def _gl_backend() -> None:
 class Renderer:
     """Frames of one robot's scene: :meth:`draw` places the model and returns an ``(H, W, 3)`` uint8 image."""
 
-    def __init__(self, shape: scene.Shapes, boxes: list[scene.Box], width: int, height: int) -> None:
+    def __init__(self, shape: scene.Shapes, terrain: scene.TerrainShapes, width: int, height: int) -> None:
         _gl_backend()
         try:
             import mujoco
@@ -158,7 +171,7 @@ class Renderer:
                                    "pip install 'shc[view]'")]) from None
         self.mujoco = mujoco
         self.shape = shape
-        self.model = mujoco.MjModel.from_xml_string(scene_xml(shape, boxes, width, height))
+        self.model = mujoco.MjModel.from_xml_string(scene_xml(shape, terrain, width, height))
         self.data = mujoco.MjData(self.model)
         try:
             self.renderer = mujoco.Renderer(self.model, height, width)
@@ -302,13 +315,13 @@ def _annotate(image: np.ndarray, lines: list[str], font: Any, scale: float) -> n
 def render_frames(run: RunLog, options: RenderOptions) -> Iterator[np.ndarray]:
     """The run's video frames, ``(H, W, 3)`` uint8 each, in order."""
     shape = scene.shapes(run.robot)
-    _, boxes = scene.terrain_boxes(run.summary)
+    terrain = scene.terrain_shapes(run.summary)
     rows = frame_rows(run.t, options.fps, options.speed)
     pose = scene.poses(shape, run.joints[rows], run.position[rows], run.rpy[rows])
     speed = measured_speed(run)
     scale = options.height / 540.0
     font = _font(max(8, round(16 * scale)))
-    renderer = Renderer(shape, boxes, options.width, options.height)
+    renderer = Renderer(shape, terrain, options.width, options.height)
     try:
         cameras = _camera_path(run, rows, options.camera, max(shape.body_size[:2]))
         for index, (row, view) in enumerate(zip(rows, cameras, strict=True)):

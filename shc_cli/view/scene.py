@@ -178,11 +178,25 @@ TERRAIN_RGB = (0.62, 0.55, 0.47)
 GROUND_RGB = (0.82, 0.82, 0.80)
 
 
-def terrain_boxes(summary: dict[str, Any]) -> tuple[str, list[Box]]:
-    """The terrain a run walked on, from its summary (``terrain``, ``seed``; flat when absent), as boxes.
+@dataclass(frozen=True)
+class TerrainShapes:
+    """A run's terrain as drawable shapes.
 
-    Height fields are not drawn (their text is returned; the ground plane stands for them)."""
-    from shc_cli.backends.pybullet_.terrain import Terrain, parse_terrain
+    Attributes:
+        text: the ``--terrain`` text (``flat`` when the run does not say).
+        boxes: blocks, ramp and stair boxes.
+        mesh: a height field as ``(vertices (V, 3), faces (F, 3))``, or ``None``.
+    """
+
+    text: str
+    boxes: list[Box]
+    mesh: tuple[FloatArray, np.ndarray] | None = None
+
+
+def terrain_shapes(summary: dict[str, Any]) -> TerrainShapes:
+    """The terrain a run walked on, from its summary (``terrain``, ``seed``), as the simulation built it. A terrain
+    that cannot be rebuilt (a height-field file no longer there) is drawn flat."""
+    from shc_cli.backends.pybullet_.terrain import FEATURE_START_X, Terrain, parse_terrain
     from shc_cli.errors import ShcError
 
     text = str(summary.get("terrain") or "flat")
@@ -190,7 +204,7 @@ def terrain_boxes(summary: dict[str, Any]) -> tuple[str, list[Box]]:
         terrain = Terrain(parse_terrain(text), int(summary.get("seed") or 0))
         raw = terrain._boxes()
     except (ShcError, OSError, ValueError):
-        return text, []
+        return TerrainShapes(text, [])
     out = []
     low, high = terrain.spec.low, terrain.spec.high
     for box in raw:
@@ -199,4 +213,19 @@ def terrain_boxes(summary: dict[str, Any]) -> tuple[str, list[Box]]:
             light = 0.75 + 0.5 * (0.5 if high <= low else (box.size[2] - low) / (high - low))
         rgb = tuple(min(1.0, c * light) for c in TERRAIN_RGB)
         out.append(Box(tuple(box.center), tuple(box.size), float(box.pitch), rgb))  # type: ignore[arg-type]
-    return text, out
+    mesh = None
+    if terrain.spec.kind == "heightfield":
+        mesh = heightfield_mesh(np.array(terrain.spec.heights, dtype=float), terrain.spec.cell, FEATURE_START_X)
+    return TerrainShapes(text, out, mesh)
+
+
+def heightfield_mesh(heights: FloatArray, cell: float, start_x: float) -> tuple[FloatArray, np.ndarray]:
+    """Triangles of a height field ``heights[i, j]`` at ``x = start_x + i·cell``, ``y = (j − (ny − 1)/2)·cell``,
+    each cell split along its (i+1, j)–(i, j+1) diagonal as PyBullet does; faces counter-clockwise from above."""
+    nx, ny = heights.shape
+    i, j = np.meshgrid(np.arange(nx), np.arange(ny), indexing="ij")
+    vertices = np.column_stack([start_x + i.ravel() * cell, (j.ravel() - (ny - 1) / 2.0) * cell, heights.ravel()])
+    index = (i * ny + j)[:-1, :-1].ravel()
+    a, b, c, d = index, index + ny, index + 1, index + ny + 1  # (i, j), (i+1, j), (i, j+1), (i+1, j+1)
+    faces = np.concatenate([np.column_stack([a, b, c]), np.column_stack([b, d, c])])
+    return vertices, faces.astype(np.uint32)

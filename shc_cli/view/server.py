@@ -284,8 +284,7 @@ class RunScene:
     com: np.ndarray
     zmp: np.ndarray
     commanded_path: np.ndarray
-    terrain: str
-    boxes: list[scene.Box]
+    terrain: scene.TerrainShapes
     plot: Any
 
 
@@ -314,8 +313,8 @@ def run_scene(run: RunLog) -> RunScene:
         total = weights.sum(axis=1)
         ok = total > 0.0
         zmp[ok] = (pose.feet[ok, :, :2] * weights[ok, :, None]).sum(axis=1) / total[ok, None]  # ATHENA eq. 32
-    terrain, boxes = scene.terrain_boxes(run.summary)
-    return RunScene(run, shape, pose, com, zmp, commanded_path(run), terrain, boxes, PlotImage(run))
+    terrain = scene.terrain_shapes(run.summary)
+    return RunScene(run, shape, pose, com, zmp, commanded_path(run), terrain, PlotImage(run))
 
 
 class PlotImage:
@@ -391,7 +390,7 @@ class RunPage:
         duration = float(run.t[-1])
         summary = run.summary
         gui.add_markdown(f"**{run.robot.name}** / {summary.get('gait', '')} — {run.kind} run `{run.path.name}`, "
-                         f"{duration:.1f} s on {data.terrain}.  \nBlue: body path; orange: commanded path; red: "
+                         f"{duration:.1f} s on {data.terrain.text}.  \nBlue: body path; orange: commanded path; red: "
                          "CoM; purple: ZMP; green feet: on the ground.")
         self.timeline = gui.add_slider("time [s]", min=float(run.t[0]), max=duration, step=run.dt,
                                        initial_value=float(run.t[0]))
@@ -410,7 +409,11 @@ class RunPage:
         threading.Thread(target=self._play, name="shc-view-play", daemon=True).start()
 
     def _terrain(self, api: Any) -> None:
-        boxes = self.data.boxes
+        if self.data.terrain.mesh is not None:
+            vertices, faces = self.data.terrain.mesh
+            api.add_mesh_simple("/heightfield", vertices.astype(np.float32), faces, color=_rgb(scene.TERRAIN_RGB),
+                                side="double", position=(0.0, 0.0, 0.0005))
+        boxes = self.data.terrain.boxes
         if not boxes:
             return
         vertices, faces = meshes.box()
