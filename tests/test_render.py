@@ -113,3 +113,18 @@ def test_bad_render_options_are_one_line(plan_run: Path, tmp_path: Path, capsys,
                        capsys, monkeypatch)
     assert code == 2 and "--video" in err and not (tmp_path / "r").exists()
     assert not list(tmp_path.glob("a.*"))
+
+
+@needs_gl
+def test_render_reads_a_bag_as_the_run(plan_run: Path, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    bag = tmp_path / "bag"
+    code, _, err = run(["export", "bag", str(plan_run), "--out", str(bag)], capsys, monkeypatch)
+    assert code == 0, err
+    out = tmp_path / "bag.gif"
+    code, _, err = run(["render", str(bag), "--out", str(out), "--fps", "2", "--size", "64x48"], capsys,
+                            monkeypatch)
+    assert (code, err) == (0, ""), err
+    from PIL import Image
+
+    with Image.open(out) as gif:
+        assert gif.n_frames == math.floor(_logged_span(plan_run) * 2 + 1e-9) + 1
