@@ -96,6 +96,11 @@ class RobotDrawing:
         self.body.wxyz = pose.body_quaternion[index]
 
 
+def _default_tips(report: Any) -> np.ndarray:
+    """Tip positions of a workspace report's default joints in base_link, ``(L, 3)`` [m]."""
+    return np.asarray(scene.shapes(report.robot).chains.tips(report.default_joints))
+
+
 def _outline_segments(points: np.ndarray) -> np.ndarray:
     """A polyline ``(K, 3)`` as line segments ``(K − 1, 2, 3)``."""
     return np.stack([points[:-1], points[1:]], axis=1).astype(np.float32)
@@ -154,6 +159,7 @@ class RobotPage:
         self.drawing = RobotDrawing(api, self.shape)
         gui.add_markdown(f"**{robot.name}** — {len(robot.legs)} legs, {robot.total_mass():.2f} kg. "
                          "Edit the file and reload the page to see the change.")
+        self.message = gui.add_markdown("")
         self.state = _RobotState(robot, self.shape, np.zeros((len(robot.legs), self.shape.chains.joints)))
         with gui.add_folder("Stance"):
             clearance = robot.walker.body_clearance
@@ -194,9 +200,17 @@ class RobotPage:
             update={"x": leg.stance.x * scale, "y": leg.stance.y * scale})}) for leg_id, leg in base.legs.items()}
         walker = base.walker.model_copy(update={"body_clearance": float(self.clearance.value)})
         robot = base.model_copy(update={"legs": legs, "walker": walker})
-        gait = load_gait(robot.walker.gait).gait
-        assert gait is not None
-        report = analyse_workspace(robot, gait)
+        try:
+            gait = load_gait(robot.walker.gait).gait
+            assert gait is not None
+            report = analyse_workspace(robot, gait)
+        except Exception as error:  # an unreachable stance: say so on the page, keep the last good one
+            self.message.content = f"Stance not computed: {type(error).__name__}: {error}"
+            return
+        reachable = np.linalg.norm(_default_tips(report) - report.identity_tips, axis=1) < 1e-3
+        self.message.content = "" if reachable.all() else (
+            "Stance out of reach for " + ", ".join(leg for leg, ok in zip(robot.legs, reachable, strict=True)
+                                                   if not ok))
         state = self.state
         state.updating = True  # the pose sliders go back to 0 without moving the legs
         try:
@@ -402,6 +416,7 @@ class RunPage:
                                   jpeg_quality=85)
         self.playing = False
         self.alive = True
+        self.lock = threading.Lock()  # the playback thread and the browser's scrubbing both redraw
         self._last_plot = 0.0
         buttons.on_click(lambda event: self._button(event.target.value))
         self.timeline.on_update(lambda _event: self._show())
@@ -450,6 +465,10 @@ class RunPage:
                 self.alive = False
 
     def _show(self, force_plot: bool = False) -> None:
+        with self.lock:
+            self._draw(force_plot)
+
+    def _draw(self, force_plot: bool) -> None:
         data, run = self.data, self.data.run
         value = float(self.timeline.value)
         row = int(np.clip(np.searchsorted(run.t, value + 1e-9, side="right") - 1, 0, len(run.t) - 1))
