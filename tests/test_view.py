@@ -192,3 +192,11 @@ def _body_pixels(image: np.ndarray) -> int:
     """Pixels of the body's blue-grey (``BODY_RGB`` 0.35, 0.38, 0.42 under the viewer's lights)."""
     r, b = image[..., 0], image[..., 2]
     return int(((np.abs(r - 90) < 30) & (np.abs(b - 107) < 30) & (b >= r)).sum())
+
+
+def test_view_of_something_unreadable_is_one_line(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    from .test_cli import run
+
+    for target in ("no_such_robot", str(tmp_path)):
+        code, out, err = run(["view", target, "--port", str(_free_port())], capsys, monkeypatch)
+        assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
