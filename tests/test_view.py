@@ -99,8 +99,24 @@ def _robot_centre(image: np.ndarray) -> np.ndarray:
 
 
 def _settle(page: Any, seconds: float = 2.5) -> np.ndarray:
+    """A screenshot once the robot is drawn (polled up to 60 s), after ``seconds`` more for the scene to settle."""
+    deadline = time.monotonic() + 60.0
+    while _robot_pixels(_shot(page)) < 500 and time.monotonic() < deadline:
+        time.sleep(1.0)
     time.sleep(seconds)
     return _shot(page)
+
+
+def _changed(page: Any, before: np.ndarray, pixels: int = 300, timeout: float = 30.0) -> np.ndarray:
+    """The first screenshot (polled each second, up to ``timeout``) differing from ``before`` in ``pixels`` pixels,
+    then one more second later (the last one taken if none does)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        time.sleep(1.0)
+        image = _shot(page)
+        if (np.abs(image - before).sum(axis=2) > 40).sum() > pixels or time.monotonic() > deadline:
+            time.sleep(1.0)
+            return _shot(page)
 
 
 def _slider(page: Any, label: str) -> Any:
@@ -137,7 +153,7 @@ def test_view_robot_draws_it_and_a_joint_slider_moves_it(browser: Any) -> None:
         thumb = _slider(page, "AR coxa")
         thumb.focus()
         thumb.press("End")  # the coxa to its upper limit: the leg swings and turns red
-        after = _settle(page)
+        after = _changed(page, before)
         changed = (np.abs(after - before).sum(axis=2) > 40).sum()
         assert changed > 300, f"moving the joint slider changed only {changed} pixels"
         r, g, b = after[..., 0], after[..., 1], after[..., 2]
@@ -161,7 +177,7 @@ def test_view_run_replays_and_the_timeline_moves_the_robot(plan_run: Path, brows
         thumb = _slider(page, "time [s]")
         thumb.focus()
         thumb.press("End")  # scrub to the end of the run: the robot has walked on
-        end = _settle(page)
+        end = _changed(page, start)
         changed = (np.abs(end - start).sum(axis=2) > 40).sum()
         assert changed > 300, f"scrubbing the timeline changed only {changed} pixels"
         assert _robot_pixels(end) > 300
