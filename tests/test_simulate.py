@@ -12,7 +12,7 @@ from .test_cli import run
 
 TIMING = {"wall_time_s", "physics_time_s", "running_wall_time_s", "running_physics_time_s"}
 REQUIRED = {"sim_time_s", "wall_time_s", "physics_time_s", "distance_m", "mean_speed_mps", "mean_power_w", "cot",
-            "fell", "seed", "engine", "engine_version"}
+            "fell", "seed", "terrain", "engine", "engine_version"}
 ENGINES = ["pybullet", "mujoco"]
 
 
@@ -30,7 +30,7 @@ def test_bullet_walks_forward_on_flat_ground(engine: str, tmp_path: Path, capsys
     summary = json.loads((out / "summary.json").read_text())
     assert set(summary) >= REQUIRED
     assert summary["engine"] == engine and summary["versions"][engine] == summary["engine_version"]
-    assert summary["fell"] is False
+    assert summary["fell"] is False and summary["terrain"] == "flat"  # shc view and render rebuild it from this
     assert summary["distance_m"] > 0.4  # accelerating towards 0.232 m/s for 4 s
     assert summary["forward_distance_m"] > 0.95 * summary["distance_m"]
     assert summary["mean_power_w"] > 30 * 0.9  # at least every servo's idle power

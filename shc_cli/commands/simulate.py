@@ -305,6 +305,7 @@ class Simulation:
             "max_tilt_rad": max_tilt,
             "fell": fell,
             "seed": self.seed,
+            "terrain": str(self.world.terrain.spec),
             "versions": {"shc": __version__, self.world.name: self.world.version, "numpy": np.__version__},
         }
 
