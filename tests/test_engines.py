@@ -100,9 +100,9 @@ def field_csv(tmp_path: Path) -> Path:
 def test_mujoco_rays_hit_height_at(text: str, field_csv: Path) -> None:
     """MuJoCo's terrain geoms are where :meth:`Terrain.height_at` says (1 mm), away from vertical faces; its height
     field follows MuJoCo's triangulation (the other diagonal than PyBullet's)."""
-    import mujoco
+    from shc_cli.backends.mujoco_.world import RAY_GROUPS, import_mujoco
 
-    from shc_cli.backends.mujoco_.world import RAY_GROUPS
+    mujoco = import_mujoco()
 
     spec = parse_terrain(f"heightfield:{field_csv}" if text == "heightfield" else text)
     robot = robot_named("bullet")

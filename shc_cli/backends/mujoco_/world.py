@@ -20,7 +20,9 @@ here only; it needs no GL to simulate.
 
 from __future__ import annotations
 
+import os
 import time
+from typing import Any
 
 import numpy as np
 
@@ -58,8 +60,7 @@ class MujocoWorld:
     def __init__(self, robot: Robot, terrain: TerrainSpec, control_period: float, substeps: int, fixed_base: bool,
                  initial_joints: np.ndarray, friction: float = 0.9, restitution: float = 0.0, seed: int = 0,
                  imu_noise: float = 0.0, stand: bool = False) -> None:
-        import mujoco
-
+        mujoco = import_mujoco()
         self.mujoco = mujoco
         self.name = "mujoco"
         self.version = str(mujoco.__version__)
@@ -202,6 +203,24 @@ class MujocoWorld:
     def close(self) -> None:
         """Nothing to free but the references."""
         self.stand = None
+
+
+def import_mujoco() -> Any:
+    """``mujoco``, imported with the headless OpenGL ``shc render`` chooses (``shc_cli.view.render``).
+
+    MuJoCo fixes its GL backend when it is imported: a simulation that imports it first, in a process that renders
+    later (``simulate --video``, a test session), must not leave it with a windowed backend. OSMesa when libOSMesa
+    is installed; otherwise ``MUJOCO_GL`` is left as it is (the physics needs no GL).
+    """
+    if "MUJOCO_GL" not in os.environ:
+        import ctypes.util
+
+        if ctypes.util.find_library("OSMesa"):
+            os.environ["MUJOCO_GL"] = "osmesa"
+            os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
+    import mujoco
+
+    return mujoco
 
 
 def _view(values: np.ndarray, index: np.ndarray) -> np.ndarray:
