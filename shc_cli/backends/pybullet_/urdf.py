@@ -116,10 +116,15 @@ def foot_names(robot: Robot) -> list[str]:
 
 
 def link_names(robot: Robot) -> list[str]:
-    """Every link in URDF order: ``base_link``, then per leg its base frame, joint links and foot."""
+    """Every link in URDF order: ``base_link``, then per leg its base frame, joint links (each followed by its rotor
+    link ``LEG_J_rotor`` when the servo has an armature) and foot."""
     out = [BASE_LINK]
+    rotors = _armature(robot) > 0.0
     for names in leg_names(robot).values():
-        out += [names.base, *names.links, names.foot]
+        out.append(names.base)
+        for link in names.links:
+            out += [link, link.removesuffix("_link") + "_rotor"] if rotors else [link]
+        out.append(names.foot)
     return out
 
 
