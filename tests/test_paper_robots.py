@@ -75,7 +75,8 @@ def test_left_legs_mirror_the_right_legs(name: str) -> None:
         q[legs.index(left)] = q[legs.index(right)] * np.array([-1, -1, 1, 1, 1])
     tips = chains.tips(q)
     for right, left in (("AR", "AL"), ("BR", "BL"), ("CR", "CL")):
-        assert np.allclose(tips[legs.index(left)], tips[legs.index(right)] * np.array([1, -1, 1]), atol=1e-5)  # DH angles in 4 decimals
+        reflected = tips[legs.index(right)] * np.array([1, -1, 1])
+        assert np.allclose(tips[legs.index(left)], reflected, atol=1e-5)  # the files' DH angles have 4 decimals
 
 
 def test_the_mammalian_a_legs_point_backwards_with_the_yaw_locked() -> None:

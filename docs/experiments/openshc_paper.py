@@ -18,7 +18,7 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.pyplot as plt
 
 OUT = Path(__file__).parent / "img"
 TABLE_IV = {("bullet_mammalian_a", "tripod"): (27.7, 51.0, 48.6), ("bullet_mammalian_b", "tripod"): (30.4, 47.1, 46.7),
@@ -50,6 +50,11 @@ def cot_lines(path: Path) -> dict[tuple[str, str, float], Line]:
 def argmin(line: Line) -> float | None:
     cots = {f: c for f, (c, _, _) in line.items() if c is not None}
     return min(cots, key=lambda f: cots[f]) if cots else None
+
+
+def values(line: Line) -> str:
+    """``frequency CoT`` pairs of a line, ``fell`` where the run fell."""
+    return ", ".join(f"{f:g} {c:.2f}" if c is not None else f"{f:g} fell" for f, (c, _, _) in sorted(line.items()))
 
 
 def report(power: dict[tuple[str, str, str], float], lines: dict[tuple[str, str, float], Line]) -> list[str]:
@@ -91,10 +96,8 @@ def report(power: dict[tuple[str, str, str], float], lines: dict[tuple[str, str,
     if 1.2 in m100 and 1.4 in m100:
         out.append(f"  Fig. 14 speed 1.4 Hz {m100[1.4][1]:.3f} vs 1.2 Hz {m100[1.2][1]:.3f} m/s")
     tri, bi = lines.get((ia, "tripod", 100.0), {}), lines.get((ia, "bipod", 100.0), {})
-    out.append(f"  Fig. 15 insectoid A tripod minimum at {argmin(tri)} Hz: "
-               + ", ".join(f"{f:g} {c:.2f}" if c is not None else f"{f:g} fell" for f, (c, _, _) in sorted(tri.items())))
-    out.append(f"  Fig. 15 insectoid A bipod minimum at {argmin(bi)} Hz: "
-               + ", ".join(f"{f:g} {c:.2f}" if c is not None else f"{f:g} fell" for f, (c, _, _) in sorted(bi.items())))
+    out.append(f"  Fig. 15 insectoid A tripod minimum at {argmin(tri)} Hz: {values(tri)}")
+    out.append(f"  Fig. 15 insectoid A bipod minimum at {argmin(bi)} Hz: {values(bi)}")
     common = [f for f in tri if f in bi and tri[f][0] is not None and bi[f][0] is not None]
     below = sum(1 for f in common if bi[f][0] <= tri[f][0])  # type: ignore[operator]
     ratios = [bi[f][1] / tri[f][1] for f in common if tri[f][1] > 0]
@@ -111,16 +114,15 @@ def report(power: dict[tuple[str, str, str], float], lines: dict[tuple[str, str,
     slower = sum(1 for f in mb100 if f in ib60 and mb100[f][1] < ib60[f][1])
     out.append(f"  Fig. 16 mammalian B slower than insectoid B 60.27 %: {slower} of {len(mb100)}")
     for name, line in (("mammalian B 100 %", mb100), ("insectoid B 60.27 %", ib60), ("insectoid B 100 %", ib100)):
-        out.append(f"  Fig. 16 {name} minimum at {argmin(line)} Hz: "
-                   + ", ".join(f"{f:g} {c:.2f}" if c is not None else f"{f:g} fell"
-                               for f, (c, _, _) in sorted(line.items())))
+        out.append(f"  Fig. 16 {name} minimum at {argmin(line)} Hz: {values(line)}")
     everything = [(c, k, f) for k, line in lines.items() for f, (c, _, _) in line.items() if c is not None]
     best = min(everything)
     out.append(f"  lowest CoT of all: {best[1][0]} {best[1][1]} {best[1][2]:g} % at {best[2]:g} Hz ({best[0]:.2f})")
     return out
 
 
-def figure(lines: dict[tuple[str, str, float], Line], keys: list[tuple[str, str, float]], name: str, title: str) -> None:
+def figure(lines: dict[tuple[str, str, float], Line], keys: list[tuple[str, str, float]], name: str,
+           title: str) -> None:
     fig, (cot_axes, speed_axes) = plt.subplots(1, 2, figsize=(11, 4))
     for key in keys:
         line = lines.get(key, {})

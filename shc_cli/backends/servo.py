@@ -111,10 +111,11 @@ class ServoModel:
         """
         s = self.servo
         if s.control == "pd":
-            return np.clip(s.stiffness * (goal - position) - s.damping * speed, -s.stall_torque, s.stall_torque)
+            return np.asarray(np.clip(s.stiffness * (goal - position) - s.damping * speed, -s.stall_torque,
+                                      s.stall_torque), dtype=float)
         voltage = np.clip(self.volts_per_rad * (goal - position), -self.max_voltage, self.max_voltage)
         current = np.clip((voltage - self.back_emf * speed) / s.winding_resistance, -s.current_limit, s.current_limit)
-        return np.asarray(s.torque_constant * current - s.viscous_friction * speed)
+        return np.asarray(s.torque_constant * current - s.viscous_friction * speed, dtype=float)
 
     def electrical(self, torque: np.ndarray, speed: np.ndarray, friction_in_engine: bool = False) -> Electrical:
         """Motor torque, current and supply power from the output torque and joint speed the engine reports.

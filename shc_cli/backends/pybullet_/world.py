@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from shc_cli.backends.servo import ServoModel
 from shc_cli.backends.pybullet_.terrain import TerrainSpec, build_terrain
 from shc_cli.backends.pybullet_.urdf import foot_radius, robot_urdf
+from shc_cli.backends.servo import ServoModel
 from shc_cli.errors import BackendError
 from shc_cli.spec.robot import Robot
 
