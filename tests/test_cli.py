@@ -98,8 +98,8 @@ def test_missing_robot_is_one_line_with_the_bundled_names(capsys, monkeypatch) -
     code, out, err = run(["workspace", "bulet"], capsys, monkeypatch)
     assert code == 2 and out == ""
     assert err.strip().splitlines() == [
-        "error: bulet: no such robot file or bundled robot (did you mean 'bullet'? bundled: athena, bullet, "
-        "bullet_insectoid_a, bullet_insectoid_b, bullet_mammalian, bullet_mammalian_a, bullet_mammalian_b, octopod, "
+        "error: bulet: no such robot file or bundled robot (did you mean 'bullet'? bundled: athena, athena_paper, "
+        "bullet, bullet_insectoid_a, bullet_insectoid_b, bullet_mammalian, bullet_mammalian_a, bullet_mammalian_b, octopod, "
         "openshc_default, quadruped)"]
 
 
