@@ -103,3 +103,16 @@ def test_table_ii_insectoid_rows_within_10_percent(name: str) -> None:
     area, stride = TABLE_II[name]
     assert report.walkspace_area() == pytest.approx(area, rel=0.10)
     assert report.walkspace_stride() == pytest.approx(stride, rel=0.10)
+
+
+def test_athena_paper_stands_in_the_papers_posture() -> None:
+    """§5.1, eq. 12 (θ2 = 0, θ3 = 0, θ4 = −π/2): feet l2 + l3 = 0.144 m out from the TC joint, l4 = 0.104 m below it;
+    the controller at 20 Hz."""
+    robot = _robot("athena_paper")
+    assert robot.time_delta == 0.05 and robot.walker.body_clearance == 0.104
+    chains = Chains.from_robot(robot)
+    q = np.tile([0.0, 0.0, -np.pi / 2], (chains.size, 1))
+    tips = chains.tips(q)
+    for i, leg in enumerate(robot.legs.values()):
+        assert tips[i][:2] == pytest.approx([leg.stance.x, leg.stance.y], abs=2e-4)
+        assert tips[i][2] == pytest.approx(-0.104, abs=1e-9)
