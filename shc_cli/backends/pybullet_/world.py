@@ -254,7 +254,9 @@ class World:
         samples = []
         pd = self._stable_pd() if self.compliant else None
         applied = []
-        state = self._states if self._states is not None else p.getJointStates(body, joints, physicsClientId=c)
+        state = self._states
+        if self.explicit and state is None:  # the explicit servo law needs the state before the first step
+            state = p.getJointStates(body, joints, physicsClientId=c)
         for _ in range(self.substeps):
             if pd is not None:
                 p.setJointMotorControlMultiDofArray(body, joints, p.STABLE_PD_CONTROL, **pd, physicsClientId=c)
