@@ -65,6 +65,8 @@ def render_table(report: WorkspaceReport) -> str:
         lines.append(f"{leg:<6}{report.area(leg):>9.4f}{report.forward_stride(leg):>10.4f}{pad}{radii}")
     walk = "".join(f"{report.walkspace[b]:>9.4f}" for b in bearings)
     lines.append(f"{'walkspace':<25}{pad}{walk}")
+    lines.append(f"walkspace area {report.walkspace_area():.4f} m², stride {report.walkspace_stride():.4f} m "
+                 "(the OpenSHC paper's Table II figure)")
     lines.append("")
     rows = [
         ("max linear speed m/s", "linear_speed"),
