@@ -204,12 +204,7 @@ def _plan_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
     rows = len(joints["t"])
     dt = float(robot.time_delta)
     desired = _stack(body, ["vel_x", "vel_y", "vel_wz"])
-    # The ideal body path: the commanded body-frame velocity integrated in the world (what a robot without
-    # slip would do); yaw first, so each cycle moves along the heading it had.
-    yaw = np.concatenate([[0.0], np.cumsum(desired[:-1, 2] * dt)])
-    step = np.stack([desired[:, 0] * np.cos(yaw) - desired[:, 1] * np.sin(yaw),
-                     desired[:, 0] * np.sin(yaw) + desired[:, 1] * np.cos(yaw)], axis=1) * dt
-    xy = np.concatenate([np.zeros((1, 2)), np.cumsum(step[:-1], axis=0)])
+    xy, yaw = ideal_path(desired, dt)
     z = body["pose_z"]  # the body pose in the walk plane: its z is the height above the ground plane
     position = np.column_stack([xy, z])
     rpy = np.column_stack([body["pose_roll"], body["pose_pitch"], yaw + body["pose_yaw"]])
@@ -230,6 +225,17 @@ def _plan_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
         joints=planned, contact=contact, height=z, commanded=planned, progress=progress, tips=tip_stages,
         states=np.column_stack([body["robot_state"], body["walk_state"]]),
     )
+
+
+def ideal_path(desired: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """The ideal body path of a plan: the commanded body-frame velocity ``desired`` ``(N, 3)`` [m/s, m/s, rad/s]
+    integrated in the world (what a robot without slip would do), yaw first so each cycle moves along the heading
+    it had. Returns ``xy`` ``(N, 2)`` [m] and ``yaw`` ``(N,)`` [rad] per logged row, the first row at the origin."""
+    yaw = np.concatenate([[0.0], np.cumsum(desired[:-1, 2] * dt)])
+    step = np.stack([desired[:, 0] * np.cos(yaw) - desired[:, 1] * np.sin(yaw),
+                     desired[:, 0] * np.sin(yaw) + desired[:, 1] * np.cos(yaw)], axis=1) * dt
+    xy = np.concatenate([np.zeros((1, 2)), np.cumsum(step[:-1], axis=0)])
+    return xy, yaw
 
 
 def _bag_run(path: Path) -> RunLog:

@@ -76,11 +76,12 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
     if plots:
         from shc_cli.plots import plot_plan
 
-        plot_plan(robot, outputs, writer.partial)
+        plot_plan(robot, outputs, writer.partial, gait=gait.name)
     path = writer.finish(summary)
     typer.echo(f"{robot.name} / {gait.name}: {summary['cycles']} cycles "
-               f"({summary['duration_s']:.2f} s), mean speed {summary['achieved_mean_speed_mps']:.4f} m/s "
-               f"(eq. 16: {summary['eq16_speed_mps']:.4f}), IK deviations {summary['ik_deviation_count']}, "
+               f"({summary['duration_s']:.2f} s), path speed {summary['path_speed_mps']:.4f} m/s, displacement "
+               f"speed {summary['displacement_speed_mps']:.4f} m/s, stance feet {summary['achieved_mean_speed_mps']:.4f}"
+               f" m/s (eq. 16: {summary['eq16_speed_mps']:.4f}), IK deviations {summary['ik_deviation_count']}, "
                f"clamped {summary['ik_clamp_count']} → {path}")
     return path
 
@@ -158,6 +159,12 @@ def _summary(robot: Robot, controller: Controller, outputs: list[CycleOutput], s
         stride = math.hypot(*now.velocity[:2]) * cycle.duty_factor / cycle.frequency
         predicted.append(stride * cycle.frequency / cycle.duty_factor)
     distance = float(np.linalg.norm(walker.odometry_position)) if walker else 0.0
+    from shc_cli.analysis.metrics import window_speeds
+    from shc_cli.runread import ideal_path
+
+    xy, _ = ideal_path(np.array([o.velocity for o in outputs]), dt)
+    running = np.flatnonzero([o.robot_state == RobotState.RUNNING for o in outputs])
+    path_speed, displacement_speed = window_speeds(xy, running, dt)  # as `shc analyze` measures the plan
     return {
         "robot": robot.name,
         "gait": controller.gait.name,
@@ -171,6 +178,8 @@ def _summary(robot: Robot, controller: Controller, outputs: list[CycleOutput], s
         "duty_factor": cycle.duty_factor,
         "moving_cycles": len(predicted),
         "achieved_mean_speed_mps": float(np.mean(achieved)) if achieved else 0.0,
+        "path_speed_mps": path_speed,
+        "displacement_speed_mps": displacement_speed,
         "eq16_speed_mps": float(np.mean(predicted)) if predicted else 0.0,
         "odometry_distance_m": distance,
         "odometry_yaw_rad": walker.odometry_yaw if walker else 0.0,

@@ -100,7 +100,8 @@ def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration
                                 stand, feedback)
     typer.echo(f"{summary['robot']} / {summary['gait']} / {summary['scenario']} on {terrain_text}: "
                f"{summary['sim_time_s']:.1f} s simulated in {summary['wall_time_s']:.1f} s, distance "
-               f"{summary['distance_m']:.3f} m, mean speed {summary['mean_speed_mps']:.4f} m/s, mean power "
+               f"{summary['distance_m']:.3f} m, path speed {summary['path_speed_mps']:.4f} m/s, displacement speed "
+               f"{summary['displacement_speed_mps']:.4f} m/s, mean power "
                f"{summary['mean_power_w']:.1f} W, "
                f"CoT {summary['cot'] if summary['cot'] is None else round(summary['cot'], 3)}"
                f"{', FELL' if summary['fell'] else ''} → {path}")
@@ -154,7 +155,7 @@ def simulate_to(robot_name: str, gait_name: str | None, velocity: str, duration:
     if plots:
         from shc_cli.plots import plot_simulation
 
-        plot_simulation(robot, series, log.partial)
+        plot_simulation(robot, series, log.partial, gait=summary["gait"])
     return log.finish(summary), summary
 
 
@@ -272,6 +273,10 @@ class Simulation:
         start = window_start if window_start is not None else end
         distance = float(np.linalg.norm((end - start)[:2]))
         speed = distance / window if window > 0 else 0.0
+        from shc_cli.analysis.metrics import window_speeds
+
+        xy = np.array(series["position"])[:, :2] if series["position"] else np.zeros((0, 2))
+        path_speed, _ = window_speeds(xy, np.flatnonzero(running), dt)
         mean_power = float(power[running].mean()) if running.any() else 0.0
         mass = robot.total_mass()
         walking_on_ground = self.scenario == "WG"
@@ -289,7 +294,9 @@ class Simulation:
             "physics_rate_hz": self.world.substeps / dt,
             "distance_m": distance,
             "forward_distance_m": float((end - start)[0]),
-            "mean_speed_mps": speed,
+            "mean_speed_mps": speed,  # = displacement_speed_mps, its first name
+            "displacement_speed_mps": speed,
+            "path_speed_mps": path_speed,
             "mean_power_w": mean_power,
             "mass_kg": mass,
             "step_frequency_hz": self.controller.parameters["step_frequency"],
