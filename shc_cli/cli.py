@@ -28,6 +28,10 @@ app = typer.Typer(
 
 _state = {"debug": False}
 
+OVERWRITE_HELP = "Replace an existing run directory at --out (when the new run finishes; only shc's own outputs)."
+VELOCITY_HELP = ("Constant velocity input VX,VY,WZ: throttle fractions −1..1 of the robot's maximum linear and "
+                 "angular speed, unless the robot file's walker.velocity_input_mode is 'real' (then m/s, m/s, rad/s).")
+
 
 def _version(value: bool) -> None:
     if value:
@@ -82,7 +86,7 @@ def plan(
     robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
     gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
     velocity: Annotated[
-        str, typer.Option(help="Constant velocity input VX,VY,WZ in the robot's input mode.")
+        str, typer.Option(help=VELOCITY_HELP)
     ] = "1,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 10).")] = None,
     commands: Annotated[
@@ -91,12 +95,13 @@ def plan(
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-plan).")] = None,
     plots: Annotated[bool, typer.Option(help="Write gait.png, tips.png and joints.png.")] = True,
     bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
+    overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
     from shc_cli.commands.plan import run_plan
 
     _bag_check(bag)
-    path = run_plan(robot, gait, velocity, duration, commands, out, plots)
+    path = run_plan(robot, gait, velocity, duration, commands, out, plots, overwrite)
     _write_bag(path, bag)
 
 
@@ -104,7 +109,7 @@ def plan(
 def simulate(
     robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
     gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
-    velocity: Annotated[str, typer.Option(help="Velocity input VX,VY,WZ in the robot's input mode.")] = "1,0,0",
+    velocity: Annotated[str, typer.Option(help=VELOCITY_HELP)] = "1,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
     commands: Annotated[
         Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
@@ -143,6 +148,7 @@ def simulate(
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
     bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
+    overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller on the robot in PyBullet physics: terrains, servos, sensors, power, CoT."""
     from shc_cli.commands.simulate import Feedback, run_simulate
@@ -150,7 +156,7 @@ def simulate(
     _bag_check(bag)
     path = run_simulate(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate,
                         friction, restitution, seed, imu_noise, start, gui, stand,
-                        Feedback(posture, imu_posing, inclination, admittance))
+                        Feedback(posture, imu_posing, inclination, admittance), overwrite)
     _write_bag(path, bag)
 
 
@@ -183,7 +189,7 @@ def run_hw(
     input_mode: Annotated[str, typer.Option("--input", help="timeline (--velocity/--commands), commands:FILE, "
                                                             "stdin (JSON lines), keyboard, gamepad[:DEVICE].")]
     = "timeline",
-    velocity: Annotated[str, typer.Option(help="Velocity input VX,VY,WZ in the robot's input mode.")] = "0,0,0",
+    velocity: Annotated[str, typer.Option(help=VELOCITY_HELP)] = "0,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
     commands: Annotated[
         Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
@@ -232,11 +238,13 @@ def sweep(
     scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address (default: a LocalCluster).")] = None,
     out: Annotated[Path | None, typer.Option(help="Output directory (default runs/<sweep name>).")] = None,
     resume: Annotated[bool, typer.Option(help="Continue a sweep: finished runs are read, not re-run.")] = False,
+    overwrite: Annotated[bool, typer.Option(help="Delete an existing sweep output at --out first and run it all "
+                                                 "again (only shc's own outputs).")] = False,
 ) -> None:
     """Run a grid of simulations in parallel and tabulate CoT, power, speed and stability per run."""
     from shc_cli.commands.sweep import run_sweep
 
-    run_sweep(file, workers, executor, scheduler, out, resume)
+    run_sweep(file, workers, executor, scheduler, out, resume, overwrite)
 
 
 export_app = typer.Typer(help="Export robots and runs to other formats.", no_args_is_help=True)

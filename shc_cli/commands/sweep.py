@@ -229,8 +229,9 @@ def dask_results(points: list[Point], out: Path, workers: int, scheduler: str | 
 
 
 def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | None, out: Path | None,
-              resume: bool) -> Path:
-    """Check the sweep, run every point, write the results table and plots; returns the output directory."""
+              resume: bool, overwrite: bool = False) -> Path:
+    """Check the sweep, run every point, write the results table and plots; returns the output directory
+    (``overwrite``: delete an existing output directory first; ``resume``: continue it)."""
     sweep = load_sweep(file)
     if executor not in ("local", "dask"):
         raise SpecError([Issue(None, None, "--executor", f"'{executor}' is not an executor", "use local or dask")])
@@ -239,8 +240,16 @@ def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | N
                                "add --executor dask")])
     check_points(sweep)
     out = out or Path("runs") / sweep.name
+    if resume and overwrite:
+        raise SpecError([Issue(None, None, "--overwrite", "cannot be combined with --resume", "choose one")])
     if out.exists() and any(out.iterdir()) and not resume:
-        raise OutputError(f"{out}: already exists (add --resume to continue it, or choose another --out)")
+        if not overwrite:
+            raise OutputError(f"{out}: already exists (add --resume to continue it, --overwrite to run it again, or "
+                              "choose another --out)")
+        from shc_cli.runlog import check_replaceable
+
+        check_replaceable(out)
+        shutil.rmtree(out)
     (out / "runs").mkdir(parents=True, exist_ok=True)
     shutil.copyfile(sweep.path, out / "sweep.toml") if sweep.path.resolve() != (out / "sweep.toml").resolve() \
         else None
