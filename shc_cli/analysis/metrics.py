@@ -66,10 +66,10 @@ def window_mask(run: RunLog, window: Window) -> np.ndarray:
     skip = round(window.skip_s / run.dt)
     mask[first:first + skip] = False
     if window.steady:
-        period = int(run.summary.get("step_period_cycles") or 1)
+        period = max(int(run.summary.get("step_period_cycles") or 1), 1)
         same = np.zeros_like(mask)
-        change = np.abs(run.desired[period:] - run.desired[:-period]).max(axis=1) < 1e-9
-        same[period:] = change
+        if period < len(mask):
+            same[period:] = np.abs(run.desired[period:] - run.desired[:-period]).max(axis=1) < 1e-9
         mask &= same & (run.walk_state == "MOVING")
     return mask
 

@@ -291,6 +291,9 @@ def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | N
     typer.echo(f"{sweep.name}: {len(rows)} runs in {time.perf_counter() - started:.1f} s with {count} "
                f"{executor} worker{'s' if count != 1 else ''}: {len(done)} ok ({fell} fell), {failed} failed "
                f"→ {out / 'results.csv'}")
+    if done and all(r.get("steady_speed_mps") in (None, "") for r in done):
+        typer.echo("note: steady_speed_mps is empty: no run held its velocity for a whole gait cycle after the "
+                   "acceleration ramp (make `duration` longer)")
     return out
 
 
