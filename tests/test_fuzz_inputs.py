@@ -196,8 +196,8 @@ def _stub_sweep(monkeypatch: pytest.MonkeyPatch) -> None:
 
 def _pose_prepare(folder: Path) -> None:
     # this robot auto-poses with the set in fuzz_pose.toml (a path: a name would be looked up next to the gait)
-    (folder / "posing.toml").write_text(QUICK_ROBOT + f'\n[pose]\nauto = true\nauto_pose_type = "{folder}/fuzz_pose.toml"\n',
-                                        encoding="utf-8")
+    pose = f'\n[pose]\nauto = true\nauto_pose_type = "{folder}/fuzz_pose.toml"\n'
+    (folder / "posing.toml").write_text(QUICK_ROBOT + pose, encoding="utf-8")
 
 
 def _pose_seeds() -> dict[str, bytes]:

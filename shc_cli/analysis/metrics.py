@@ -224,11 +224,11 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
         "step_frequency_hz": summary.get("step_frequency_hz", run.robot.walker.step_frequency.default),
         "window_s": len(rows) * dt, "window_start_s": float(run.t[rows[0]]) if len(rows) else None,
     }
-    keys = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps", "steady_speed_mps", "commanded_speed_mps", "speed_ratio",
-            "distance_m", "duty_factor", "foot_slip_m", "height_median_m", "height_iqr_m", "pitch_rate_median_rps",
-            "pitch_rate_iqr_rps", "roll_rate_median_rps", "roll_rate_iqr_rps", "stability_margin_median_m",
-            "stability_margin_min_m", "zmp_margin_median_m", "zmp_margin_iqr_m", "zmp_centre_distance_median_m",
-            "zmp_centre_distance_iqr_m", "gait_cycles")
+    keys = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps", "steady_speed_mps",
+            "commanded_speed_mps", "speed_ratio", "distance_m", "duty_factor", "foot_slip_m", "height_median_m",
+            "height_iqr_m", "pitch_rate_median_rps", "pitch_rate_iqr_rps", "roll_rate_median_rps",
+            "roll_rate_iqr_rps", "stability_margin_median_m", "stability_margin_min_m", "zmp_margin_median_m",
+            "zmp_margin_iqr_m", "zmp_centre_distance_median_m", "zmp_centre_distance_iqr_m", "gait_cycles")
     out.update(dict.fromkeys(keys))
     if len(rows) < 2:
         return out

@@ -82,8 +82,9 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
 
     typer.echo(f"{robot.name} / {gait.name}: {summary['cycles']} cycles "
                f"({summary['duration_s']:.2f} s), path speed {summary['path_speed_mps']:.4f} m/s, displacement "
-               f"speed {summary['displacement_speed_mps']:.4f} m/s, stance feet {summary['achieved_mean_speed_mps']:.4f}"
-               f" m/s (eq. 16: {summary['eq16_speed_mps']:.4f}), IK deviations {summary['ik_deviation_count']}, "
+               f"speed {summary['displacement_speed_mps']:.4f} m/s, stance feet "
+               f"{summary['achieved_mean_speed_mps']:.4f} m/s (eq. 16: {summary['eq16_speed_mps']:.4f}), "
+               f"IK deviations {summary['ik_deviation_count']}, "
                f"clamped {summary['ik_clamp_count']}{progress_note(summary)} → {path}")
     return path
 

@@ -31,9 +31,10 @@ import typer
 from shc_cli.errors import Issue, OutputError, ShcError, SpecError
 from shc_cli.spec.sweep import Point, Sweep, load_sweep, variant_text
 
-METRICS = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps", "steady_speed_mps", "commanded_speed_mps", "speed_ratio",
-           "distance_m", "duty_factor", "foot_slip_m", "stability_margin_median_m", "zmp_margin_median_m",
-           "height_median_m", "height_iqr_m", "roll_rate_median_rps", "pitch_rate_median_rps", "step_frequency_hz")
+METRICS = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps", "steady_speed_mps",
+           "commanded_speed_mps", "speed_ratio", "distance_m", "duty_factor", "foot_slip_m",
+           "stability_margin_median_m", "zmp_margin_median_m", "height_median_m", "height_iqr_m",
+           "roll_rate_median_rps", "pitch_rate_median_rps", "step_frequency_hz")
 """Analysis keys copied into the results table."""
 RUN_KEYS = ("fell", "sim_time_s", "wall_time_s", "physics_time_s")
 """Summary keys copied into the results table (the timings differ from run to run; compare the others)."""
