@@ -270,9 +270,11 @@ def _source_run(kind: str, tmp_root: Path) -> Path:
     folder.mkdir(parents=True)
     _quick_robot(folder)
     out = folder / "run"
-    if kind == "bag":
+    if kind.startswith("bag-"):  # bag-mcap, bag-sqlite3, bag-ros1: the plan run exported
         plan = _source_run("plan", tmp_root)
-        code, _, err = _shc(["export", "bag", str(plan), "--out", str(out)])
+        fmt = kind.removeprefix("bag-")
+        out = folder / ("run.bag" if fmt == "ros1" else "run")
+        code, _, err = _shc(["export", "bag", str(plan), "--format", fmt, "--out", str(out)])
     else:
         code, _, err = _shc([kind, str(folder / "quick.toml"), "--duration", "0.4", "--out", str(out), "--no-plots"])
     assert code == 0, err
@@ -283,6 +285,8 @@ def _source_run(kind: str, tmp_root: Path) -> Path:
 def _run_seeds(kind: str) -> Callable[[], dict[str, bytes]]:
     def seeds() -> dict[str, bytes]:
         source = _source_run(kind, Path(os.environ["SHC_FUZZ_TMP"]))
+        if source.is_file():  # a ROS 1 bag is one file
+            return {source.name: source.read_bytes()}
         return {str(p.relative_to(source)): p.read_bytes() for p in sorted(source.rglob("*")) if p.is_file()}
     return seeds
 
@@ -314,7 +318,11 @@ KINDS = [
                                                                                   "--json"]),
     Kind("simulate-run", lambda: _files_under("run", _run_seeds("simulate")()),
          lambda d: ["analyze", str(d / "run"), "--json"]),
-    Kind("bag", lambda: _files_under("run", _run_seeds("bag")()), lambda d: ["analyze", str(d / "run"), "--json"]),
+    Kind("bag-mcap", lambda: _files_under("run", _run_seeds("bag-mcap")()),
+         lambda d: ["analyze", str(d / "run"), "--json"]),
+    Kind("bag-sqlite3", lambda: _files_under("run", _run_seeds("bag-sqlite3")()),
+         lambda d: ["analyze", str(d / "run"), "--json"]),
+    Kind("bag-ros1", _run_seeds("bag-ros1"), lambda d: ["analyze", str(d / "run.bag"), "--json"], binary=True),
 ]
 
 
@@ -381,7 +389,7 @@ def test_mutated_inputs_fail_in_one_line_without_traceback(kind: Kind, tmp_path_
         for name, data in seeds.items():
             target = folder / name
             target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_bytes(mutate(data, rng, kind.binary or name.endswith((".mcap", ".png", ".db3")))
+            target.write_bytes(mutate(data, rng, kind.binary or name.endswith((".mcap", ".png", ".db3", ".bag")))
                                if name == fuzzed else data)
         code, stdout, stderr = _shc(kind.argv(folder))
         accepted = code == 0 or "fuzz: terrain accepted" in stderr
