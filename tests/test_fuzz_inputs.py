@@ -8,7 +8,7 @@ directory or ``.partial`` left behind.
 
 Adding a kind is one :class:`Kind` entry in :data:`KINDS`: its seed files, the ``shc`` arguments that read the
 fuzzed file, and optionally companion files (``prepare``) and stubs for expensive work past the reading
-(``stub``). Replay inputs, study files and imported URDFs join here when their commands exist.
+(``stub``). Study files and imported URDFs join here when their commands exist.
 
 Set ``SHC_FUZZ_CASES`` to run more (or fewer) cases per kind than :data:`CASES`.
 """
@@ -139,6 +139,45 @@ class Kind:
     mutable: tuple[str, ...] = field(default_factory=tuple)
 
 
+REPLAY_CYCLES = 300
+"""Cycles of the OpenSHC insectoid recording (golden/openshc-runs) in the replay seeds: start-up and settling."""
+
+
+def _recording_seeds() -> dict[str, bytes]:
+    """The recording's first cycles as the recorder's three files (their text; written gzipped, see ``_write``)."""
+    import gzip
+
+    seeds = {}
+    for part in ("joints", "tips", "body"):
+        with gzip.open(ROOT / "golden" / "openshc-runs" / f"insectoid_{part}.csv.gz", "rb") as source:
+            seeds[f"rec_{part}.csv.gz"] = b"".join(next(source) for _ in range(REPLAY_CYCLES + 1))
+    return seeds
+
+
+def _replay_bag_seeds(ros1: bool) -> Callable[[], dict[str, bytes]]:
+    def seeds() -> dict[str, bytes]:
+        from shc_cli.replay.source import open_source
+
+        from .openshc_bags import write_openshc_bag
+
+        folder = Path(os.environ["SHC_FUZZ_TMP"]) / f"replay-{'ros1' if ros1 else 'mcap'}"
+        folder.mkdir(exist_ok=True)
+        head = open_source(ROOT / "golden" / "openshc-runs" / "insectoid").head(REPLAY_CYCLES)
+        path = write_openshc_bag(head, folder / ("rec.bag" if ros1 else "rec"), ros1=ros1)
+        if ros1:
+            return {"rec.bag": path.read_bytes()}
+        return {f"rec/{p.relative_to(path)}": p.read_bytes() for p in sorted(path.rglob("*")) if p.is_file()}
+    return seeds
+
+
+def _write(target: Path, data: bytes) -> None:
+    """A case's file: ``.gz`` files hold their (mutated) text compressed, as the recorder writes them."""
+    import gzip
+
+    target.parent.mkdir(parents=True, exist_ok=True)
+    target.write_bytes(gzip.compress(data, mtime=0) if target.suffix == ".gz" else data)
+
+
 def _quick_robot(folder: Path) -> None:
     (folder / "quick.toml").write_text(QUICK_ROBOT, encoding="utf-8")
 
@@ -177,10 +216,22 @@ def _csv_seeds() -> dict[str, bytes]:
 
 
 def _sweep_seeds() -> dict[str, bytes]:
-    return {"sweep.toml": (ROOT / "sweeps" / "ci_smoke.toml").read_bytes() + b"""
+    return {"sweep.toml": b"""name = "fuzz"
+description = "every kind of key"
+duration = 3.0
+
+[[grid]]
+robot = ["bullet", "bullet_mammalian"]
+gait = ["tripod", "bipod"]
+"walker.step_frequency" = [0.8, 1.1]
+
 [[grid]]
 "walker.body_clearance" = [0.2, 0.25]
+stride_percent = [60, 100]
 seed = [1, 2]
+
+[fixed]
+terrain = "flat"
 """}
 
 
@@ -323,6 +374,11 @@ KINDS = [
     Kind("bag-sqlite3", lambda: _files_under("run", _run_seeds("bag-sqlite3")()),
          lambda d: ["analyze", str(d / "run"), "--json"]),
     Kind("bag-ros1", _run_seeds("bag-ros1"), lambda d: ["analyze", str(d / "run.bag"), "--json"], binary=True),
+    Kind("replay-recording", _recording_seeds, lambda d: ["replay", str(d / "rec"), "--robot", "bullet", "--json"]),
+    Kind("replay-bag-ros1", _replay_bag_seeds(ros1=True),
+         lambda d: ["replay", str(d / "rec.bag"), "--robot", "bullet", "--json"], binary=True),
+    Kind("replay-bag-mcap", _replay_bag_seeds(ros1=False),
+         lambda d: ["replay", str(d / "rec"), "--robot", "bullet", "--json"]),
 ]
 
 
@@ -392,6 +448,13 @@ def test_mutated_inputs_fail_in_one_line_without_traceback(kind: Kind, tmp_path_
     seeds = kind.seeds()
     names = [n for n in seeds if not kind.mutable or n in kind.mutable]
     rng = random.Random(f"shc-fuzz-{kind.name}")
+    folder = tmp_path_factory.mktemp(f"{kind.name}-seed")  # the seeds as they are: valid, so accepted
+    if kind.prepare is not None:
+        kind.prepare(folder)
+    for name, data in seeds.items():
+        _write(folder / name, data)
+    code, _, stderr = _shc(kind.argv(folder))
+    assert code == 0 or "fuzz: terrain accepted" in stderr, f"{kind.name}: the unmutated seeds fail: {stderr}"
     failures: dict[str, str] = {}
     outcomes: dict[int | str, int] = {}
     for case in range(CASES):
@@ -400,10 +463,8 @@ def test_mutated_inputs_fail_in_one_line_without_traceback(kind: Kind, tmp_path_
             kind.prepare(folder)
         fuzzed = rng.choice(names)
         for name, data in seeds.items():
-            target = folder / name
-            target.parent.mkdir(parents=True, exist_ok=True)
-            target.write_bytes(mutate(data, rng, kind.binary or name.endswith((".mcap", ".png", ".db3", ".bag")))
-                               if name == fuzzed else data)
+            binary = kind.binary or name.endswith((".mcap", ".png", ".db3", ".bag"))
+            _write(folder / name, mutate(data, rng, binary) if name == fuzzed else data)
         code, stdout, stderr = _shc(kind.argv(folder))
         accepted = code == 0 or "fuzz: terrain accepted" in stderr
         outcomes["accepted" if accepted else code] = outcomes.get("accepted" if accepted else code, 0) + 1
