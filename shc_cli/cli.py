@@ -206,12 +206,13 @@ def run_hw(
                                                         "between goals.")] = False,
     watchdog: Annotated[float, typer.Option(help="stdin: seconds without a line before the velocity goes to 0.")]
     = 0.5,
+    overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller on the robot's Dynamixel servos (Protocol 2.0), safely."""
     from shc_cli.commands.run_hw import run_hw as run
 
     run(robot, gait, port, baud, velocity, duration, commands, out, dry_run, on_fault, on_stop, input_mode, watchdog,
-        stop_state, profile_velocity)
+        stop_state, profile_velocity, overwrite)
 
 
 @app.command()

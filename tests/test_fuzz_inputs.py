@@ -127,6 +127,8 @@ class Kind:
         stub: replaces expensive work after the reading (a physics run), given pytest's monkeypatch.
         out: output directory (relative to the case folder) that must not exist after a failed case.
         mutable: the seed files a case may mutate (default: all of them).
+        named_as: what else names the fuzzed file in an error (relative to the case folder): the source as given,
+            e.g. a recording's prefix for its three files.
     """
 
     name: str
@@ -137,6 +139,7 @@ class Kind:
     stub: Callable[[pytest.MonkeyPatch], None] | None = None
     out: str | None = None
     mutable: tuple[str, ...] = field(default_factory=tuple)
+    named_as: str | None = None
 
 
 REPLAY_CYCLES = 300
@@ -374,7 +377,8 @@ KINDS = [
     Kind("bag-sqlite3", lambda: _files_under("run", _run_seeds("bag-sqlite3")()),
          lambda d: ["analyze", str(d / "run"), "--json"]),
     Kind("bag-ros1", _run_seeds("bag-ros1"), lambda d: ["analyze", str(d / "run.bag"), "--json"], binary=True),
-    Kind("replay-recording", _recording_seeds, lambda d: ["replay", str(d / "rec"), "--robot", "bullet", "--json"]),
+    Kind("replay-recording", _recording_seeds, lambda d: ["replay", str(d / "rec"), "--robot", "bullet", "--json"],
+         named_as="rec"),
     Kind("replay-bag-ros1", _replay_bag_seeds(ros1=True),
          lambda d: ["replay", str(d / "rec.bag"), "--robot", "bullet", "--json"], binary=True),
     Kind("replay-bag-mcap", _replay_bag_seeds(ros1=False),
@@ -417,7 +421,8 @@ def _shc(argv: list[str]) -> tuple[int, str, str]:
     return code, out.getvalue(), err.getvalue()
 
 
-def judge(code: int, stdout: str, stderr: str, fuzzed: str, folder: Path, out: str | None) -> str | None:
+def judge(code: int, stdout: str, stderr: str, fuzzed: str, folder: Path, out: str | None,
+          named_as: str | None = None) -> str | None:
     """What is wrong with a case's outcome, or None."""
     if "Traceback" in stdout + stderr or "internal error" in stderr or code not in (0, 2):
         lines = [line for line in stderr.splitlines() if line.strip()]
@@ -429,7 +434,8 @@ def judge(code: int, stdout: str, stderr: str, fuzzed: str, folder: Path, out: s
         return f"not error lines: {stderr[:300]!r}"
     if "fuzz: terrain accepted" in stderr:
         return None
-    if Path(fuzzed).name not in stderr and Path(fuzzed).parts[0] not in stderr:
+    names = [Path(fuzzed).name, Path(fuzzed).parts[0], *([str(folder / named_as)] if named_as else [])]
+    if not any(name in stderr for name in names):
         return f"does not name {fuzzed}: {lines[0]}"
     if out is not None and ((folder / out).exists() or list(folder.glob("*.partial"))):
         return f"left output behind: {lines[0]}"
@@ -468,7 +474,7 @@ def test_mutated_inputs_fail_in_one_line_without_traceback(kind: Kind, tmp_path_
         code, stdout, stderr = _shc(kind.argv(folder))
         accepted = code == 0 or "fuzz: terrain accepted" in stderr
         outcomes["accepted" if accepted else code] = outcomes.get("accepted" if accepted else code, 0) + 1
-        problem = judge(code, stdout, stderr, fuzzed, folder, kind.out)
+        problem = judge(code, stdout, stderr, fuzzed, folder, kind.out, kind.named_as)
         if problem is not None:
             failures.setdefault(re.sub(r"0x[0-9a-f]+|\d+", "#", problem)[:100], f"case {case} ({fuzzed}): {problem}")
         else:

@@ -150,6 +150,9 @@ def check_points(sweep: Sweep) -> None:
             issue = error.issues[0]
             raise SpecError([Issue(sweep.path, document_lines.get("gait"), "gait",
                                    f"{key[0]} / {key[1] or 'own gait'}: {issue.problem}", issue.fix)]) from None
+        except ShcError as error:  # a gait that does not exist
+            raise SpecError([Issue(sweep.path, document_lines.get("gait"), "gait", str(error).splitlines()[0],
+                                   "name a bundled gait or a gait file")]) from None
 
 
 def _key_lines(sweep: Sweep) -> dict[str, int | None]:
