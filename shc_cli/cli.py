@@ -326,6 +326,43 @@ def import_openshc(
         typer.echo(f"wrote {path}")
 
 
+@import_app.command("urdf")
+def import_urdf(
+    file: Annotated[Path, typer.Argument(help="URDF or xacro file of a legged robot.", metavar="FILE.urdf|FILE.xacro")],
+    out: Annotated[Path | None, typer.Option(help="Folder for robots/NAME.toml and joint_map.csv "
+                                                  "[default: imported/NAME].")] = None,
+    name: Annotated[str | None, typer.Option(help="Robot name [default: the URDF's robot name].")] = None,
+    legs: Annotated[str, typer.Option(help="'auto' (every chain to a leaf link) or the tip links LINK,… or "
+                                           "ID=LINK,… in leg order.")] = "auto",
+    tip: Annotated[list[str] | None, typer.Option(help="Tip link (glob pattern), optionally with the tip point in "
+                                                       "its frame: LINK@X,Y,Z [m]. Repeatable.")] = None,
+    clearance: Annotated[float | None, typer.Option(help="Body clearance [m] [default: from the zero pose].")] = None,
+    reach: Annotated[float | None, typer.Option(help="Stance distance from the hip, as a share of the leg's "
+                                                     "length [default: from the zero pose].")] = None,
+    snap: Annotated[float, typer.Option(help="Snap rpy values this close to a multiple of pi/2 [rad] (for "
+                                             "axes meant to be parallel that are not quite).")] = 0.0,
+    arg: Annotated[list[str] | None, typer.Option(help="xacro argument NAME=VALUE. Repeatable.")] = None,
+) -> None:
+    """Turn a legged robot's URDF or xacro into an shc robot file and a joint map (URDF joint → leg, joint)."""
+    from shc_cli.errors import Issue, SpecError
+    from shc_cli.interop.urdf_import import import_urdf as convert
+
+    mappings = {}
+    for item in arg or []:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise SpecError([Issue(None, None, "--arg", f"'{item}' is not NAME=VALUE", "e.g. --arg prefix=robot_")])
+        mappings[key] = value
+    result = convert(file, out, name, legs, tip, clearance, reach, snap, mappings)
+    for note in result.notes:
+        typer.echo(f"note: {note}")
+    typer.echo(f"forward kinematics: largest tip difference to the URDF {result.fk_error:.2g} m at 200 random joint "
+               "vectors per leg" + (f" ({result.fk_error_unsnapped:.2g} m to the URDF before snapping rpy values, "
+                                    f"largest snap {result.snap:.2g} rad)" if result.snap > 0 else ""))
+    typer.echo(f"wrote {result.robot_path}")
+    typer.echo(f"wrote {result.joint_map_path}")
+
+
 @app.command()
 def schema(
     kind: Annotated[str, typer.Argument(help="'robot' or 'gait'.")],
