@@ -8,7 +8,7 @@ directory or ``.partial`` left behind.
 
 Adding a kind is one :class:`Kind` entry in :data:`KINDS`: its seed files, the ``shc`` arguments that read the
 fuzzed file, and optionally companion files (``prepare``) and stubs for expensive work past the reading
-(``stub``). Study files and imported URDFs join here when their commands exist.
+(``stub``). Study files join here when their command exists.
 
 Set ``SHC_FUZZ_CASES`` to run more (or fewer) cases per kind than :data:`CASES`.
 """
@@ -171,6 +171,14 @@ def _replay_bag_seeds(ros1: bool) -> Callable[[], dict[str, bytes]]:
             return {"rec.bag": path.read_bytes()}
         return {f"rec/{p.relative_to(path)}": p.read_bytes() for p in sorted(path.rglob("*")) if p.is_file()}
     return seeds
+
+
+def _urdf_seeds() -> dict[str, bytes]:
+    from .urdf_robots import insect_leg, robot_urdf
+
+    specs = [insect_leg(f"leg{i}", x, y, standing=True)
+             for i, (x, y) in enumerate([(0.12, -0.08), (-0.12, -0.08), (-0.12, 0.08), (0.12, 0.08)])]
+    return {"quad.urdf": robot_urdf(specs, name="quad").encode()}
 
 
 def _write(target: Path, data: bytes) -> None:
@@ -383,6 +391,8 @@ KINDS = [
          lambda d: ["replay", str(d / "rec.bag"), "--robot", "bullet", "--json"], binary=True),
     Kind("replay-bag-mcap", _replay_bag_seeds(ros1=False),
          lambda d: ["replay", str(d / "rec"), "--robot", "bullet", "--json"]),
+    Kind("urdf-import", _urdf_seeds, lambda d: ["import", "urdf", str(d / "quad.urdf"), "--out", str(d / "out")],
+         out="out"),
 ]
 
 
