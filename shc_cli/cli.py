@@ -95,14 +95,18 @@ def plan(
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-plan).")] = None,
     plots: Annotated[bool, typer.Option(help="Write gait.png, tips.png and joints.png.")] = True,
     bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
+    video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
+                                                    "render with its defaults).", metavar="FILE")] = None,
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
     from shc_cli.commands.plan import run_plan
 
     _bag_check(bag)
+    _video_check(video)
     path = run_plan(robot, gait, velocity, duration, commands, out, plots, overwrite)
     _write_bag(path, bag)
+    _write_video(path, video)
 
 
 @app.command()
@@ -148,16 +152,20 @@ def simulate(
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
     bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
+    video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
+                                                    "render with its defaults).", metavar="FILE")] = None,
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller on the robot in PyBullet physics: terrains, servos, sensors, power, CoT."""
     from shc_cli.commands.simulate import Feedback, run_simulate
 
     _bag_check(bag)
+    _video_check(video)
     path = run_simulate(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate,
                         friction, restitution, seed, imu_noise, start, gui, stand,
                         Feedback(posture, imu_posing, inclination, admittance), overwrite)
     _write_bag(path, bag)
+    _write_video(path, video)
 
 
 def _bag_check(fmt: str | None) -> None:
@@ -166,6 +174,22 @@ def _bag_check(fmt: str | None) -> None:
         from shc_cli.errors import Issue, SpecError
 
         raise SpecError([Issue(None, None, "--bag", f"'{fmt}' is not a bag format", "use mcap, sqlite3 or ros1")])
+
+
+def _video_check(video: Path | None) -> None:
+    """Refuse a bad --video name before the run."""
+    if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
+        from shc_cli.errors import Issue, SpecError
+
+        raise SpecError([Issue(None, None, "--video", f"'{video}' is neither .mp4 nor .gif", "e.g. --video walk.mp4")])
+
+
+def _write_video(run: Path, video: Path | None) -> None:
+    """``--video``: the finished run rendered as ``shc render RUN --out FILE`` would."""
+    if video is not None:
+        from shc_cli.commands.render import render_video
+
+        render_video(run, video)
 
 
 def _write_bag(run: Path, fmt: str | None) -> None:
@@ -246,6 +270,36 @@ def sweep(
     from shc_cli.commands.sweep import run_sweep
 
     run_sweep(file, workers, executor, scheduler, out, resume, overwrite)
+
+
+@app.command()
+def render(
+    run: Annotated[Path, typer.Argument(help="Run directory (plan, simulate, run-hw) or a bag from export bag.")],
+    out: Annotated[Path, typer.Option(help="Video file: FILE.mp4 (H.264) or FILE.gif.")],
+    fps: Annotated[float, typer.Option(help="Frames per second of the video.")] = 25.0,
+    size: Annotated[str, typer.Option(help="Frame size WIDTHxHEIGHT in pixels.")] = "960x540",
+    camera: Annotated[str, typer.Option(help="follow (the body, from behind and above), fixed (the whole path) "
+                                             "or top (from above, following).")] = "follow",
+    speed: Annotated[float, typer.Option(help="Playback speed: 2 = twice real time.")] = 1.0,
+) -> None:
+    """Render a run headless to video: the robot, terrain and feet, with time, speeds and walk state over it."""
+    from shc_cli.commands.render import run_render
+
+    run_render(run, out, fps, size, camera, speed)
+
+
+@app.command()
+def view(
+    target: Annotated[str, typer.Argument(help="Robot file or bundled robot name, a run directory, or a bag.")],
+    host: Annotated[str, typer.Option(help="Address to listen on. The default 127.0.0.1 serves this computer "
+                                           "only; 0.0.0.0 serves anyone who can reach it on the network.")]
+    = "127.0.0.1",
+    port: Annotated[int, typer.Option(help="Port to listen on.")] = 8080,
+) -> None:
+    """See a robot (joint sliders, body pose, workspaces) or replay a run in the browser; Ctrl-C stops it."""
+    from shc_cli.commands.view import run_view
+
+    run_view(target, host, port)
 
 
 @app.command()

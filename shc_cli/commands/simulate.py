@@ -320,6 +320,7 @@ class Simulation:
             "max_tilt_rad": max_tilt,
             "fell": fell,
             "seed": self.seed,
+            "terrain": str(self.world.terrain.spec),
             "versions": {"shc": __version__, "pybullet": str(pybullet.getAPIVersion()),
                          "numpy": np.__version__},
         }
