@@ -167,6 +167,8 @@ def test_ci_smoke_sweep_matches_its_golden_results(tmp_path: Path, capsys, monke
                 problems.append(f"{slug}: {key} {a:.6g} vs golden {b:.6g} ({(a - b) / b:+.1%}, tolerance "
                                 f"±{tolerance:.0%})")
     assert not problems, "ci_smoke moved beyond the golden tolerances:\n" + "\n".join(problems)
+    # every run walks long enough to hold its speed for a whole gait cycle: no empty steady-speed column
+    assert all(float(r["steady_speed_mps"]) > 0.0 for r in now.values())
 
     # --resume with every run finished re-reads them: same table, no simulation
     logs = sorted((out / "runs").glob("*/log.csv"))
