@@ -22,7 +22,7 @@ def _log(path: Path) -> list[dict[str, str]]:
 def _walk(tmp: Path, name: str, robot: str, seconds: float, feedback: Feedback,
           engine: str = "pybullet") -> list[dict[str, str]]:
     path, summary = simulate_to(robot, None, "1,0,0", seconds, None, tmp / name, False, "ramp:10", "WG", 400.0, 0.9,
-                                0.0, 0, 0.0, "unpacked", False, None, feedback, engine)
+                                0.0, 0, 0.0, "unpacked", False, None, feedback, engine=engine)
     assert summary["fell"] is False
     return _log(path)
 
@@ -87,7 +87,7 @@ def test_admittance_keeps_more_feet_on_the_ground_over_a_step(engine: str, tmp_p
     for name, on in (("off", False), ("on", True)):
         path, summary = simulate_to(str(robot), None, "1,0,0", 8.0, None, tmp_path / name, False, "stairs:0.06,1.0",
                                     "WG", 400.0, 0.9, 0.0, 0, 0.0, "unpacked", False, None, Feedback(admittance=on),
-                                    engine)
+                                    engine=engine)
         assert summary["fell"] is False
         rows = [r for r in _log(path) if r["robot_state"] == "RUNNING" and 0.2 < float(r["x"]) < 1.4]
         assert len(rows) > 300

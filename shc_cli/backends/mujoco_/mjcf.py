@@ -229,17 +229,22 @@ def _segment(body: ET.Element, leg: Leg, index: int, joint: Joint, common: dict[
 
 
 def _actuators(root: ET.Element, robot: Robot) -> None:
-    """One actuator per joint, within ± the stall torque: a velocity actuator (position servo, driven by the
-    position loop every physics step) or a position actuator of ``stiffness`` and ``damping`` (``pd``)."""
+    """One actuator per joint: for ``position`` servos a velocity actuator within ± the stall torque, driven by the
+    position loop every physics step; for ``pd`` and ``dynamixel`` servos a position actuator of the servo model's
+    stiffness and damping within ± its torque limit (:meth:`~shc_cli.backends.servo.ServoModel.gains`)."""
+    from shc_cli.backends.servo import ServoModel
+
     servo = robot.servo
     actuators = ET.SubElement(root, "actuator")
     limit = f"{_num(-servo.stall_torque)} {_num(servo.stall_torque)}"
+    gains = ServoModel(servo).gains() if servo.control in ("pd", "dynamixel") else None
     for names in leg_names(robot).values():
         for joint_name in names.joints:
             name = joint_name.removesuffix("_joint") + "_servo"
-            if servo.control == "pd":
-                ET.SubElement(actuators, "position", name=name, joint=joint_name, kp=_num(servo.stiffness),
-                              kv=_num(servo.damping), forcerange=limit)
+            if gains is not None:
+                ET.SubElement(actuators, "position", name=name, joint=joint_name, kp=_num(gains.stiffness),
+                              kv=_num(gains.damping),
+                              forcerange=f"{_num(-gains.torque_limit)} {_num(gains.torque_limit)}")
             else:
                 ET.SubElement(actuators, "velocity", name=name, joint=joint_name, kv=_num(velocity_stiffness(robot)),
                               forcerange=limit)
@@ -261,10 +266,12 @@ def velocity_stiffness(robot: Robot) -> float:
 
 
 def armature(robot: Robot) -> float:
-    """Reflected rotor inertia of every joint [kg·m²] (:data:`ARMATURE_PER_NM` × stall torque).
+    """Reflected rotor inertia of every joint [kg·m²]: the servo's ``armature`` if the robot file gives one, else
+    :data:`ARMATURE_PER_NM` × stall torque.
 
     MuJoCo integrates a clamped actuator explicitly: at 400 Hz the stall torque on a light link without it
     (the Bullet tarsus: 0.0008 kg·m² about its joint) changes the speed by ``h·τ/I`` ≈ 27 rad/s in one step and
     the joint chatters between ± the limit. PyBullet's motor, a solver constraint, needs none.
     """
-    return ARMATURE_PER_NM * robot.servo.stall_torque
+    given = float(getattr(robot.servo, "armature", 0.0))
+    return given if given > 0.0 else ARMATURE_PER_NM * robot.servo.stall_torque

@@ -10,8 +10,9 @@ behave as PyBullet's (docs/physics-model.md):
   limited to ± the stall torque. The joints carry the gearbox's reflected rotor inertia
   (:func:`~shc_cli.backends.mujoco_.mjcf.armature`), which keeps light links stable when the torque limit
   clamps (MuJoCo integrates a clamped actuator explicitly).
-* ``pd`` control: a position actuator ``τ = stiffness·(q* − q) − damping·q̇`` within ± the stall torque
-  (implicit in the damping, as PyBullet's stable PD).
+* ``pd`` and ``dynamixel`` control: a position actuator ``τ = stiffness·(q* − q) − damping·q̇`` within ± the
+  torque limit, with the gains of :meth:`~shc_cli.backends.servo.ServoModel.gains` (implicit in the damping, as
+  PyBullet's stable PD); the servo's ``armature`` as joint armature.
 
 Torque and speed are averaged over each control period's physics steps and turned into electrical power by the
 engine-independent :func:`~shc_cli.backends.power.servo_power`, exactly as in PyBullet. ``mujoco`` is imported
@@ -93,7 +94,8 @@ class MujocoWorld:
         mujoco.mj_forward(model, data)
         self.stand: int | None = model.equality("stand").id if stand else None
         servo = robot.servo
-        self.compliant = servo.control == "pd"
+        self.compliant = servo.control in ("pd", "dynamixel")
+        """A position actuator of the servo model's stiffness and damping (no per-step servo loop in Python)."""
         self._gain = servo.position_gain / timestep
         self._keep = 1.0 - servo.velocity_gain
         self._speed = servo.no_load_speed
