@@ -67,8 +67,9 @@ def test_engine_is_a_sweepable_option_and_sweep_engine_fills_it_in(tmp_path: Pat
     assert {p.options["engine"] for p in plain.points} == {"pybullet"}  # the default
     assert {p.options["engine"] for p in with_engine(plain, "mujoco").points} == {"mujoco"}
     assert [p.slug for p in with_engine(plain, "mujoco").points] == [p.slug for p in plain.points]
-    agreement = load_sweep(ROOT / "sweeps" / "engines_agreement.toml")
-    assert len(agreement.points) == 12
+    for name in ("engines_agreement.toml", "engines_agreement_paper.toml"):
+        agreement = load_sweep(ROOT / "sweeps" / name)
+        assert len(agreement.points) == 12 and {p.options["engine"] for p in agreement.points} == {"pybullet", "mujoco"}
 
 
 def test_shipped_sweeps_load_and_bullet_cot_is_the_papers_grid() -> None:
