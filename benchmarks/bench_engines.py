@@ -32,7 +32,8 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 SHC = [sys.executable, "-m", "shc_cli.cli"]
-ROBOTS = ["bullet", "bullet_mammalian", "athena", "quadruped", "octopod", "openshc_default"]
+ROBOTS = sorted(path.stem for path in (ROOT / "robots").glob("*.toml"))
+"""Every shipped robot."""
 
 
 def uptime() -> str:
@@ -84,7 +85,7 @@ def terrains(duration: float, engine: str) -> None:
         x, y = np.meshgrid(np.arange(120) * 0.05, np.arange(60) * 0.05)
         np.savetxt(field, 0.025 * (1.0 + np.sin(2.1 * x) * np.cos(1.7 * y)), delimiter=",", fmt="%.5f")
         kinds = ["flat", "ramp:10", "blocks", "stairs:0.05,0.3", f"heightfield:{field}"]
-        print(f"{'robot':18s}" + "".join(f"{k.split(':')[0] if k.startswith('height') else k:>18s}" for k in kinds))
+        print(f"{'robot':20s}" + "".join(f"{k.split(':')[0] if k.startswith('height') else k:>18s}" for k in kinds))
         for robot in ROBOTS:
             cells = []
             for kind in kinds:
@@ -97,7 +98,7 @@ def terrains(duration: float, engine: str) -> None:
                     cells.append(f"{'FELL ' if summary['fell'] else ''}{summary['forward_distance_m']:.2f} m")
                 except subprocess.CalledProcessError as error:
                     cells.append("error: " + (error.stderr.strip().splitlines() or ["?"])[-1][:10])
-            print(f"{robot:18s}" + "".join(f"{c:>18s}" for c in cells))
+            print(f"{robot:20s}" + "".join(f"{c:>18s}" for c in cells))
     print(f"load after:  {uptime()}")
 
 
