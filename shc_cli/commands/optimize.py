@@ -307,6 +307,11 @@ def run_optimize(file: Path, trials: int | None, workers: int | None, executor: 
     the tables, robot files and plots; returns the output directory."""
     from shc_cli.commands.sweep import RunPool, check_executor
 
+    try:
+        import optuna
+    except ImportError:
+        raise SpecError([Issue(None, None, "optimize", "optuna is not installed",
+                               "pip install 'shc[optimize]' (optuna, optuna-dashboard)")]) from None
     spec = load_study(file)
     check_executor(executor, scheduler)
     check_study(spec)
@@ -328,7 +333,6 @@ def run_optimize(file: Path, trials: int | None, workers: int | None, executor: 
         shutil.copyfile(spec.path, copy)
     count = workers or os.cpu_count() or 1
     study = _open_study(spec, out, resume)
-    import optuna
     from optuna.trial import TrialState
 
     keys = metric_keys(spec)
@@ -340,6 +344,9 @@ def run_optimize(file: Path, trials: int | None, workers: int | None, executor: 
                 stored = study.get_trials(deepcopy=False)
                 finished = sum(1 for t in stored if t.state.is_finished())
                 pending = sorted((t for t in stored if t.state == TrialState.RUNNING), key=lambda t: t.number)
+                for frozen in [t for t in pending if set(t.params) != {d.key for d in spec.space}]:
+                    study.tell(frozen.number, state=TrialState.FAIL)  # stopped between ask and its suggestions
+                    pending.remove(frozen)
                 if finished >= total and not pending:
                     break
                 batch = [optuna.trial.Trial(study, t._trial_id) for t in pending[:count]]  # interrupted: re-run
