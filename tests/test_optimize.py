@@ -224,3 +224,26 @@ def test_interrupted_study_resumes_without_losing_or_rerunning_trials(tmp_path: 
     params = [tuple(r[k] for k in ("gait", "walker.step_frequency", "walker.swing_height", "stride_percent"))
               for r in after]
     assert len(set(params)) == len(params)
+
+
+def test_a_trial_with_the_values_of_a_finished_one_is_not_simulated_again(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                           monkeypatch) -> None:
+    """Four trials over two possible values: at least two repeat an earlier trial and reuse its runs."""
+    text = SMALL.format(duration=0.3, seeds="[0]")
+    text = text[:text.index("[space]")] + '[space]\ngait = { choices = ["tripod", "bipod"] }\n' + \
+        text[text.index("[objectives]"):].replace('name = "nsga2"', 'name = "random"').replace("population = 2\n", "")
+    path = _write(tmp_path, text)
+    out = tmp_path / "out"
+    code, _, err = run(["optimize", str(path), "--trials", "4", "--workers", "1", "--out", str(out)], capsys,
+                       monkeypatch)
+    assert code == 0, err
+    rows = _rows(out / "trials.csv")
+    copies = [r for r in rows if r["duplicate_of"]]
+    assert len(copies) >= 2
+    for row in copies:
+        first = rows[int(row["duplicate_of"])]
+        assert first["gait"] == row["gait"] and not first["duplicate_of"]
+        assert (row["cot"], row["mean_speed_mps"], row["runs"]) == \
+            (first["cot"], first["mean_speed_mps"], first["runs"])
+        assert not (out / "runs" / f"t{int(row['trial']):04d}-s0").exists()
+    assert len(list((out / "runs").iterdir())) == len(rows) - len(copies)

@@ -87,6 +87,30 @@ def compare(study: Path, grid: Path) -> None:
         best = min(faster, key=lambda t: t[1])
         print(f"| {describe(row)} | {speed:.3f} | {cot:.2f} | trial {best[2]['trial']}: {describe(best[2])} | "
               f"{best[0]:.3f} | {best[1]:.2f} | {(best[1] - cot) / cot:+.0%} |")
+    print("\n| speed at least [m/s] | grid: lowest CoT (point, speed) | study: lowest CoT (trial, speed) | change |")
+    print("|---|---|---|---|")
+    for floor in (0.1, 0.2, 0.3, 0.4, 0.45, 0.5):
+        cells = []
+        for points in (grid_all, trials):
+            faster = [p for p in points if p[0] >= floor]
+            cells.append(min(faster, key=lambda p: p[1]) if faster else None)
+        text = [f"{c[1]:.2f} ({describe(c[2])}{'; trial ' + c[2]['trial'] if 'trial' in c[2] else ''}, {c[0]:.3f})"
+                if c else "none" for c in cells]
+        change = f"{(cells[1][1] - cells[0][1]) / cells[0][1]:+.0%}" if cells[0] and cells[1] else ""
+        print(f"| {floor:.2f} | {text[0]} | {text[1]} | {change} |")
+    print("\n| gait | grid: lowest CoT (point, speed [m/s]) | study, same gait, at ≥ that speed: lowest CoT "
+          "(trial, speed) "
+          "| change |")
+    print("|---|---|---|---|")
+    for gait in ("tripod", "bipod", "ripple"):
+        mine = [p for p in grid_all if p[2]["gait"] == gait]
+        base = min(mine, key=lambda p: p[1]) if mine else None
+        found = [p for p in trials if p[2]["gait"] == gait and (base is None or p[0] >= base[0])]
+        best = min(found, key=lambda p: p[1]) if found else None
+        left = f"{base[1]:.2f} ({describe(base[2])}, {base[0]:.3f})" if base else "not in the grid"
+        right = f"{best[1]:.2f} (trial {best[2]['trial']}: {describe(best[2])}, {best[0]:.3f})" if best else "none"
+        change = f"{(best[1] - base[1]) / base[1]:+.0%}" if base and best else ""
+        print(f"| {gait} | {left} | {right} | {change} |")
     figure, axes = plt.subplots(figsize=(7, 5), dpi=120)
     axes.scatter([p[0] for p in trials], [p[1] for p in trials], s=10, color="tab:blue", alpha=0.4,
                  label=f"study trials (feasible, {len(trials)})")
@@ -100,7 +124,7 @@ def compare(study: Path, grid: Path) -> None:
     axes.set_yscale("log")
     axes.set_xlabel("mean speed [m/s]")
     axes.set_ylabel("cost of transport (eq. 22), log scale")
-    axes.set_title("Bullet insectoid, flat, 10 s walking: optimiser vs the paper's grid")
+    axes.set_title("Bullet insectoid, flat, 10 s walking: optimiser vs the paper's grid", fontsize=10)
     axes.grid(True, lw=0.3, which="both")
     axes.legend(fontsize=8)
     figure.tight_layout()
