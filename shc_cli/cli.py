@@ -28,6 +28,10 @@ app = typer.Typer(
 
 _state = {"debug": False}
 
+OVERWRITE_HELP = "Replace an existing run directory at --out (when the new run finishes; only shc's own outputs)."
+VELOCITY_HELP = ("Constant velocity input VX,VY,WZ: throttle fractions −1..1 of the robot's maximum linear and "
+                 "angular speed, unless the robot file's walker.velocity_input_mode is 'real' (then m/s, m/s, rad/s).")
+
 
 def _version(value: bool) -> None:
     if value:
@@ -82,7 +86,7 @@ def plan(
     robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
     gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
     velocity: Annotated[
-        str, typer.Option(help="Constant velocity input VX,VY,WZ in the robot's input mode.")
+        str, typer.Option(help=VELOCITY_HELP)
     ] = "1,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 10).")] = None,
     commands: Annotated[
@@ -91,20 +95,25 @@ def plan(
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-plan).")] = None,
     plots: Annotated[bool, typer.Option(help="Write gait.png, tips.png and joints.png.")] = True,
     bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
+    video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
+                                                    "render with its defaults).", metavar="FILE")] = None,
+    overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
     from shc_cli.commands.plan import run_plan
 
     _bag_check(bag)
-    path = run_plan(robot, gait, velocity, duration, commands, out, plots)
+    _video_check(video)
+    path = run_plan(robot, gait, velocity, duration, commands, out, plots, overwrite)
     _write_bag(path, bag)
+    _write_video(path, video)
 
 
 @app.command()
 def simulate(
     robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
     gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
-    velocity: Annotated[str, typer.Option(help="Velocity input VX,VY,WZ in the robot's input mode.")] = "1,0,0",
+    velocity: Annotated[str, typer.Option(help=VELOCITY_HELP)] = "1,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
     commands: Annotated[
         Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
@@ -143,15 +152,20 @@ def simulate(
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
     bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
+    video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
+                                                    "render with its defaults).", metavar="FILE")] = None,
+    overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller on the robot in PyBullet physics: terrains, servos, sensors, power, CoT."""
     from shc_cli.commands.simulate import Feedback, run_simulate
 
     _bag_check(bag)
+    _video_check(video)
     path = run_simulate(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate,
                         friction, restitution, seed, imu_noise, start, gui, stand,
-                        Feedback(posture, imu_posing, inclination, admittance))
+                        Feedback(posture, imu_posing, inclination, admittance), overwrite)
     _write_bag(path, bag)
+    _write_video(path, video)
 
 
 def _bag_check(fmt: str | None) -> None:
@@ -160,6 +174,22 @@ def _bag_check(fmt: str | None) -> None:
         from shc_cli.errors import Issue, SpecError
 
         raise SpecError([Issue(None, None, "--bag", f"'{fmt}' is not a bag format", "use mcap, sqlite3 or ros1")])
+
+
+def _video_check(video: Path | None) -> None:
+    """Refuse a bad --video name before the run."""
+    if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
+        from shc_cli.errors import Issue, SpecError
+
+        raise SpecError([Issue(None, None, "--video", f"'{video}' is neither .mp4 nor .gif", "e.g. --video walk.mp4")])
+
+
+def _write_video(run: Path, video: Path | None) -> None:
+    """``--video``: the finished run rendered as ``shc render RUN --out FILE`` would."""
+    if video is not None:
+        from shc_cli.commands.render import render_video
+
+        render_video(run, video)
 
 
 def _write_bag(run: Path, fmt: str | None) -> None:
@@ -183,7 +213,7 @@ def run_hw(
     input_mode: Annotated[str, typer.Option("--input", help="timeline (--velocity/--commands), commands:FILE, "
                                                             "stdin (JSON lines), keyboard, gamepad[:DEVICE].")]
     = "timeline",
-    velocity: Annotated[str, typer.Option(help="Velocity input VX,VY,WZ in the robot's input mode.")] = "0,0,0",
+    velocity: Annotated[str, typer.Option(help=VELOCITY_HELP)] = "0,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
     commands: Annotated[
         Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
@@ -200,12 +230,13 @@ def run_hw(
                                                         "between goals.")] = False,
     watchdog: Annotated[float, typer.Option(help="stdin: seconds without a line before the velocity goes to 0.")]
     = 0.5,
+    overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller on the robot's Dynamixel servos (Protocol 2.0), safely."""
     from shc_cli.commands.run_hw import run_hw as run
 
     run(robot, gait, port, baud, velocity, duration, commands, out, dry_run, on_fault, on_stop, input_mode, watchdog,
-        stop_state, profile_velocity)
+        stop_state, profile_velocity, overwrite)
 
 
 @app.command()
@@ -232,11 +263,43 @@ def sweep(
     scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address (default: a LocalCluster).")] = None,
     out: Annotated[Path | None, typer.Option(help="Output directory (default runs/<sweep name>).")] = None,
     resume: Annotated[bool, typer.Option(help="Continue a sweep: finished runs are read, not re-run.")] = False,
+    overwrite: Annotated[bool, typer.Option(help="Delete an existing sweep output at --out first and run it all "
+                                                 "again (only shc's own outputs).")] = False,
 ) -> None:
     """Run a grid of simulations in parallel and tabulate CoT, power, speed and stability per run."""
     from shc_cli.commands.sweep import run_sweep
 
-    run_sweep(file, workers, executor, scheduler, out, resume)
+    run_sweep(file, workers, executor, scheduler, out, resume, overwrite)
+
+
+@app.command()
+def render(
+    run: Annotated[Path, typer.Argument(help="Run directory (plan, simulate, run-hw) or a bag from export bag.")],
+    out: Annotated[Path, typer.Option(help="Video file: FILE.mp4 (H.264) or FILE.gif.")],
+    fps: Annotated[float, typer.Option(help="Frames per second of the video.")] = 25.0,
+    size: Annotated[str, typer.Option(help="Frame size WIDTHxHEIGHT in pixels.")] = "960x540",
+    camera: Annotated[str, typer.Option(help="follow (the body, from behind and above), fixed (the whole path) "
+                                             "or top (from above, following).")] = "follow",
+    speed: Annotated[float, typer.Option(help="Playback speed: 2 = twice real time.")] = 1.0,
+) -> None:
+    """Render a run headless to video: the robot, terrain and feet, with time, speeds and walk state over it."""
+    from shc_cli.commands.render import run_render
+
+    run_render(run, out, fps, size, camera, speed)
+
+
+@app.command()
+def view(
+    target: Annotated[str, typer.Argument(help="Robot file or bundled robot name, a run directory, or a bag.")],
+    host: Annotated[str, typer.Option(help="Address to listen on. The default 127.0.0.1 serves this computer "
+                                           "only; 0.0.0.0 serves anyone who can reach it on the network.")]
+    = "127.0.0.1",
+    port: Annotated[int, typer.Option(help="Port to listen on.")] = 8080,
+) -> None:
+    """See a robot (joint sliders, body pose, workspaces) or replay a run in the browser; Ctrl-C stops it."""
+    from shc_cli.commands.view import run_view
+
+    run_view(target, host, port)
 
 
 @app.command()
@@ -249,12 +312,14 @@ def optimize(
     scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address (default: a LocalCluster).")] = None,
     out: Annotated[Path | None, typer.Option(help="Output directory (default runs/<study name>).")] = None,
     resume: Annotated[bool, typer.Option(help="Continue a study from its storage: finished trials are kept.")] = False,
+    overwrite: Annotated[bool, typer.Option(help="Delete an existing study output (shc's only) and start again.")]
+    = False,
 ) -> None:
     """Multi-objective search (Optuna) of gait and robot parameters over simulated runs: Pareto front and robot
     files."""
     from shc_cli.commands.optimize import run_optimize
 
-    run_optimize(file, trials, workers, executor, scheduler, out, resume)
+    run_optimize(file, trials, workers, executor, scheduler, out, resume, overwrite)
 
 
 @app.command()
@@ -333,6 +398,43 @@ def import_openshc(
 
     for path in convert(robot, gait, auto_pose, out):
         typer.echo(f"wrote {path}")
+
+
+@import_app.command("urdf")
+def import_urdf(
+    file: Annotated[Path, typer.Argument(help="URDF or xacro file of a legged robot.", metavar="FILE.urdf|FILE.xacro")],
+    out: Annotated[Path | None, typer.Option(help="Folder for robots/NAME.toml and joint_map.csv "
+                                                  "[default: imported/NAME].")] = None,
+    name: Annotated[str | None, typer.Option(help="Robot name [default: the URDF's robot name].")] = None,
+    legs: Annotated[str, typer.Option(help="'auto' (every chain to a leaf link) or the tip links LINK,… or "
+                                           "ID=LINK,… in leg order.")] = "auto",
+    tip: Annotated[list[str] | None, typer.Option(help="Tip link (glob pattern), optionally with the tip point in "
+                                                       "its frame: LINK@X,Y,Z [m]. Repeatable.")] = None,
+    clearance: Annotated[float | None, typer.Option(help="Body clearance [m] [default: from the zero pose].")] = None,
+    reach: Annotated[float | None, typer.Option(help="Stance distance from the hip, as a share of the leg's "
+                                                     "length [default: from the zero pose].")] = None,
+    snap: Annotated[float, typer.Option(help="Snap rpy values this close to a multiple of pi/2 [rad] (for "
+                                             "axes meant to be parallel that are not quite).")] = 0.0,
+    arg: Annotated[list[str] | None, typer.Option(help="xacro argument NAME=VALUE. Repeatable.")] = None,
+) -> None:
+    """Turn a legged robot's URDF or xacro into an shc robot file and a joint map (URDF joint → leg, joint)."""
+    from shc_cli.errors import Issue, SpecError
+    from shc_cli.interop.urdf_import import import_urdf as convert
+
+    mappings = {}
+    for item in arg or []:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise SpecError([Issue(None, None, "--arg", f"'{item}' is not NAME=VALUE", "e.g. --arg prefix=robot_")])
+        mappings[key] = value
+    result = convert(file, out, name, legs, tip, clearance, reach, snap, mappings)
+    for note in result.notes:
+        typer.echo(f"note: {note}")
+    typer.echo(f"forward kinematics: largest tip difference to the URDF {result.fk_error:.2g} m at 200 random joint "
+               "vectors per leg" + (f" ({result.fk_error_unsnapped:.2g} m to the URDF before snapping rpy values, "
+                                    f"largest snap {result.snap:.2g} rad)" if result.snap > 0 else ""))
+    typer.echo(f"wrote {result.robot_path}")
+    typer.echo(f"wrote {result.joint_map_path}")
 
 
 @app.command()

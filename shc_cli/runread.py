@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from shc_cli.errors import OutputError, SpecError
+from shc_cli.errors import OutputError, ShcError, SpecError
 from shc_cli.runlog import PARTIAL_SUFFIX, ROBOT_FILE
 from shc_cli.spec.robot import Robot
 
@@ -90,7 +90,13 @@ def read_run(path: Path) -> RunLog:
     ``shc export bag``; raises :class:`SpecError` (exit 2) with one line when it is neither."""
     path = Path(path)
     if (path / "metadata.yaml").exists() or (path.is_file() and path.suffix == ".bag"):
-        return _bag_run(path)
+        try:
+            return _bag_run(path)
+        except ShcError:
+            raise
+        except Exception as error:  # rosbags, YAML and the message decoders raise many kinds for a damaged bag
+            raise _bad(path, f"not a readable bag: {_first_line(error)}", "export the run again with shc export bag") \
+                from None
     if not path.is_dir():
         raise _bad(path, "not a run directory", "give a directory written by shc plan or shc simulate")
     if path.name.endswith(PARTIAL_SUFFIX) and not (path / "summary.json").exists():
@@ -99,14 +105,47 @@ def read_run(path: Path) -> RunLog:
         summary = json.loads((path / "summary.json").read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise _bad(path, "no summary.json", "give a directory written by shc plan or shc simulate") from None
-    except (OSError, json.JSONDecodeError) as error:
-        raise _bad(path / "summary.json", f"unreadable: {error}", "re-run to regenerate it") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise _bad(path / "summary.json", f"unreadable: {_first_line(error)}", "re-run to regenerate it") from None
+    _check_summary(path / "summary.json", summary)
     robot = _robot(path, summary)
-    if (path / "log.csv").exists():
-        return _simulate_run(path, summary, robot)
-    if (path / "joints.csv").exists() and (path / "body.csv").exists():
-        return _plan_run(path, summary, robot)
+    try:
+        if (path / "log.csv").exists():
+            return _simulate_run(path, summary, robot)
+        if (path / "joints.csv").exists() and (path / "body.csv").exists():
+            return _plan_run(path, summary, robot)
+    except (KeyError, ValueError, IndexError, TypeError) as error:  # tables that do not fit together or the robot
+        raise _bad(path, f"malformed run tables: {_first_line(error)}", "re-run to regenerate it") from None
     raise _bad(path, "neither log.csv (simulate) nor joints.csv and body.csv (plan)", "re-run to regenerate it")
+
+
+SUMMARY_NUMBERS = ("step_period_cycles", "step_frequency_hz", "duty_factor", "time_delta_s")
+"""Summary keys the readers of a run compute with: numbers when present."""
+SUMMARY_TEXTS = ("robot", "gait", "scenario")
+
+
+def _first_line(error: BaseException) -> str:
+    text = str(error).strip().splitlines()
+    return f"{type(error).__name__}: {text[0].strip() if text else ''}".rstrip(": ")
+
+
+def _check_summary(file: Path, summary: Any) -> None:
+    """A summary is a JSON object whose keys that readers use have the right types; one line if not."""
+    import math
+
+    if not isinstance(summary, dict):
+        raise _bad(file, f"a JSON {type(summary).__name__}, not an object", "re-run to regenerate it")
+    for key in SUMMARY_NUMBERS:
+        value = summary.get(key)
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)
+                                  or not math.isfinite(value) or value < 0):
+            raise _bad(file, f"{key}: {value!r} is not a non-negative number", "re-run to regenerate it")
+    if isinstance(summary.get("step_period_cycles"), float):
+        raise _bad(file, "step_period_cycles: not a whole number", "re-run to regenerate it")
+    for key in SUMMARY_TEXTS:
+        value = summary.get(key)
+        if value is not None and not isinstance(value, str):
+            raise _bad(file, f"{key}: {value!r} is not text", "re-run to regenerate it")
 
 
 def _bad(path: Path, problem: str, fix: str) -> SpecError:
@@ -132,6 +171,8 @@ def _table(file: Path) -> dict[str, np.ndarray]:
         lines = file.read_text(encoding="utf-8").splitlines()
     except OSError as error:
         raise OutputError(f"{file}: cannot read the table ({error})") from None
+    except UnicodeDecodeError as error:
+        raise _bad(file, f"not UTF-8 text at byte {error.start}", "re-run to regenerate it") from None
     if len(lines) < 2:
         raise _bad(file, "no rows", "re-run to regenerate it")
     header = lines[0].split(",")
@@ -202,14 +243,12 @@ def _plan_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
     body = _table(path / "body.csv")
     tips = _table(path / "tips.csv") if (path / "tips.csv").exists() else None
     rows = len(joints["t"])
+    for name, table in (("body.csv", body), ("tips.csv", tips)):
+        if table is not None and len(table["t"]) != rows:
+            raise _bad(path / name, f"{len(table['t'])} rows where joints.csv has {rows}", "re-run to regenerate it")
     dt = float(robot.time_delta)
     desired = _stack(body, ["vel_x", "vel_y", "vel_wz"])
-    # The ideal body path: the commanded body-frame velocity integrated in the world (what a robot without
-    # slip would do); yaw first, so each cycle moves along the heading it had.
-    yaw = np.concatenate([[0.0], np.cumsum(desired[:-1, 2] * dt)])
-    step = np.stack([desired[:, 0] * np.cos(yaw) - desired[:, 1] * np.sin(yaw),
-                     desired[:, 0] * np.sin(yaw) + desired[:, 1] * np.cos(yaw)], axis=1) * dt
-    xy = np.concatenate([np.zeros((1, 2)), np.cumsum(step[:-1], axis=0)])
+    xy, yaw = ideal_path(desired, dt)
     z = body["pose_z"]  # the body pose in the walk plane: its z is the height above the ground plane
     position = np.column_stack([xy, z])
     rpy = np.column_stack([body["pose_roll"], body["pose_pitch"], yaw + body["pose_yaw"]])
@@ -230,6 +269,17 @@ def _plan_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
         joints=planned, contact=contact, height=z, commanded=planned, progress=progress, tips=tip_stages,
         states=np.column_stack([body["robot_state"], body["walk_state"]]),
     )
+
+
+def ideal_path(desired: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """The ideal body path of a plan: the commanded body-frame velocity ``desired`` ``(N, 3)`` [m/s, m/s, rad/s]
+    integrated in the world (what a robot without slip would do), yaw first so each cycle moves along the heading
+    it had. Returns ``xy`` ``(N, 2)`` [m] and ``yaw`` ``(N,)`` [rad] per logged row, the first row at the origin."""
+    yaw = np.concatenate([[0.0], np.cumsum(desired[:-1, 2] * dt)])
+    step = np.stack([desired[:, 0] * np.cos(yaw) - desired[:, 1] * np.sin(yaw),
+                     desired[:, 0] * np.sin(yaw) + desired[:, 1] * np.cos(yaw)], axis=1) * dt
+    xy = np.concatenate([np.zeros((1, 2)), np.cumsum(step[:-1], axis=0)])
+    return xy, yaw
 
 
 def _bag_run(path: Path) -> RunLog:

@@ -41,11 +41,13 @@ def test_version(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
 
 
 def test_help_starts_fast() -> None:
-    """``shc --help`` must not import numpy, numba, pydantic or matplotlib (budget 0.3 s)."""
+    """``shc --help`` must not import numpy, numba, pydantic, matplotlib, nor the viewer or renderer (viser, mujoco,
+    imageio-ffmpeg, Pillow) (budget 0.3 s)."""
     code = ("import sys, time; t = time.perf_counter(); sys.argv = ['shc', '--help']\n"
             "from shc_cli.cli import main\n"
             "try:\n    main()\nexcept SystemExit:\n    pass\n"
-            "heavy = [m for m in ('numpy', 'numba', 'pydantic', 'matplotlib', 'scipy') if m in sys.modules]\n"
+            "heavy = [m for m in ('numpy', 'numba', 'pydantic', 'matplotlib', 'scipy', 'viser', 'mujoco', "
+            "'imageio_ffmpeg', 'PIL', 'playwright', 'shc_cli.view') if m in sys.modules]\n"
             "print(heavy, time.perf_counter() - t, file=sys.stderr)")
     best = min(_timed(code) for _ in range(3))
     assert best[0] == "[]"
@@ -98,15 +100,17 @@ def test_missing_robot_is_one_line_with_the_bundled_names(capsys, monkeypatch) -
     code, out, err = run(["workspace", "bulet"], capsys, monkeypatch)
     assert code == 2 and out == ""
     assert err.strip().splitlines() == [
-        "error: bulet: no such robot file or bundled robot (did you mean 'bullet'? bundled: athena, bullet, "
-        "bullet_mammalian, octopod, openshc_default, quadruped)"]
+        "error: bulet: no such robot file or bundled robot (did you mean 'bullet'? bundled: athena, athena_paper, "
+        "bullet, bullet_insectoid_a, bullet_insectoid_b, bullet_mammalian, bullet_mammalian_a, bullet_mammalian_b, "
+        "octopod, openshc_default, quadruped)"]
 
 
 def test_workspace_json_has_the_documented_keys_and_nothing_else_on_stdout(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     code, out, err = run(["workspace", "bullet", "--json"], capsys, monkeypatch)
     assert code == 0 and err == ""
     document = json.loads(out)
-    for key in ("legs", "walkspace", "max_linear_speed", "max_angular_speed", "step_period_cycles"):
+    for key in ("legs", "walkspace", "max_linear_speed", "max_angular_speed", "step_period_cycles",
+                "walkspace_area_m2", "walkspace_stride_m"):
         assert key in document
     assert document["step_period_cycles"] == 184
     assert document["legs"]["AR"]["45"] == pytest.approx(0.363383191, abs=1e-6)

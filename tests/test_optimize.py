@@ -247,3 +247,24 @@ def test_a_trial_with_the_values_of_a_finished_one_is_not_simulated_again(tmp_pa
             (first["cot"], first["mean_speed_mps"], first["runs"])
         assert not (out / "runs" / f"t{int(row['trial']):04d}-s0").exists()
     assert len(list((out / "runs").iterdir())) == len(rows) - len(copies)
+
+
+def test_an_existing_study_is_refused_unless_resumed_or_overwritten(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    path = _write(tmp_path, SMALL.format(duration=0.3, seeds="[0]"))
+    out = tmp_path / "out"
+    argv = ["optimize", str(path), "--trials", "1", "--workers", "1", "--out", str(out)]
+    assert run(argv, capsys, monkeypatch)[0] == 0
+    code, _, err = run(argv, capsys, monkeypatch)
+    assert code == 2 and "already exists" in err and "--overwrite" in err
+    code, _, err = run([*argv, "--resume", "--overwrite"], capsys, monkeypatch)
+    assert code == 2 and "cannot be combined" in err
+    (out / "trials.csv").write_text("stale\n", encoding="utf-8")
+    code, _, err = run([*argv, "--overwrite"], capsys, monkeypatch)
+    assert code == 0, err
+    assert _rows(out / "trials.csv")[0]["trial"] == "0"
+    other = tmp_path / "mine"
+    other.mkdir()
+    (other / "notes.txt").write_text("keep\n", encoding="utf-8")
+    code, _, err = run([*argv[:-1], str(other), "--overwrite"], capsys, monkeypatch)
+    assert code == 2 and "leaves it alone" in err
+    assert (other / "notes.txt").exists()

@@ -342,9 +342,10 @@ def _open_study(spec: Study, out: Path, resume: bool) -> optuna.study.Study:
 
 
 def run_optimize(file: Path, trials: int | None, workers: int | None, executor: str, scheduler: str | None,
-                 out: Path | None, resume: bool) -> Path:
+                 out: Path | None, resume: bool, overwrite: bool = False) -> Path:
     """Check the study, run trials until ``trials`` have finished (counting earlier ones on ``--resume``), write
-    the tables, robot files and plots; returns the output directory."""
+    the tables, robot files and plots; returns the output directory (``overwrite``: delete an existing output
+    directory of shc's first)."""
     from shc_cli.commands.sweep import RunPool, check_executor
 
     try:
@@ -360,6 +361,8 @@ def run_optimize(file: Path, trials: int | None, workers: int | None, executor: 
         raise SpecError([Issue(None, None, "--trials", f"{total} is not a positive number of trials", "e.g. 50")])
     out = out or Path("runs") / spec.name
     copy = out / "study.toml"
+    if resume and overwrite:
+        raise SpecError([Issue(None, None, "--overwrite", "cannot be combined with --resume", "choose one")])
     if resume:
         if not (out / STORAGE).exists():
             raise OutputError(f"{out}: no {STORAGE} to resume (run without --resume first)")
@@ -367,7 +370,13 @@ def run_optimize(file: Path, trials: int | None, workers: int | None, executor: 
             raise OutputError(f"{out}: was started with a different study file ({copy}); resume it with that "
                               "file or choose another --out")
     elif out.exists() and any(out.iterdir()):
-        raise OutputError(f"{out}: already exists (add --resume to continue it, or choose another --out)")
+        if not overwrite:
+            raise OutputError(f"{out}: already exists (add --resume to continue it, --overwrite to start it again, "
+                              "or choose another --out)")
+        from shc_cli.runlog import check_replaceable
+
+        check_replaceable(out)
+        shutil.rmtree(out)
     (out / "runs").mkdir(parents=True, exist_ok=True)
     if spec.path.resolve() != copy.resolve():
         shutil.copyfile(spec.path, copy)

@@ -39,8 +39,8 @@ def parse_velocity(text: str) -> tuple[float, float, float]:
 
 
 def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
-             commands: Path | None, out: Path | None, plots: bool) -> Path:
-    """Load, run, log; returns the run directory."""
+             commands: Path | None, out: Path | None, plots: bool, overwrite: bool = False) -> Path:
+    """Load, run, log; returns the run directory (``overwrite``: replace an existing one when the run finishes)."""
     from shc_cli.spec.checks import load_checked
 
     robot, gait, loaded = load_checked(robot_name, gait_name)
@@ -64,7 +64,7 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
     pose_sets = pose_sets_for(robot, gait, timeline, gait_file.parent)
     directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-plan"
     controller = Controller(robot, gait, pose_sets=pose_sets)
-    writer = RunWriter(directory, robot)
+    writer = RunWriter(directory, robot, overwrite)
     writer.write_robot(robot)
     started = time.perf_counter()
     try:
@@ -76,12 +76,16 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
     if plots:
         from shc_cli.plots import plot_plan
 
-        plot_plan(robot, outputs, writer.partial)
+        plot_plan(robot, outputs, writer.partial, gait=gait.name)
     path = writer.finish(summary)
+    from shc_cli.analysis.progress import progress_note
+
     typer.echo(f"{robot.name} / {gait.name}: {summary['cycles']} cycles "
-               f"({summary['duration_s']:.2f} s), mean speed {summary['achieved_mean_speed_mps']:.4f} m/s "
-               f"(eq. 16: {summary['eq16_speed_mps']:.4f}), IK deviations {summary['ik_deviation_count']}, "
-               f"clamped {summary['ik_clamp_count']} → {path}")
+               f"({summary['duration_s']:.2f} s), path speed {summary['path_speed_mps']:.4f} m/s, displacement "
+               f"speed {summary['displacement_speed_mps']:.4f} m/s, stance feet "
+               f"{summary['achieved_mean_speed_mps']:.4f} m/s (eq. 16: {summary['eq16_speed_mps']:.4f}), "
+               f"IK deviations {summary['ik_deviation_count']}, "
+               f"clamped {summary['ik_clamp_count']}{progress_note(summary)} → {path}")
     return path
 
 
@@ -158,6 +162,16 @@ def _summary(robot: Robot, controller: Controller, outputs: list[CycleOutput], s
         stride = math.hypot(*now.velocity[:2]) * cycle.duty_factor / cycle.frequency
         predicted.append(stride * cycle.frequency / cycle.duty_factor)
     distance = float(np.linalg.norm(walker.odometry_position)) if walker else 0.0
+    from shc_cli.analysis.metrics import window_speeds
+    from shc_cli.runread import ideal_path
+
+    xy, _ = ideal_path(np.array([o.velocity for o in outputs]), dt)
+    running = np.flatnonzero([o.robot_state == RobotState.RUNNING for o in outputs])
+    path_speed, displacement_speed = window_speeds(xy, running, dt)  # as `shc analyze` measures the plan
+    from shc_cli.analysis.progress import cycle_path_length, progress_fields
+
+    desired = np.array([o.velocity[:2] for o in outputs]).reshape(-1, 2)[running]
+    commanded = float(np.linalg.norm(desired, axis=1).mean()) if len(desired) else 0.0
     return {
         "robot": robot.name,
         "gait": controller.gait.name,
@@ -171,6 +185,10 @@ def _summary(robot: Robot, controller: Controller, outputs: list[CycleOutput], s
         "duty_factor": cycle.duty_factor,
         "moving_cycles": len(predicted),
         "achieved_mean_speed_mps": float(np.mean(achieved)) if achieved else 0.0,
+        "path_speed_mps": path_speed,
+        "displacement_speed_mps": displacement_speed,
+        "commanded_speed_mps": commanded,
+        **progress_fields(cycle_path_length(xy[running], cycle.period), commanded, len(running) * dt),
         "eq16_speed_mps": float(np.mean(predicted)) if predicted else 0.0,
         "odometry_distance_m": distance,
         "odometry_yaw_rad": walker.odometry_yaw if walker else 0.0,

@@ -49,8 +49,9 @@ INPUTS = "timeline, commands:FILE, stdin, keyboard, gamepad or gamepad:DEVICE"
 def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int | None, velocity: str,
            duration: float | None, commands: Path | None, out: Path | None, dry_run: bool, on_fault: str,
            on_stop: str, input_mode: str = "timeline", watchdog: float = 0.5, stop_state: str = "packed",
-           profile_velocity: bool = False) -> Path:
-    """Start up, run the input on the servos, stop and shut down safely; returns the run directory."""
+           profile_velocity: bool = False, overwrite: bool = False) -> Path:
+    """Start up, run the input on the servos, stop and shut down safely; returns the run directory (``overwrite``:
+    replace an existing one when the run finishes)."""
     from shc_cli.hardware.bus import HardwareError, ServoBus
     from shc_cli.spec.checks import load_checked
     from shc_cli.spec.timeline import constant, load_timeline
@@ -93,7 +94,7 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
         state = bus.read_state()
         controller = Controller(robot, gait, joints=state.positions, pose_sets=pose_sets, direct_shutdown=True)
         directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-run-hw"
-        log = RunDirectory(directory)
+        log = RunDirectory(directory, overwrite)
         log.write_robot(robot)
         loop = _Loop(robot, controller, bus, log, dry_run, on_fault, on_stop, STATES[stop_state])
         summary = loop.run(source, state)

@@ -93,17 +93,21 @@ def parse_posture(text: str) -> dict[str, Any]:
 def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
                  commands: Path | None, out: Path | None, plots: bool, terrain_text: str, scenario: str,
                  physics_rate: float, friction: float, restitution: float, seed: int, imu_noise: float,
-                 start_pose: str, gui: bool, stand: bool | None = None, feedback: Feedback | None = None) -> Path:
+                 start_pose: str, gui: bool, stand: bool | None = None, feedback: Feedback | None = None,
+                 overwrite: bool = False) -> Path:
     """Load, simulate, log, print one line; returns the run directory."""
+    from shc_cli.analysis.progress import progress_note
+
     path, summary = simulate_to(robot_name, gait_name, velocity, duration, commands, out, plots, terrain_text,
                                 scenario, physics_rate, friction, restitution, seed, imu_noise, start_pose, gui,
-                                stand, feedback)
+                                stand, feedback, overwrite)
     typer.echo(f"{summary['robot']} / {summary['gait']} / {summary['scenario']} on {terrain_text}: "
                f"{summary['sim_time_s']:.1f} s simulated in {summary['wall_time_s']:.1f} s, distance "
-               f"{summary['distance_m']:.3f} m, mean speed {summary['mean_speed_mps']:.4f} m/s, mean power "
+               f"{summary['distance_m']:.3f} m, path speed {summary['path_speed_mps']:.4f} m/s, displacement speed "
+               f"{summary['displacement_speed_mps']:.4f} m/s, mean power "
                f"{summary['mean_power_w']:.1f} W, "
                f"CoT {summary['cot'] if summary['cot'] is None else round(summary['cot'], 3)}"
-               f"{', FELL' if summary['fell'] else ''} → {path}")
+               f"{', FELL' if summary['fell'] else progress_note(summary)} → {path}")
     return path
 
 
@@ -111,8 +115,9 @@ def simulate_to(robot_name: str, gait_name: str | None, velocity: str, duration:
                 commands: Path | None, out: Path | None, plots: bool, terrain_text: str, scenario: str,
                 physics_rate: float, friction: float, restitution: float, seed: int, imu_noise: float,
                 start_pose: str, gui: bool = False, stand: bool | None = None,
-                feedback: Feedback | None = None) -> tuple[Path, dict[str, Any]]:
-    """Load, simulate, log (silently); returns the run directory and its summary."""
+                feedback: Feedback | None = None, overwrite: bool = False) -> tuple[Path, dict[str, Any]]:
+    """Load, simulate, log (silently); returns the run directory and its summary (``overwrite``: replace an
+    existing run directory when the run finishes)."""
     from shc_cli.backends.pybullet_.terrain import parse_terrain
     from shc_cli.spec.checks import load_checked
 
@@ -142,7 +147,7 @@ def simulate_to(robot_name: str, gait_name: str | None, velocity: str, duration:
         stand = robot.start_up.simulation == "stand"
     run = Simulation(robot, gait, pose_sets, terrain, scenario, substeps, friction, restitution, seed, imu_noise,
                      start_pose, gui, stand)
-    log = RunDirectory(directory)
+    log = RunDirectory(directory, overwrite)
     log.write_robot(robot)
     try:
         summary, series = run.execute(timeline, cycles, log)
@@ -154,7 +159,7 @@ def simulate_to(robot_name: str, gait_name: str | None, velocity: str, duration:
     if plots:
         from shc_cli.plots import plot_simulation
 
-        plot_simulation(robot, series, log.partial)
+        plot_simulation(robot, series, log.partial, gait=summary["gait"])
     return log.finish(summary), summary
 
 
@@ -196,7 +201,8 @@ class Simulation:
         handle, row = log.table("log.csv", columns, ["%.6g"] * (len(columns) - 2) + ["%s", "%s"])
         rows, cols = world.slot_rows, world.slot_cols  # padded (L, n) arrays → the log's joint columns
         limit = round((robot.start_up.time_to_start + START_UP_MARGIN_S) / dt)
-        series: dict[str, list[Any]] = {"t": [], "position": [], "power": [], "contact": [], "running": []}
+        series: dict[str, list[Any]] = {"t": [], "position": [], "power": [], "contact": [], "running": [],
+                                        "desired": []}
         commands = iter(timeline.commands(walk_cycles))
         started = time.perf_counter()
         cycle, walked, fell, max_tilt = 0, 0, False, 0.0
@@ -238,6 +244,7 @@ class Simulation:
             series["power"].append(total)
             series["contact"].append(reading.foot_contact)
             series["running"].append(running)
+            series["desired"].append(out.velocity)
             if running:
                 if window_start is None:  # where the body was when the first RUNNING cycle began
                     window_start = series["position"][-2] if len(series["position"]) > 1 else reading.position
@@ -272,6 +279,14 @@ class Simulation:
         start = window_start if window_start is not None else end
         distance = float(np.linalg.norm((end - start)[:2]))
         speed = distance / window if window > 0 else 0.0
+        from shc_cli.analysis.metrics import window_speeds
+
+        xy = np.array(series["position"])[:, :2] if series["position"] else np.zeros((0, 2))
+        path_speed, _ = window_speeds(xy, np.flatnonzero(running), dt)
+        from shc_cli.analysis.progress import cycle_path_length, progress_fields
+
+        desired = np.array(series["desired"]).reshape(-1, 3)[running[:len(series["desired"])], :2]
+        commanded = float(np.linalg.norm(desired, axis=1).mean()) if len(desired) else 0.0
         mean_power = float(power[running].mean()) if running.any() else 0.0
         mass = robot.total_mass()
         walking_on_ground = self.scenario == "WG"
@@ -289,7 +304,12 @@ class Simulation:
             "physics_rate_hz": self.world.substeps / dt,
             "distance_m": distance,
             "forward_distance_m": float((end - start)[0]),
-            "mean_speed_mps": speed,
+            "mean_speed_mps": speed,  # = displacement_speed_mps, its first name
+            "displacement_speed_mps": speed,
+            "path_speed_mps": path_speed,
+            "commanded_speed_mps": commanded,
+            **progress_fields(cycle_path_length(_window_path(xy, running), self.controller.cycle.period), commanded,
+                              window),
             "mean_power_w": mean_power,
             "mass_kg": mass,
             "step_frequency_hz": self.controller.parameters["step_frequency"],
@@ -300,9 +320,18 @@ class Simulation:
             "max_tilt_rad": max_tilt,
             "fell": fell,
             "seed": self.seed,
+            "terrain": str(self.world.terrain.spec),
             "versions": {"shc": __version__, "pybullet": str(pybullet.getAPIVersion()),
                          "numpy": np.__version__},
         }
+
+
+def _window_path(xy: np.ndarray, running: np.ndarray) -> np.ndarray:
+    """The body path over the RUNNING rows, starting where the row before the first of them ended."""
+    rows = np.flatnonzero(running)
+    if len(rows) == 0:
+        return np.zeros((0, 2))
+    return np.vstack([xy[max(rows[0] - 1, 0)], xy[rows[0]:rows[-1] + 1]])
 
 
 def _progress(total: int) -> Any:

@@ -60,7 +60,8 @@ NOT_SEARCHED = ("seed", "duration", "robot")
 """Simulation options a study sets once (``seeds``, ``duration``, ``robot``), never per trial."""
 RUN_KEYS = ("fell", "max_tilt_rad")
 """Run-summary keys a constraint or objective may name besides the analyze keys."""
-ANALYZE_KEYS = ("cot", "mean_power_w", "mean_speed_mps", "steady_speed_mps", "commanded_speed_mps", "speed_ratio",
+ANALYZE_KEYS = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps", "steady_speed_mps",
+                "commanded_speed_mps", "speed_ratio",
                 "distance_m", "duty_factor", "foot_slip_m", "height_median_m", "height_iqr_m",
                 "pitch_rate_median_rps", "pitch_rate_iqr_rps", "roll_rate_median_rps", "roll_rate_iqr_rps",
                 "stability_margin_median_m", "stability_margin_min_m", "zmp_margin_median_m", "zmp_margin_iqr_m",
