@@ -158,6 +158,7 @@ def test_small_study_end_to_end(tmp_path: Path, capsys, monkeypatch) -> None:  #
 
     first = pareto[0]
     robot = load_robot(files[0]).robot
+    assert robot is not None
     assert robot.walker.gait == first["gait"]
     assert robot.walker.step_frequency.default == pytest.approx(float(first["walker.step_frequency"]), rel=1e-5)
     assert robot.walker.swing_height.default == pytest.approx(float(first["walker.swing_height"]), rel=1e-5)
@@ -216,7 +217,7 @@ def test_interrupted_study_resumes_without_losing_or_rerunning_trials(tmp_path: 
     assert finished.returncode == 0, finished.stderr
     after = _rows(out / "trials.csv")
     assert [r["trial"] for r in after] == ["0", "1", "2", "3", "4"]
-    assert all(r["state"] == "complete" for r in after)
+    assert all(r["state"] == "complete" for r in after), [(r["trial"], r["state"], r["error"]) for r in after]
     for number, row in before.items():
         assert {k: v for k, v in after[int(number)].items() if k != "trial_wall_s"} == \
             {k: v for k, v in row.items() if k != "trial_wall_s"}
@@ -268,3 +269,47 @@ def test_an_existing_study_is_refused_unless_resumed_or_overwritten(tmp_path: Pa
     code, _, err = run([*argv[:-1], str(other), "--overwrite"], capsys, monkeypatch)
     assert code == 2 and "leaves it alone" in err
     assert (other / "notes.txt").exists()
+
+
+def test_a_trial_interrupted_before_all_its_values_were_drawn_is_completed_on_resume(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                                      monkeypatch) -> None:
+    """Ctrl-C between Optuna's ask and the last suggestion leaves a running trial with some values: --resume keeps
+    them, draws the rest and runs it under its number."""
+    import optuna
+
+    path = _write(tmp_path, SMALL.format(duration=0.3, seeds="[0]"))
+    out = tmp_path / "out"
+    argv = ["optimize", str(path), "--workers", "1", "--out", str(out)]
+    assert run([*argv, "--trials", "1"], capsys, monkeypatch)[0] == 0
+    stored = optuna.load_study(study_name="small", storage=f"sqlite:///{out / 'study.db'}")
+    stored.ask().suggest_categorical("gait", ["tripod", "bipod"])
+    gait = stored.trials[1].params["gait"]
+    code, _, err = run([*argv, "--trials", "2", "--resume"], capsys, monkeypatch)
+    assert code == 0, err
+    rows = _rows(out / "trials.csv")
+    assert [(r["trial"], r["state"]) for r in rows] == [("0", "complete"), ("1", "complete")]
+    assert rows[1]["gait"] == gait and rows[1]["walker.step_frequency"]
+
+
+def test_ctrl_c_inside_a_run_stops_the_study_instead_of_failing_the_run(tmp_path: Path,
+                                                                         monkeypatch: pytest.MonkeyPatch) -> None:
+    """simulate turns Ctrl-C into a one-line error; run_point must not record that as a failed run and go on."""
+    from shc_cli.commands import sweep
+    from shc_cli.errors import ShcError
+
+    def interrupted(*_: object) -> None:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt:
+            raise ShcError("interrupted: the cycles completed so far are in …") from None
+
+    def broken(*_: object) -> None:
+        raise ShcError("a terrain file is missing")
+
+    point = load_study(_write(tmp_path, SMALL.format(duration=0.3, seeds="[0]"))).points(0, {"gait": "tripod"})[0]
+    monkeypatch.setattr(sweep, "_simulate", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        sweep.run_point(point, str(tmp_path))
+    monkeypatch.setattr(sweep, "_simulate", broken)
+    row = sweep.run_point(point, str(tmp_path))
+    assert row["status"] == "failed" and "terrain file is missing" in row["error"]

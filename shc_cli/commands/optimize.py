@@ -395,13 +395,11 @@ def run_optimize(file: Path, trials: int | None, workers: int | None, executor: 
                 stored = study.get_trials(deepcopy=False)
                 finished = sum(1 for t in stored if t.state.is_finished())
                 pending = sorted((t for t in stored if t.state == TrialState.RUNNING), key=lambda t: t.number)
-                for frozen in [t for t in pending if set(t.params) != {d.key for d in spec.space}]:
-                    study.tell(frozen.number, state=TrialState.FAIL)  # stopped between ask and its suggestions
-                    pending.remove(frozen)
                 if finished >= total and not pending:
                     break
                 batch = [optuna.trial.Trial(study, t._trial_id) for t in pending[:count]]  # interrupted: re-run
-                params = {t.number: dict(pending[i].params) for i, t in enumerate(batch)}
+                # a stored value is returned as it was; one the interruption came before is sampled now
+                params = {t.number: {d.key: suggest(t, d) for d in spec.space} for t in batch}
                 for _ in range(min(count - len(batch), total - finished - len(pending))):
                     trial = study.ask()
                     params[trial.number] = {d.key: suggest(trial, d) for d in spec.space}

@@ -63,8 +63,21 @@ def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: 
         row.update({key: log.summary.get(key) for key in RUN_KEYS})
         row.update({key: result.get(key) for key in metrics})
     except Exception as error:  # a failing run is a row, not the end of the sweep
+        if _interrupted(error):
+            raise KeyboardInterrupt from error  # Ctrl-C during the run: stop the sweep, not just this run
         row.update(status="failed", error=_one_line(error))
     return row
+
+
+def _interrupted(error: BaseException) -> bool:
+    """Whether ``error`` stands for a Ctrl-C: ``simulate`` turns the KeyboardInterrupt into a one-line ShcError,
+    keeping it as the context."""
+    seen: BaseException | None = error
+    while seen is not None:
+        if isinstance(seen, KeyboardInterrupt):
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return False
 
 
 def _one_line(error: BaseException) -> str:
