@@ -313,3 +313,18 @@ def test_ctrl_c_inside_a_run_stops_the_study_instead_of_failing_the_run(tmp_path
     monkeypatch.setattr(sweep, "_simulate", broken)
     row = sweep.run_point(point, str(tmp_path))
     assert row["status"] == "failed" and "terrain file is missing" in row["error"]
+
+
+def test_dask_and_local_workers_give_the_same_trials(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """Batches of --workers trials told in number order: the trials do not depend on which runs finish first, so a
+    Dask LocalCluster and local worker processes (2 each) give the same study."""
+    pytest.importorskip("dask.distributed", reason="the Dask executor needs dask[distributed]")
+    path = _write(tmp_path, SMALL.format(duration=0.3, seeds="[0, 1]"))
+    tables = []
+    for executor in ("local", "dask"):
+        out = tmp_path / executor
+        code, _, err = run(["optimize", str(path), "--trials", "4", "--workers", "2", "--executor", executor,
+                            "--out", str(out)], capsys, monkeypatch)
+        assert code == 0, err
+        tables.append(_study_params(out))
+    assert tables[0] == tables[1]
