@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from shc_cli.backends.pybullet_ import world as world_module
-from shc_cli.backends.pybullet_.terrain import parse_terrain
+from shc_cli.backends.terrain import parse_terrain
 from shc_cli.commands.simulate import Simulation
 from shc_cli.control.controller import Command, RobotState
 from shc_cli.runlog import RunDirectory

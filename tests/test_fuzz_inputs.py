@@ -309,7 +309,7 @@ def _stub_simulation(monkeypatch: pytest.MonkeyPatch) -> None:
         def __init__(self, robot: Any, gait: Any, pose_sets: Any, terrain: Any, *args: Any) -> None:
             import pybullet
 
-            from shc_cli.backends.pybullet_.terrain import build_terrain
+            from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
 
             client = pybullet.connect(pybullet.DIRECT)
             try:

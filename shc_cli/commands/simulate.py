@@ -1,4 +1,4 @@
-"""``shc simulate``: the one controller driving the robot in PyBullet physics, logged and summarised."""
+"""``shc simulate``: the one controller driving the robot in physics (PyBullet or MuJoCo), logged and summarised."""
 
 from __future__ import annotations
 
@@ -94,13 +94,13 @@ def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration
                  commands: Path | None, out: Path | None, plots: bool, terrain_text: str, scenario: str,
                  physics_rate: float, friction: float, restitution: float, seed: int, imu_noise: float,
                  start_pose: str, gui: bool, stand: bool | None = None, feedback: Feedback | None = None,
-                 overwrite: bool = False) -> Path:
+                 overwrite: bool = False, engine: str = "pybullet") -> Path:
     """Load, simulate, log, print one line; returns the run directory."""
     from shc_cli.analysis.progress import progress_note
 
     path, summary = simulate_to(robot_name, gait_name, velocity, duration, commands, out, plots, terrain_text,
                                 scenario, physics_rate, friction, restitution, seed, imu_noise, start_pose, gui,
-                                stand, feedback, overwrite)
+                                stand, feedback, overwrite, engine)
     typer.echo(f"{summary['robot']} / {summary['gait']} / {summary['scenario']} on {terrain_text}: "
                f"{summary['sim_time_s']:.1f} s simulated in {summary['wall_time_s']:.1f} s, distance "
                f"{summary['distance_m']:.3f} m, path speed {summary['path_speed_mps']:.4f} m/s, displacement speed "
@@ -115,10 +115,12 @@ def simulate_to(robot_name: str, gait_name: str | None, velocity: str, duration:
                 commands: Path | None, out: Path | None, plots: bool, terrain_text: str, scenario: str,
                 physics_rate: float, friction: float, restitution: float, seed: int, imu_noise: float,
                 start_pose: str, gui: bool = False, stand: bool | None = None,
-                feedback: Feedback | None = None, overwrite: bool = False) -> tuple[Path, dict[str, Any]]:
+                feedback: Feedback | None = None, overwrite: bool = False,
+                engine: str = "pybullet") -> tuple[Path, dict[str, Any]]:
     """Load, simulate, log (silently); returns the run directory and its summary (``overwrite``: replace an
     existing run directory when the run finishes)."""
-    from shc_cli.backends.pybullet_.terrain import parse_terrain
+    from shc_cli.backends.engine import ENGINES
+    from shc_cli.backends.terrain import parse_terrain
     from shc_cli.spec.checks import load_checked
 
     robot, gait, loaded = load_checked(robot_name, gait_name)
@@ -134,6 +136,9 @@ def simulate_to(robot_name: str, gait_name: str | None, velocity: str, duration:
         raise SpecError([Issue(None, None, "--physics-rate", f"{physics_rate:g} Hz is not a whole multiple of the "
                                f"control rate {1 / robot.time_delta:g} Hz",
                                f"e.g. {4 / robot.time_delta:g} Hz")])
+    if engine not in ENGINES:
+        raise SpecError([Issue(None, None, "--engine", f"'{engine}' is not a physics engine",
+                               f"use {' or '.join(ENGINES)}")])
     if start_pose not in ("unpacked", "packed"):
         raise SpecError([Issue(None, None, "--start", f"'{start_pose}' is not a start pose", "use unpacked or packed")])
     walking = SCENARIOS[scenario][1]
@@ -146,7 +151,7 @@ def simulate_to(robot_name: str, gait_name: str | None, velocity: str, duration:
     if stand is None:
         stand = robot.start_up.simulation == "stand"
     run = Simulation(robot, gait, pose_sets, terrain, scenario, substeps, friction, restitution, seed, imu_noise,
-                     start_pose, gui, stand)
+                     start_pose, gui, stand, engine)
     log = RunDirectory(directory, overwrite)
     log.write_robot(robot)
     try:
@@ -164,12 +169,12 @@ def simulate_to(robot_name: str, gait_name: str | None, velocity: str, duration:
 
 
 class Simulation:
-    """One simulated run: a :class:`~shc_cli.backends.pybullet_.world.World` and the controller."""
+    """One simulated run: a physics :class:`~shc_cli.backends.engine.Engine` and the controller."""
 
     def __init__(self, robot: Robot, gait: Any, pose_sets: dict[str, Any], terrain: Any, scenario: str,
                  substeps: int, friction: float, restitution: float, seed: int, imu_noise: float,
-                 start_pose: str, gui: bool, stand: bool = False) -> None:
-        from shc_cli.backends.pybullet_.world import World
+                 start_pose: str, gui: bool, stand: bool = False, engine: str = "pybullet") -> None:
+        from shc_cli.backends.engine import open_engine
         from shc_cli.control.sequence import joint_configurations
         from shc_cli.model.chains import Chains
 
@@ -179,14 +184,14 @@ class Simulation:
         initial = np.clip(packed[-1] if start_pose == "packed" and len(packed) else unpacked, chains.lower,
                           chains.upper)
         airborne, _ = SCENARIOS[scenario]
-        self.world = World(robot, terrain, robot.time_delta, substeps, airborne, initial, friction, restitution,
-                           seed, imu_noise, gui, stand)
+        self.world = open_engine(engine, robot, terrain, robot.time_delta, substeps, airborne, initial, friction,
+                                 restitution, seed, imu_noise, gui, stand)
         self.controller = Controller(robot, gait, joints=self.world.read().joints, pose_sets=pose_sets)
         self.airborne = airborne
 
     def execute(self, timeline: Timeline, walk_cycles: int, log: RunDirectory) -> tuple[dict[str, Any], dict[str, Any]]:
         """Start up, play the timeline, log every control cycle; returns (summary, series for the plots)."""
-        from shc_cli.backends.pybullet_.world import tilt
+        from shc_cli.backends.engine import tilt
 
         robot, world, controller = self.robot, self.world, self.controller
         dt = robot.time_delta
@@ -267,8 +272,6 @@ class Simulation:
     def _summary(self, series: dict[str, list[Any]], window_start: np.ndarray | None, wall: float, fell: bool,
                  max_tilt: float) -> dict[str, Any]:
         """Paper eq. 22 cost of transport over the RUNNING window: mean power / (m·g·v)."""
-        import pybullet
-
         from shc_cli import __version__
 
         robot, dt = self.robot, self.robot.time_delta
@@ -302,6 +305,8 @@ class Simulation:
             "running_physics_time_s": self.running_times[1],
             "physics_time_s": self.world.physics_time,
             "physics_rate_hz": self.world.substeps / dt,
+            "engine": self.world.name,
+            "engine_version": self.world.version,
             "distance_m": distance,
             "forward_distance_m": float((end - start)[0]),
             "mean_speed_mps": speed,  # = displacement_speed_mps, its first name
@@ -321,8 +326,7 @@ class Simulation:
             "fell": fell,
             "seed": self.seed,
             "terrain": str(self.world.terrain.spec),
-            "versions": {"shc": __version__, "pybullet": str(pybullet.getAPIVersion()),
-                         "numpy": np.__version__},
+            "versions": {"shc": __version__, self.world.name: self.world.version, "numpy": np.__version__},
         }
 
 
