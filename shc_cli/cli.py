@@ -96,8 +96,7 @@ def plan(
     from shc_cli.commands.plan import run_plan
 
     _bag_check(bag)
-    path = run_plan(robot, gait, velocity, duration, commands, out, plots)
-    _write_bag(path, bag)
+    run_plan(robot, gait, velocity, duration, commands, out, plots, after=lambda run: _write_bag(run, bag))
 
 
 @app.command()
@@ -143,15 +142,16 @@ def simulate(
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
     bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
+    fail_on_fall: Annotated[bool, typer.Option(help="Exit with code 4 when the robot fell.")] = False,
 ) -> None:
     """Run the controller on the robot in PyBullet physics: terrains, servos, sensors, power, CoT."""
-    from shc_cli.commands.simulate import Feedback, run_simulate
+    from shc_cli.commands.simulate import Feedback, SimulateOptions, run_simulate
 
     _bag_check(bag)
-    path = run_simulate(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate,
-                        friction, restitution, seed, imu_noise, start, gui, stand,
-                        Feedback(posture, imu_posing, inclination, admittance))
-    _write_bag(path, bag)
+    options = SimulateOptions(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate,
+                              friction, restitution, seed, imu_noise, start, gui, stand,
+                              Feedback(posture, imu_posing, inclination, admittance), fail_on_fall)
+    run_simulate(options, after=lambda run: _write_bag(run, bag))
 
 
 def _bag_check(fmt: str | None) -> None:

@@ -48,6 +48,8 @@ def run_point(point: Point, out: str) -> dict[str, Any]:
     row: dict[str, Any] = {"index": point.index, "slug": point.slug, **point.values, "status": "ok", "error": ""}
     directory = Path(out) / "runs" / point.slug
     try:
+        if _interrupted(directory):  # finished as an interrupted run (complete false) by an earlier Ctrl-C: re-run
+            shutil.rmtree(directory)
         if not (directory / "summary.json").exists():
             partial = directory.with_name(directory.name + ".partial")
             if partial.exists():
@@ -57,12 +59,25 @@ def run_point(point: Point, out: str) -> dict[str, Any]:
         from shc_cli.runread import read_run
 
         log = read_run(directory)
+        if _interrupted(directory):  # Ctrl-C reached this worker: the run is kept, marked, and re-run on --resume
+            row["status"] = "interrupted"
         result = analyze_run(log)
         row.update({key: log.summary.get(key) for key in RUN_KEYS})
         row.update({key: result.get(key) for key in METRICS})
     except Exception as error:  # a failing run is a row, not the end of the sweep
         row.update(status="failed", error=_one_line(error))
     return row
+
+
+def _interrupted(directory: Path) -> bool:
+    """A finished run directory whose summary says it did not play to its end because of a signal."""
+    import json
+
+    try:
+        summary = json.loads((directory / "summary.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return summary.get("stop_reason") in ("SIGINT", "SIGTERM")
 
 
 def _one_line(error: BaseException) -> str:
@@ -73,17 +88,18 @@ def _one_line(error: BaseException) -> str:
 
 
 def _simulate(point: Point, out: Path, directory: Path) -> None:
-    from shc_cli.commands.simulate import simulate_to
+    from shc_cli.commands.simulate import SimulateOptions, simulate_to
 
     options = point.options
     robot = _robot_for(point, out)
     velocity = options["velocity"]
     if options["stride_percent"] is not None:
         velocity = f"{float(options['stride_percent']) / 100.0:g},0,0"
-    simulate_to(robot, options["gait"] or None, velocity, float(options["duration"]), None, directory, False,
-                options["terrain"], options["scenario"], float(options["physics_rate"]), float(options["friction"]),
-                float(options["restitution"]), int(options["seed"]), float(options["imu_noise"]), options["start"],
-                False, options["stand"])
+    simulate_to(SimulateOptions(robot, options["gait"] or None, velocity, float(options["duration"]), out=directory,
+                                plots=False, terrain=options["terrain"], scenario=options["scenario"],
+                                physics_rate=float(options["physics_rate"]), friction=float(options["friction"]),
+                                restitution=float(options["restitution"]), seed=int(options["seed"]),
+                                imu_noise=float(options["imu_noise"]), start=options["start"], stand=options["stand"]))
 
 
 def _robot_for(point: Point, out: Path) -> str:
