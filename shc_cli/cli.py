@@ -274,7 +274,11 @@ def export_bag(
     from shc_cli.runread import read_run
 
     target = out or run.with_name(run.name + (".bag" if format == "ros1" else "_bag"))
-    path = write_bag(read_run(run), target, format)
+    log = read_run(run)
+    note = log.partial_note()
+    if note is not None:
+        typer.echo(f"note: {note}", err=True)
+    path = write_bag(log, target, format)
     typer.echo(f"wrote {path}")
 
 
@@ -327,6 +331,11 @@ def main() -> None:
         for line in str(error).splitlines():
             typer.echo(f"error: {line}", err=True)
         sys.exit(2)
+    except KeyboardInterrupt:  # Ctrl-C outside a run's loop (a run's own signals finish its directory first)
+        if debug:
+            raise
+        typer.echo("error: interrupted", err=True)
+        sys.exit(130)
     except Exception as error:  # a bug in shc, not bad input: still one line unless --debug
         if debug:
             raise

@@ -84,6 +84,18 @@ class RunLog:
     def legs(self) -> list[str]:
         return list(self.robot.legs)
 
+    @property
+    def complete(self) -> bool:
+        """The run played its input to the end (runs written before ``complete`` existed count as complete)."""
+        return bool(self.summary.get("complete", True))
+
+    def partial_note(self) -> str | None:
+        """``"<path>: a partial run (stopped by SIGINT after 4.2 s)"`` for an interrupted run, else None."""
+        if self.complete:
+            return None
+        seconds = float(self.t[-1]) if len(self.t) else 0.0
+        return f"{self.path}: a partial run (stopped by {self.summary.get('stop_reason', '?')} after {seconds:.2f} s)"
+
 
 def read_run(path: Path) -> RunLog:
     """Read a run directory written by ``shc plan`` or ``shc simulate``, or a bag written from one by
