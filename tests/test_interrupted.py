@@ -92,16 +92,38 @@ def test_interrupted_simulate_is_a_finished_partial_run(twice: bool, tmp_path: P
     _check_readers(run, tmp_path)
 
 
+def test_interrupted_run_hw_is_marked_partial(tmp_path: Path) -> None:
+    """On the emulated bus: Ctrl-C stops walking and shuts down (exit 0, the normal end of an open-ended run); the
+    summary says the run did not play its input to the end, and analyze and export bag say so."""
+    from tests.test_run_hw import _bus
+
+    run = tmp_path / "hw"
+    with _bus() as bus:
+        result = _interrupt(["run-hw", "bullet", "--port", bus.port, "--out", str(run), "--velocity", "1,0,0",
+                             "--duration", "60"], run.with_name("hw.partial") / "log.csv", signal.SIGINT)
+        assert result.returncode == 0, result.stderr
+        assert all(servo.table[64] == 0 for servo in bus.servos.values())  # torque off
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["complete"] is False and summary["stop_reason"] == "SIGINT" and summary["fault"] is None
+    assert summary["final_state"] == "PACKED"
+    assert len(read_run(run).t) == summary["cycles"]
+    _check_readers(run, tmp_path)
+
+
 def test_simulate_fail_on_fall_exit_code(tmp_path: Path) -> None:
-    """A robot that falls (the ATHENA hexapod off a 35° ramp) exits 4 with --fail-on-fall, 0 without."""
-    args = ["simulate", "bullet", "--terrain", "ramp:40", "--duration", "6", "--no-plots"]
+    """A robot whose servos cannot hold it (0.3 N·m stall torque) collapses: the run stops as fallen and exits 4
+    with --fail-on-fall, 0 without."""
+    robot = tmp_path / "weak.toml"
+    bullet = Path(__file__).parents[1] / "robots" / "bullet.toml"
+    robot.write_text(f'extends = "{bullet.as_posix()}"\n\n[servo]\nstall_torque = 0.3\n')
+    args = ["simulate", str(robot), "--duration", "2", "--no-plots"]
     result = subprocess.run([*SHC, *args, "--out", str(tmp_path / "a"), "--fail-on-fall"], capture_output=True,
                             text=True, timeout=300)
     summary = json.loads((tmp_path / "a" / "summary.json").read_text())
-    assert summary["fell"] is True and summary["stop_reason"] == "fell", summary
+    assert summary["fell"] is True and summary["stop_reason"] == "fell" and summary["complete"] is False
     assert result.returncode == 4 and "FELL" in result.stdout
     result = subprocess.run([*SHC, *args, "--out", str(tmp_path / "b")], capture_output=True, text=True, timeout=300)
-    assert result.returncode == 0
+    assert result.returncode == 0, result.stderr
 
 
 def test_gui_without_a_display_is_one_line(tmp_path: Path) -> None:
