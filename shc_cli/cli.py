@@ -239,6 +239,27 @@ def sweep(
     run_sweep(file, workers, executor, scheduler, out, resume)
 
 
+@app.command()
+def replay(
+    source: Annotated[Path, typer.Argument(help="A recording prefix DIR/NAME (NAME_joints.csv.gz, NAME_tips.csv.gz, "
+                                                "NAME_body.csv.gz), a ROS 1 .bag or a ROS 2 bag directory.")],
+    robot: Annotated[str, typer.Option(help="Robot file or bundled robot name: the robot that was recorded.")],
+    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    json_output: Annotated[bool, typer.Option("--json", help="Print one JSON object and nothing else.")] = False,
+    out: Annotated[Path | None, typer.Option(help="Write differences.csv (per cycle) and differences.png here.")]
+    = None,
+    tolerance_joints: Annotated[
+        float | None, typer.Option(metavar="RAD", help="Exit 1 if the joints differ by more than this [rad].")
+    ] = None,
+) -> None:
+    """Replay a recorded OpenSHC run through shc's controller; the worst difference of joints, tips, velocity."""
+    from shc_cli.commands.replay import run_replay
+
+    code = run_replay(source, robot, gait, json_output, out, tolerance_joints)
+    if code:
+        raise typer.Exit(code)
+
+
 export_app = typer.Typer(help="Export robots and runs to other formats.", no_args_is_help=True)
 app.add_typer(export_app, name="export")
 

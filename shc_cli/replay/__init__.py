@@ -1,0 +1,66 @@
+"""``shc replay``: drive the controller with a recorded OpenSHC run's inputs and compare every cycle's outputs.
+
+The parts are separable, so any loop can replay a run:
+
+* :mod:`shc_cli.replay.source` (with :mod:`~shc_cli.replay.recording` and :mod:`~shc_cli.replay.bagfile`): a
+  recording or a bag → per-cycle arrays (:class:`~shc_cli.replay.source.Recorded`);
+* :mod:`shc_cli.replay.states`: the state requests, inferred from the data (robust to stalls);
+* :mod:`shc_cli.replay.inputs`: the per-cycle command source for the controller;
+* :mod:`shc_cli.replay.compare`: the comparison, which consumes the controller's outputs.
+
+:func:`replay` is the plain loop over them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from shc_cli.control.controller import Controller, RobotState
+from shc_cli.control.walk import WalkState
+from shc_cli.replay.compare import Comparer, Comparison
+from shc_cli.replay.inputs import ReplayInputs
+from shc_cli.replay.source import Recorded, usable
+from shc_cli.replay.states import StatePlan, infer_states
+from shc_cli.spec.autopose import AutoPoseSet
+from shc_cli.spec.gait import Gait
+from shc_cli.spec.robot import Robot
+
+
+@dataclass
+class Replay:
+    """A finished replay: the comparison, the inferred states and the controller's state in each cycle."""
+
+    recorded: Recorded
+    plan: StatePlan
+    comparison: Comparison
+    robot_states: list[RobotState]
+    walk_states: list[WalkState]
+
+
+def initial_joints(recorded: Recorded, comparer: Comparer, robot: Robot) -> np.ndarray | None:
+    """The recorded joints of the first cycle ``(L, n)`` [rad] (OpenSHC starts from them), or ``None`` (the
+    controller's default) if any is unusable."""
+    first = comparer.joints[0] if recorded.cycles else np.zeros(0)
+    if len(first) == 0 or not usable(first).all():
+        return None
+    return first.reshape(len(robot.legs), -1)
+
+
+def replay(recorded: Recorded, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet] | None = None,
+           plan: StatePlan | None = None) -> Replay:
+    """Run the controller on the recorded inputs, cycle by cycle, and compare its outputs with the recorded ones;
+    ``plan`` replaces the state requests inferred from the data (:func:`~shc_cli.replay.states.infer_states`)."""
+    comparer = Comparer(recorded, robot)
+    plan = plan or infer_states(recorded, robot)
+    inputs = ReplayInputs(recorded, plan)
+    controller = Controller(robot, gait, joints=initial_joints(recorded, comparer, robot), pose_sets=pose_sets)
+    robot_states: list[RobotState] = []
+    walk_states: list[WalkState] = []
+    for cycle in range(recorded.cycles):
+        out = controller.step(inputs.command(cycle))
+        comparer.add(cycle, out)
+        robot_states.append(out.robot_state)
+        walk_states.append(out.walk_state)
+    return Replay(recorded, plan, comparer.result(), robot_states, walk_states)
