@@ -56,9 +56,9 @@ def run_point(point: Point, out: str) -> dict[str, Any]:
                 shutil.rmtree(partial)  # a crashed earlier attempt
             _simulate(point, Path(out), directory)
         from shc_cli.analysis.metrics import analyze_run
-        from shc_cli.runread import read_run
+        from shc_cli.runs.opening import open_run
 
-        log = read_run(directory)
+        log = open_run(directory)
         if _interrupted(directory):  # Ctrl-C reached this worker: the run is kept, marked, and re-run on --resume
             row["status"] = "interrupted"
         result = analyze_run(log)
