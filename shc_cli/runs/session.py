@@ -19,8 +19,6 @@ from shc_cli.runlog import RunDirectory
 from shc_cli.runs.loop import LoopResult, RunLoop
 
 
-
-
 def execute(loop: RunLoop, run: RunDirectory, summarise: Callable[[LoopResult], dict[str, Any]],
             plot: Callable[[Path], None] | None = None, after_loop: Callable[[LoopResult], None] | None = None
             ) -> tuple[Path, dict[str, Any], LoopResult]:
