@@ -25,7 +25,7 @@ def test_the_documented_example_runs(tmp_path: Path, monkeypatch: pytest.MonkeyP
                                      capsys: pytest.CaptureFixture[str]) -> None:
     monkeypatch.chdir(tmp_path)
     names: dict[str, object] = {}
-    exec(compile(_example(), "docs/python-api.md", "exec"), names)  # noqa: S102 - the documented example itself
+    exec(compile(_example(), "docs/python-api.md", "exec"), names)
     run, planned, table = names["run"], names["planned"], names["table"]
     summary = json.loads((tmp_path / "runs" / "api-walk" / "summary.json").read_text())
     assert run.summary == summary and run.complete and summary["fell"] is False  # type: ignore[attr-defined]

@@ -44,12 +44,10 @@ state — desired joints, joint velocities, FK tips — and of IK). Inside one c
 Quirk 8 (study §14): OpenSHC reaches step 2 twice per cycle in RUNNING (``loop`` calls ``transitionRobotState``,
 then ``runningState`` calls it again because the flag is still set), so the shut-down sequence advances **two**
 iterations (two stepToPosition evaluations and two IK steps) per control cycle: every step takes half its nominal
-time (Bullet: 0.45 s per group step, 1.36 s lowering). Recommendation: **reproduce it by default** — the project is
-a faithful re-implementation, the visited joint states are exactly OpenSHC's (only every second one is
-published), and a recorded OpenSHC shut-down can only be matched this way — behind a controller option that
-calls the handler once per cycle (``fix_double_shutdown``) for hardware where the doubled joint speed
-(no velocity clamping on Bullet) is a concern. This module is neutral: each ``begin``/``finish`` pair is one
-OpenSHC iteration; the controller decides how many it runs per cycle.
+time (Bullet: 0.45 s per group step, 1.36 s lowering). The controller runs one iteration per cycle by default
+(each step at its nominal time, a deliberate deviation, docs/deviations.md) and reproduces the quirk with its
+option ``openshc_double_shutdown=True`` (what a recorded OpenSHC shut-down needs to be matched). This module is
+neutral: each ``begin``/``finish`` pair is one OpenSHC iteration; the controller decides how many it runs per cycle.
 
 Deliberate simplifications (exact for the shipped robots): admittance deltas are zero (``admittance_control``
 off), tip rotations are undefined (``gravity_aligned_tips`` off; the IK is position-only) and legs are never
