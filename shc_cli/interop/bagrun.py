@@ -19,6 +19,7 @@ def read_bag_run(path: Path) -> RunLog:
     """A bag from ``shc export bag`` (ROS 2 directory or ROS 1 file) as the run it was written from."""
     import tempfile
 
+    from shc_cli.analysis.metrics import rpy_of
     from shc_cli.control.sensing import quaternion_matrix
     from shc_cli.interop.bag import ROBOT_STATES, WALK_STATES, read_topics
     from shc_cli.spec.loading import load_robot
@@ -73,7 +74,7 @@ def read_bag_run(path: Path) -> RunLog:
     return RunLog(
         path=path, kind="simulate" if simulated else "plan", summary=summary, robot=robot, t=stamps / 1e9,
         running=states[:, 0] == "RUNNING", walk_state=states[:, 1], command=command, desired=state[:, 3:6],
-        position=position, rpy=_rpy(rotation), joints=joints, contact=contact,
+        position=position, rpy=rpy_of(rotation), joints=joints, contact=contact,
         power=np.array([m.data for _, m in topics["/shc/power"]]) if simulated else None, foot_force=forces,
         body_rate=np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z] for m in imu])
         if simulated else None,
@@ -87,10 +88,3 @@ def read_bag_run(path: Path) -> RunLog:
         progress=None if simulated else progress, states=states,
     )
 
-
-def _rpy(rotation: np.ndarray) -> np.ndarray:
-    """Roll, pitch, yaw of ``Rz·Ry·Rx`` matrices ``(N, 3, 3)``."""
-    pitch = np.arcsin(-np.clip(rotation[:, 2, 0], -1.0, 1.0))
-    roll = np.arctan2(rotation[:, 2, 1], rotation[:, 2, 2])
-    yaw = np.arctan2(rotation[:, 1, 0], rotation[:, 0, 0])
-    return np.column_stack([roll, pitch, yaw])

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from shc_cli.analysis.cot import cost_of_transport
 from shc_cli.control.controller import RobotState
 
 if TYPE_CHECKING:
@@ -24,19 +25,12 @@ FALL_TILT = 0.8
 """Body tilt above which the robot has fallen [rad] (≈ 46°)."""
 FALL_HEIGHT_SHARE = 0.3
 """The robot has fallen when its body is lower than this share of the body clearance above the terrain."""
-GRAVITY = 9.81
-"""Standard gravity [m/s²] (the cost of transport's g)."""
 
 
 def tilt(rpy: np.ndarray) -> float:
     """Angle between the body's z axis and the world's vertical [rad]."""
     roll, pitch = float(rpy[0]), float(rpy[1])
     return math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch))))
-
-
-def cost_of_transport(power_w: float, mass_kg: float, speed_mps: float) -> float | None:
-    """Paper eq. 22: mean power / (m·g·v); ``None`` when the robot hardly moved (v ≤ 1 mm/s)."""
-    return power_w / (mass_kg * GRAVITY * speed_mps) if speed_mps > 1e-3 else None
 
 
 class PhysicsRecord:
