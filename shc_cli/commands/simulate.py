@@ -227,21 +227,16 @@ def simulate_to(options: SimulateOptions | None = None, **changes: Any) -> tuple
 
 
 class _Progress:
-    """A rich progress bar over the walking cycles (an observer of the loop)."""
+    """The progress bar over the walking cycles (an observer of the loop)."""
 
-    def __init__(self, total: int) -> None:
-        from rich.progress import Progress
-
-        self.total, self.walked = total, 0
-        self.bar = Progress(transient=True)
-        self.task = self.bar.add_task("simulating", total=total)
-        self.bar.start()
+    def __init__(self, bar: Any) -> None:
+        self.bar, self.walked = bar, 0
 
     def __call__(self, cycle: int, command: Any, out: Any, reading: Any) -> str | None:
         if command.state_request is None or out.robot_state.name == "RUNNING":
             self.walked += 1
             if self.walked % 50 == 0:
-                self.bar.update(self.task, completed=self.walked)
+                self.bar.update(self.walked)
         return None
 
     def stop(self) -> None:
@@ -249,7 +244,8 @@ class _Progress:
 
 
 def _progress(total: int) -> _Progress | None:
-    """A rich progress bar on a terminal; None in pipes and CI (quiet)."""
-    if not sys.stderr.isatty() or os.environ.get("CI"):
-        return None
-    return _Progress(total)
+    """A progress bar on a terminal; None in pipes and CI (quiet)."""
+    from shc_cli.progress import progress_bar
+
+    bar = progress_bar("simulating", total)
+    return None if bar is None else _Progress(bar)

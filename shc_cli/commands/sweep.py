@@ -20,7 +20,6 @@ import io
 import math
 import os
 import shutil
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -302,18 +301,10 @@ def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | N
 
 
 def _progress(total: int) -> Callable[[int, dict[str, Any]], None] | None:
-    """A rich progress bar on a terminal; ``None`` (quiet) in pipes and CI."""
-    if not sys.stderr.isatty() or os.environ.get("CI"):
+    """The progress bar over the sweep's runs (``None``, quiet, in pipes and CI)."""
+    from shc_cli.progress import progress_bar
+
+    bar = progress_bar("sweep", total)
+    if bar is None:
         return None
-    from rich.progress import Progress
-
-    bar = Progress(transient=True)
-    task = bar.add_task("sweep", total=total)
-    bar.start()
-
-    def update(done: int, row: dict[str, Any]) -> None:
-        bar.update(task, completed=done, description=f"sweep ({row['slug'][:40]})")
-        if done >= total:
-            bar.stop()
-
-    return update
+    return lambda done, row: bar.update(done, str(row["slug"])[:40])
