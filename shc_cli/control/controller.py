@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from enum import IntEnum
 
 import numpy as np
 
@@ -31,6 +30,8 @@ from shc_cli.control.sensing import (
     support_centroid_pose,
 )
 from shc_cli.control.startup import iterations, plan_direct_startup
+from shc_cli.control.states import LegMode as LegMode
+from shc_cli.control.states import RobotState as RobotState  # re-exported: the controller's interface
 from shc_cli.control.walk import WalkController, WalkState
 from shc_cli.model import kernels
 from shc_cli.model.chains import Chains, FloatArray
@@ -42,15 +43,6 @@ from shc_cli.spec.robot import Robot
 
 UNDEFINED = float(2147483647)
 """OpenSHC's 'undefined position' value, published before a tip has been posed."""
-
-
-class RobotState(IntEnum):
-    """OpenSHC ``RobotState``."""
-
-    UNKNOWN = -1
-    PACKED = 0
-    READY = 1
-    RUNNING = 2
 
 
 @dataclass
@@ -84,15 +76,6 @@ class Command:
     leg_toggle: str | None = None
     tip_velocity: dict[str, tuple[float, float, float]] = field(default_factory=dict)
     tip_position: dict[str, tuple[float, float, float]] = field(default_factory=dict)
-
-
-class LegMode(IntEnum):
-    """OpenSHC ``LegState``: who drives a leg."""
-
-    WALKING = 0
-    MANUAL = 1
-    WALKING_TO_MANUAL = 2
-    MANUAL_TO_WALKING = 3
 
 
 MAX_MANUAL_LEGS = 2

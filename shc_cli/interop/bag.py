@@ -34,6 +34,7 @@ from typing import Any
 
 import numpy as np
 
+from shc_cli.control.states import RobotState, WalkState
 from shc_cli.errors import Issue, OutputError, SpecError
 from shc_cli.interop import mcap_chunks
 from shc_cli.interop.batch import BatchSerializer
@@ -41,9 +42,9 @@ from shc_cli.runlog import ROBOT_FILE
 from shc_cli.runread import RunLog
 
 FORMATS = ("mcap", "sqlite3", "ros1")
-ROBOT_STATES = {"UNKNOWN": -1, "PACKED": 0, "READY": 1, "RUNNING": 2}
+ROBOT_STATES = {state.name: int(state) for state in RobotState}
 """OpenSHC's robot-state values (``/shc/state`` data[0])."""
-WALK_STATES = {"STARTING": 0, "MOVING": 1, "STOPPING": 2, "STOPPED": 3}
+WALK_STATES = {state.name: int(state) for state in WalkState}
 """OpenSHC's walk-state values (``/shc/state`` data[1])."""
 LEG_STATE_TYPE = "syropod_highlevel_controller/msg/LegState"
 LEG_STATE_MSG = """std_msgs/Header header
