@@ -28,6 +28,13 @@ app = typer.Typer(
 
 _state = {"debug": False}
 
+# Options several commands share (one definition each: the same name, help and type everywhere).
+RobotArgument = Annotated[str, typer.Argument(help="Robot file or bundled robot name.")]
+GaitOption = Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")]
+CommandsOption = Annotated[Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan "
+                                                          "script.")]
+BagOption = Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")]
+
 
 def _version(value: bool) -> None:
     if value:
@@ -61,8 +68,8 @@ def validate(
 
 @app.command()
 def workspace(
-    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
-    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    robot: RobotArgument = "bullet",
+    gait: GaitOption = None,
     step_frequency: Annotated[
         float | None, typer.Option(help="Step frequency [Hz] (default: the robot's).")
     ] = None,
@@ -79,18 +86,16 @@ def workspace(
 
 @app.command()
 def plan(
-    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
-    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    robot: RobotArgument = "bullet",
+    gait: GaitOption = None,
     velocity: Annotated[
         str, typer.Option(help="Constant velocity input VX,VY,WZ in the robot's input mode.")
     ] = "1,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 10).")] = None,
-    commands: Annotated[
-        Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
-    ] = None,
+    commands: CommandsOption = None,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-plan).")] = None,
     plots: Annotated[bool, typer.Option(help="Write gait.png, tips.png and joints.png.")] = True,
-    bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
+    bag: BagOption = None,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
     from shc_cli.commands.plan import run_plan
@@ -101,13 +106,11 @@ def plan(
 
 @app.command()
 def simulate(
-    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
-    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    robot: RobotArgument = "bullet",
+    gait: GaitOption = None,
     velocity: Annotated[str, typer.Option(help="Velocity input VX,VY,WZ in the robot's input mode.")] = "1,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
-    commands: Annotated[
-        Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
-    ] = None,
+    commands: CommandsOption = None,
     terrain: Annotated[
         str, typer.Option(help="flat, ramp:DEG, blocks[:LOW,HIGH[,SIZE]], stairs:RISE,RUN or heightfield:FILE[,SCALE]")
     ] = "flat",
@@ -141,7 +144,7 @@ def simulate(
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-simulate).")] = None,
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
-    bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
+    bag: BagOption = None,
     fail_on_fall: Annotated[bool, typer.Option(help="Exit with code 4 when the robot fell.")] = False,
 ) -> None:
     """Run the controller on the robot in PyBullet physics: terrains, servos, sensors, power, CoT."""
@@ -179,15 +182,13 @@ def run_hw(
     port: Annotated[list[str], typer.Option(metavar="DEV", help="Serial device of a servo bus, e.g. /dev/ttyUSB0; "
                                                                 "once per bus, bus 0 first.")],
     baud: Annotated[int | None, typer.Option(help="Baud rate [default: hardware.baud].")] = None,
-    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    gait: GaitOption = None,
     input_mode: Annotated[str, typer.Option("--input", help="timeline (--velocity/--commands), commands:FILE, "
                                                             "stdin (JSON lines), keyboard, gamepad[:DEVICE].")]
     = "timeline",
     velocity: Annotated[str, typer.Option(help="Velocity input VX,VY,WZ in the robot's input mode.")] = "0,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
-    commands: Annotated[
-        Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
-    ] = None,
+    commands: CommandsOption = None,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-run-hw).")] = None,
     dry_run: Annotated[bool, typer.Option(help="Everything except current-limit, torque-enable and goal writes.")]
     = False,
@@ -244,7 +245,7 @@ def replay(
     source: Annotated[Path, typer.Argument(help="A recording prefix DIR/NAME (NAME_joints.csv.gz, NAME_tips.csv.gz, "
                                                 "NAME_body.csv.gz), a ROS 1 .bag or a ROS 2 bag directory.")],
     robot: Annotated[str, typer.Option(help="Robot file or bundled robot name: the robot that was recorded.")],
-    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    gait: GaitOption = None,
     json_output: Annotated[bool, typer.Option("--json", help="Print one JSON object and nothing else.")] = False,
     out: Annotated[Path | None, typer.Option(help="Write differences.csv (per cycle) and differences.png here.")]
     = None,
@@ -266,7 +267,7 @@ app.add_typer(export_app, name="export")
 
 @export_app.command("urdf")
 def export_urdf(
-    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
+    robot: RobotArgument = "bullet",
     out: Annotated[Path | None, typer.Option(help="Write the URDF here (default: print it).")] = None,
 ) -> None:
     """The physics model generated from the robot file, as URDF (what `simulate` loads)."""
