@@ -68,7 +68,8 @@ class Reading:
         joint_velocities: ``(L, n)`` [rad/s].
         joint_efforts: motor torques averaged over the control period's physics steps ``(L, n)`` [N·m].
         servo_power: electrical power of each servo averaged over the same steps ``(L, n)`` [W].
-        orientation: IMU orientation quaternion (x, y, z, w), body → world (PyBullet's base orientation: it rotates body-frame vectors into the world).
+        orientation: IMU orientation quaternion (x, y, z, w), body → world (rotates body-frame vectors into the
+            world, as PyBullet's base orientation).
         angular_rate: IMU angular velocity in the body frame [rad/s].
         linear_acceleration: IMU specific force in the body frame (gravity included, at rest +9.81 z) [m/s²].
         foot_forces: contact normal force on each foot ``(L,)`` [N].
