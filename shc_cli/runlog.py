@@ -181,7 +181,8 @@ def joint_values(robot: Robot, values: np.ndarray) -> list[float]:
     counts = {len(leg.joints) for leg in robot.legs.values()}
     if len(counts) == 1 and counts.pop() == values.shape[1]:  # no padding: every value, row by row
         return list(values.ravel().tolist())
-    return [float(v) for i, leg in enumerate(robot.legs.values()) for v in values[i, :len(leg.joints)]]
+    rows, cols = joint_slots(robot)
+    return list(values[rows, cols].tolist())
 
 
 class RunWriter(RunDirectory):

@@ -38,7 +38,7 @@ from shc_cli.control.states import RobotState, WalkState
 from shc_cli.errors import Issue, OutputError, SpecError
 from shc_cli.interop import mcap_chunks
 from shc_cli.interop.batch import BatchSerializer
-from shc_cli.runlog import ROBOT_FILE
+from shc_cli.runlog import ROBOT_FILE, joint_slots
 from shc_cli.runread import RunLog
 
 FORMATS = ("mcap", "sqlite3", "ros1")
@@ -248,8 +248,7 @@ def _topics(run: RunLog, m: _Messages) -> list[Topic]:
     legs = list(robot.legs)
     names = leg_names(robot)
     chains = Chains.from_robot(robot)
-    slots = [(i, k) for i, leg in enumerate(robot.legs.values()) for k in range(len(leg.joints))]
-    rows_, cols_ = np.array([s[0] for s in slots]), np.array([s[1] for s in slots])
+    rows_, cols_ = joint_slots(robot)
     joint_ids = [joint for leg in names.values() for joint in leg.joints]
     measured = run.joints[:, rows_, cols_]
     commanded = (run.commanded if run.commanded is not None else run.joints)[:, rows_, cols_]
