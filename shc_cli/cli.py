@@ -96,12 +96,15 @@ def plan(
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-plan).")] = None,
     plots: Annotated[bool, typer.Option(help="Write gait.png, tips.png and joints.png.")] = True,
     bag: BagOption = None,
+    video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
+                                                    "render with its defaults).", metavar="FILE")] = None,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
     from shc_cli.commands.plan import run_plan
 
     _bag_check(bag)
-    run_plan(robot, gait, velocity, duration, commands, out, plots, after=lambda run: _write_bag(run, bag))
+    _video_check(video)
+    run_plan(robot, gait, velocity, duration, commands, out, plots, after=lambda run: _finish_outputs(run, bag, video))
 
 
 @app.command()
@@ -146,15 +149,24 @@ def simulate(
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
     bag: BagOption = None,
     fail_on_fall: Annotated[bool, typer.Option(help="Exit with code 4 when the robot fell.")] = False,
+    video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
+                                                    "render with its defaults).", metavar="FILE")] = None,
 ) -> None:
     """Run the controller on the robot in PyBullet physics: terrains, servos, sensors, power, CoT."""
     from shc_cli.commands.simulate import Feedback, SimulateOptions, run_simulate
 
     _bag_check(bag)
+    _video_check(video)
     options = SimulateOptions(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate,
                               friction, restitution, seed, imu_noise, start, gui, stand,
                               Feedback(posture, imu_posing, inclination, admittance), fail_on_fall)
-    run_simulate(options, after=lambda run: _write_bag(run, bag))
+    run_simulate(options, after=lambda run: _finish_outputs(run, bag, video))
+
+
+def _finish_outputs(run: Path, bag: str | None, video: Path | None) -> None:
+    """``--bag`` and ``--video`` of a finished run (also an interrupted one, before its exit code)."""
+    _write_bag(run, bag)
+    _write_video(run, video)
 
 
 def _bag_check(fmt: str | None) -> None:
@@ -163,6 +175,22 @@ def _bag_check(fmt: str | None) -> None:
         from shc_cli.errors import Issue, SpecError
 
         raise SpecError([Issue(None, None, "--bag", f"'{fmt}' is not a bag format", "use mcap, sqlite3 or ros1")])
+
+
+def _video_check(video: Path | None) -> None:
+    """Refuse a bad --video name before the run."""
+    if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
+        from shc_cli.errors import Issue, SpecError
+
+        raise SpecError([Issue(None, None, "--video", f"'{video}' is neither .mp4 nor .gif", "e.g. --video walk.mp4")])
+
+
+def _write_video(run: Path, video: Path | None) -> None:
+    """``--video``: the finished run rendered as ``shc render RUN --out FILE`` would."""
+    if video is not None:
+        from shc_cli.commands.render import render_video
+
+        render_video(run, video)
 
 
 def _write_bag(run: Path, fmt: str | None) -> None:
@@ -238,6 +266,36 @@ def sweep(
     from shc_cli.commands.sweep import run_sweep
 
     run_sweep(file, workers, executor, scheduler, out, resume)
+
+
+@app.command()
+def render(
+    run: Annotated[Path, typer.Argument(help="Run directory (plan, simulate, run-hw) or a bag from export bag.")],
+    out: Annotated[Path, typer.Option(help="Video file: FILE.mp4 (H.264) or FILE.gif.")],
+    fps: Annotated[float, typer.Option(help="Frames per second of the video.")] = 25.0,
+    size: Annotated[str, typer.Option(help="Frame size WIDTHxHEIGHT in pixels.")] = "960x540",
+    camera: Annotated[str, typer.Option(help="follow (the body, from behind and above), fixed (the whole path) "
+                                             "or top (from above, following).")] = "follow",
+    speed: Annotated[float, typer.Option(help="Playback speed: 2 = twice real time.")] = 1.0,
+) -> None:
+    """Render a run headless to video: the robot, terrain and feet, with time, speeds and walk state over it."""
+    from shc_cli.commands.render import run_render
+
+    run_render(run, out, fps, size, camera, speed)
+
+
+@app.command()
+def view(
+    target: Annotated[str, typer.Argument(help="Robot file or bundled robot name, a run directory, or a bag.")],
+    host: Annotated[str, typer.Option(help="Address to listen on. The default 127.0.0.1 serves this computer "
+                                           "only; 0.0.0.0 serves anyone who can reach it on the network.")]
+    = "127.0.0.1",
+    port: Annotated[int, typer.Option(help="Port to listen on.")] = 8080,
+) -> None:
+    """See a robot (joint sliders, body pose, workspaces) or replay a run in the browser; Ctrl-C stops it."""
+    from shc_cli.commands.view import run_view
+
+    run_view(target, host, port)
 
 
 @app.command()
@@ -320,6 +378,43 @@ def import_openshc(
 
     for path in convert(robot, gait, auto_pose, out):
         typer.echo(f"wrote {path}")
+
+
+@import_app.command("urdf")
+def import_urdf(
+    file: Annotated[Path, typer.Argument(help="URDF or xacro file of a legged robot.", metavar="FILE.urdf|FILE.xacro")],
+    out: Annotated[Path | None, typer.Option(help="Folder for robots/NAME.toml and joint_map.csv "
+                                                  "[default: imported/NAME].")] = None,
+    name: Annotated[str | None, typer.Option(help="Robot name [default: the URDF's robot name].")] = None,
+    legs: Annotated[str, typer.Option(help="'auto' (every chain to a leaf link) or the tip links LINK,… or "
+                                           "ID=LINK,… in leg order.")] = "auto",
+    tip: Annotated[list[str] | None, typer.Option(help="Tip link (glob pattern), optionally with the tip point in "
+                                                       "its frame: LINK@X,Y,Z [m]. Repeatable.")] = None,
+    clearance: Annotated[float | None, typer.Option(help="Body clearance [m] [default: from the zero pose].")] = None,
+    reach: Annotated[float | None, typer.Option(help="Stance distance from the hip, as a share of the leg's "
+                                                     "length [default: from the zero pose].")] = None,
+    snap: Annotated[float, typer.Option(help="Snap rpy values this close to a multiple of pi/2 [rad] (for "
+                                             "axes meant to be parallel that are not quite).")] = 0.0,
+    arg: Annotated[list[str] | None, typer.Option(help="xacro argument NAME=VALUE. Repeatable.")] = None,
+) -> None:
+    """Turn a legged robot's URDF or xacro into an shc robot file and a joint map (URDF joint → leg, joint)."""
+    from shc_cli.errors import Issue, SpecError
+    from shc_cli.interop.urdf_import import import_urdf as convert
+
+    mappings = {}
+    for item in arg or []:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise SpecError([Issue(None, None, "--arg", f"'{item}' is not NAME=VALUE", "e.g. --arg prefix=robot_")])
+        mappings[key] = value
+    result = convert(file, out, name, legs, tip, clearance, reach, snap, mappings)
+    for note in result.notes:
+        typer.echo(f"note: {note}")
+    typer.echo(f"forward kinematics: largest tip difference to the URDF {result.fk_error:.2g} m at 200 random joint "
+               "vectors per leg" + (f" ({result.fk_error_unsnapped:.2g} m to the URDF before snapping rpy values, "
+                                    f"largest snap {result.snap:.2g} rad)" if result.snap > 0 else ""))
+    typer.echo(f"wrote {result.robot_path}")
+    typer.echo(f"wrote {result.joint_map_path}")
 
 
 @app.command()

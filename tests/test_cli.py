@@ -48,11 +48,13 @@ def test_version(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
 
 
 def test_help_starts_fast() -> None:
-    """``shc --help`` must not import numpy, numba, pydantic or matplotlib (budget 0.3 s)."""
+    """``shc --help`` must not import numpy, numba, pydantic, matplotlib, nor the viewer or renderer (viser, mujoco,
+    imageio-ffmpeg, Pillow) (budget 0.3 s)."""
     code = ("import sys, time; t = time.perf_counter(); sys.argv = ['shc', '--help']\n"
             "from shc_cli.cli import main\n"
             "try:\n    main()\nexcept SystemExit:\n    pass\n"
-            "heavy = [m for m in ('numpy', 'numba', 'pydantic', 'matplotlib', 'scipy') if m in sys.modules]\n"
+            "heavy = [m for m in ('numpy', 'numba', 'pydantic', 'matplotlib', 'scipy', 'viser', 'mujoco', "
+            "'imageio_ffmpeg', 'PIL', 'playwright', 'shc_cli.view') if m in sys.modules]\n"
             "print(heavy, time.perf_counter() - t, file=sys.stderr)")
     best = min(_timed(code) for _ in range(3))
     assert best[0] == "[]"

@@ -12,7 +12,7 @@ from .test_cli import run
 
 TIMING = {"wall_time_s", "physics_time_s", "running_wall_time_s", "running_physics_time_s"}
 REQUIRED = {"sim_time_s", "wall_time_s", "physics_time_s", "distance_m", "mean_speed_mps", "mean_power_w", "cot",
-            "fell", "seed"}
+            "fell", "seed", "terrain"}
 
 
 def _simulate(tmp_path: Path, name: str, args: list[str], capsys, monkeypatch) -> tuple[int, str, Path]:  # type: ignore[no-untyped-def]
@@ -27,7 +27,7 @@ def test_bullet_walks_forward_on_flat_ground(tmp_path: Path, capsys, monkeypatch
     assert code == 0 and "bullet / tripod / WG on flat" in stdout
     summary = json.loads((out / "summary.json").read_text())
     assert set(summary) >= REQUIRED
-    assert summary["fell"] is False
+    assert summary["fell"] is False and summary["terrain"] == "flat"  # shc view and render rebuild it from this
     assert summary["distance_m"] > 0.4  # accelerating towards 0.232 m/s for 4 s
     assert summary["forward_distance_m"] > 0.95 * summary["distance_m"]
     assert summary["mean_power_w"] > 30 * 0.9  # at least every servo's idle power

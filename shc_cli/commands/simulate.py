@@ -214,6 +214,7 @@ def simulate_to(options: SimulateOptions | None = None, **changes: Any) -> tuple
                 if progress is not None:
                     progress.stop()
                 return {**record.summary(scenario, controller.gait.name, controller), "seed": o.seed,
+                        "terrain": str(world.terrain.spec),
                         "versions": {"shc": __version__, "pybullet": str(pybullet.getAPIVersion()),
                                      "numpy": np.__version__}}
 

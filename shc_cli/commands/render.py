@@ -1,0 +1,33 @@
+"""``shc render``: a finished run (or a bag from ``shc export bag``) as an MP4 or a GIF."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import typer
+
+
+def run_render(run_path: Path, out: Path, fps: float, size: str, camera: str, speed: float) -> Path:
+    """Read the run, render it, print one line; returns the video's path."""
+    from shc_cli.runs.opening import open_run as read_run  # directories and bags
+    from shc_cli.view.render import RenderOptions, check_options, parse_size, render_run
+
+    width, height = parse_size(size)
+    options = RenderOptions(fps=fps, width=width, height=height, camera=camera, speed=speed)
+    check_options(out, options)
+    run = read_run(run_path)
+    result = render_run(run, out, options, progress=sys.stderr.isatty())
+    typer.echo(f"wrote {result.path}: {result.frames} frames at {fps:g} fps, {width}x{height}, "
+               f"{result.draw_s + result.encode_s:.1f} s")
+    return result.path
+
+
+DEFAULTS: tuple[float, str, str, float] = (25.0, "960x540", "follow", 1.0)
+"""What ``--video`` on plan and simulate renders with: ``shc render``'s defaults (fps, size, camera, speed)."""
+
+
+def render_video(run_path: Path, out: Path) -> Path:
+    """``--video FILE``: the finished run rendered as ``shc render RUN --out FILE`` would."""
+    fps, size, camera, speed = DEFAULTS
+    return run_render(run_path, out, fps, size, camera, speed)

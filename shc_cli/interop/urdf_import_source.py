@@ -1,0 +1,204 @@
+"""Reading a URDF or xacro file for ``shc import urdf``: xacro expanded without ROS, rpy snapped, parsed by yourdfpy.
+
+``$(find PKG)`` has no ROS package index to ask here, so it is resolved from the file's own folders: the
+nearest folder above the file (the file's own folder included) that is named ``PKG`` or holds a
+``package.xml`` naming ``PKG``, or a folder ``PKG`` beside one of those folders (a ``src/`` of a catkin or
+colcon workspace). An included file that does not exist under the resolved path is looked for by name beside
+the file that includes it (a package's files copied flat into one folder, as ``shared/reference/bullet_syropod``).
+
+With ``--snap TOL``, angles in ``<origin rpy>`` within TOL of a multiple of π/2 are snapped to it before
+parsing (``1.57`` meant as π/2). Off by default, since it moves the tips (by up to TOL × the leg's length):
+it is needed only when two axes meant to be parallel are not quite, which the import reports (the common
+normal of nearly parallel axes is far away, and the DH offsets with it).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import re
+import xml.etree.ElementTree as ET
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from shc_cli.errors import Issue, SpecError
+
+SUGGESTED_SNAP = 0.001
+"""Smallest ``--snap`` suggested when axes are nearly parallel [rad] (1.57 is 0.0008 from π/2)."""
+
+
+@dataclass(frozen=True)
+class Source:
+    """A URDF as read: the text after xacro, the text parsed (snapped), and the largest snap made.
+
+    Attributes:
+        path: the file given.
+        text: URDF text after xacro expansion (capsules as cylinders), before snapping.
+        snapped_text: the text parsed, rpy values snapped.
+        snap: largest change made to an rpy value [rad].
+    """
+
+    path: Path
+    text: str
+    snapped_text: str
+    snap: float
+
+
+def _fail(path: Path, problem: str, fix: str, line: int | None = None) -> SpecError:
+    return SpecError([Issue(path, line, "", problem, fix)])
+
+
+def find_package(name: str, start: Path) -> Path | None:
+    """The folder of package ``name`` seen from the folder ``start`` (see the module docstring), or None."""
+    for folder in [start, *start.parents]:
+        if folder.name == name:
+            return folder
+        manifest = folder / "package.xml"
+        if manifest.is_file() and re.search(rf"<name>\s*{re.escape(name)}\s*</name>", manifest.read_text("utf-8")):
+            return folder
+        if (folder / name).is_dir():
+            return folder / name
+    return None
+
+
+@contextlib.contextmanager
+def _xacro_hooks(path: Path) -> Iterator[None]:
+    """Patch xacro's ``$(find)`` and include-path resolution for the duration of one expansion."""
+    import xacro
+    import xacro.substitution_args as substitution
+
+    def eval_find(package: str) -> str:
+        current = Path(xacro.filestack[-1]) if xacro.filestack and xacro.filestack[-1] else path
+        found = find_package(package, current.resolve().parent)
+        if found is None:
+            raise _fail(path, f"$(find {package}): no folder '{package}' (or package.xml naming it) above "
+                        f"{current.parent}", f"put the file inside the package's folder, named {package}")
+        return str(found)
+
+    original_find, original_abs = substitution._eval_find, xacro.abs_filename_spec
+
+    def abs_filename_spec(spec: str) -> str:
+        resolved: str = original_abs(spec)
+        if not re.search("[*[?]+", resolved) and not Path(resolved).exists() and xacro.filestack:
+            beside = Path(xacro.filestack[-1] or path).parent / Path(resolved).name
+            if beside.exists():
+                return str(beside)
+        return resolved
+
+    substitution._eval_find, xacro.abs_filename_spec = eval_find, abs_filename_spec
+    try:
+        yield
+    finally:
+        substitution._eval_find, xacro.abs_filename_spec = original_find, original_abs
+
+
+def expand_xacro(path: Path, args: dict[str, str]) -> str:
+    """The URDF text of a xacro file (``args``: xacro arguments ``name:=value``)."""
+    import xacro
+
+    with _xacro_hooks(path):
+        try:
+            document = xacro.process_file(str(path), mappings=dict(args))
+        except SpecError:
+            raise
+        except Exception as error:  # xacro raises XacroException, ExpatError, NameError, ... with its own text
+            cause = getattr(error, "exc", None)
+            if isinstance(cause, SpecError):
+                raise cause from None
+            message = " ".join(str(error).split()) or type(error).__name__
+            raise _fail(path, f"xacro: {message}", "fix the xacro file, or give xacro arguments with --arg NAME=VALUE")\
+                from None
+    text: str = document.toprettyxml(indent="  ")
+    return text
+
+
+def snap_rpy(text: str, tolerance: float) -> tuple[str, float]:
+    """The URDF text with every ``origin rpy`` value within ``tolerance`` of a multiple of π/2 snapped to it.
+
+    Returns the new text and the largest change [rad]."""
+    root = ET.fromstring(text)  # also the well-formedness check: yourdfpy would recover from broken XML
+    if tolerance <= 0.0:
+        return text, 0.0
+    largest = 0.0
+    for origin in root.iter("origin"):
+        rpy = origin.get("rpy")
+        if rpy is None:
+            continue
+        values = [float(v) for v in rpy.split()]
+        out = []
+        for value in values:
+            nearest = round(value / (math.pi / 2.0)) * (math.pi / 2.0)
+            if 0.0 < abs(value - nearest) <= tolerance:
+                largest = max(largest, abs(value - nearest))
+                value = nearest
+            out.append(repr(value))
+        origin.set("rpy", " ".join(out))
+    return ET.tostring(root, encoding="unicode"), largest
+
+
+def require() -> None:
+    """Fail with one line if the optional dependencies of ``shc import urdf`` are missing."""
+    import importlib.util
+
+    from shc_cli.errors import BackendError
+
+    missing = [name for name in ("xacro", "yourdfpy") if importlib.util.find_spec(name) is None]
+    if missing:
+        raise BackendError(f"shc import urdf needs {' and '.join(missing)} (pip install 'shc[urdf]')")
+
+
+def _known_geometry(text: str) -> str:
+    """PyBullet's ``<capsule>`` (which ``shc export urdf`` writes) as a ``<cylinder>``: yourdfpy knows no capsule,
+    and the import reads no geometry but foot spheres and the body's box."""
+    if "<capsule" not in text:
+        return text
+    root = ET.fromstring(text)
+    for geometry in root.iter("geometry"):
+        for shape in geometry.findall("capsule"):
+            shape.tag = "cylinder"
+    return ET.tostring(root, encoding="unicode")
+
+
+def read_source(path: Path, args: dict[str, str], snap: float) -> Source:
+    """Read ``path`` (``.xacro`` expanded, anything else as URDF) and snap its rpy values.
+
+    Raises:
+        SpecError: missing file, xacro failure or malformed XML (one line).
+    """
+    require()
+    if not path.is_file():
+        raise _fail(path, "file not found", "check the path")
+    if path.suffix == ".xacro" or ".xacro" in path.suffixes:
+        text = expand_xacro(path, args)
+    else:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    try:
+        text = _known_geometry(text)
+        snapped, largest = snap_rpy(text, snap)
+    except ET.ParseError as error:
+        line = error.position[0] if hasattr(error, "position") else None
+        raise _fail(path, f"malformed XML: {error}", "fix the XML (a URDF is one <robot> element)", line) from None
+    except ValueError as error:
+        raise _fail(path, f"an rpy value is not a number: {error}", "write three numbers, e.g. rpy=\"0 0 1.5708\"")\
+            from None
+    return Source(path, text, snapped, largest)
+
+
+def parse_urdf(path: Path, text: str) -> Any:
+    """yourdfpy's model of URDF ``text`` (no meshes loaded; the scene graph built for its forward kinematics)."""
+    import io
+
+    import yourdfpy
+    from lxml import etree
+
+    try:
+        model = yourdfpy.URDF.load(io.BytesIO(text.encode("utf-8")), build_scene_graph=True, load_meshes=False,
+                                   build_collision_scene_graph=False, load_collision_meshes=False)
+    except etree.XMLSyntaxError as error:
+        raise _fail(path, f"malformed XML: {error}", "fix the XML (a URDF is one <robot> element)") from None
+    except (ValueError, KeyError, AttributeError, TypeError) as error:
+        raise _fail(path, f"not a URDF yourdfpy can read: {error}", "check it with check_urdf or a URDF viewer")\
+            from None
+    return model
