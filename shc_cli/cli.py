@@ -34,6 +34,9 @@ GaitOption = Annotated[str | None, typer.Option(help="Gait name or file (default
 CommandsOption = Annotated[Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan "
                                                           "script.")]
 BagOption = Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")]
+OVERWRITE_HELP = "Replace an existing run directory at --out (when the new run finishes; only shc's own outputs)."
+VELOCITY_HELP = ("Constant velocity input VX,VY,WZ: throttle fractions −1..1 of the robot's maximum linear and "
+                 "angular speed, unless the robot file's walker.velocity_input_mode is 'real' (then m/s, m/s, rad/s).")
 
 
 def _version(value: bool) -> None:
@@ -89,7 +92,7 @@ def plan(
     robot: RobotArgument = "bullet",
     gait: GaitOption = None,
     velocity: Annotated[
-        str, typer.Option(help="Constant velocity input VX,VY,WZ in the robot's input mode.")
+        str, typer.Option(help=VELOCITY_HELP)
     ] = "1,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 10).")] = None,
     commands: CommandsOption = None,
@@ -98,20 +101,22 @@ def plan(
     bag: BagOption = None,
     video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
                                                     "render with its defaults).", metavar="FILE")] = None,
+    overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
     from shc_cli.commands.plan import run_plan
 
     _bag_check(bag)
     _video_check(video)
-    run_plan(robot, gait, velocity, duration, commands, out, plots, after=lambda run: _finish_outputs(run, bag, video))
+    run_plan(robot, gait, velocity, duration, commands, out, plots, after=lambda run: _finish_outputs(run, bag, video),
+             overwrite=overwrite)
 
 
 @app.command()
 def simulate(
     robot: RobotArgument = "bullet",
     gait: GaitOption = None,
-    velocity: Annotated[str, typer.Option(help="Velocity input VX,VY,WZ in the robot's input mode.")] = "1,0,0",
+    velocity: Annotated[str, typer.Option(help=VELOCITY_HELP)] = "1,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
     commands: CommandsOption = None,
     terrain: Annotated[
@@ -151,6 +156,7 @@ def simulate(
     fail_on_fall: Annotated[bool, typer.Option(help="Exit with code 4 when the robot fell.")] = False,
     video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
                                                     "render with its defaults).", metavar="FILE")] = None,
+    overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller on the robot in PyBullet physics: terrains, servos, sensors, power, CoT."""
     from shc_cli.commands.simulate import Feedback, SimulateOptions, run_simulate
@@ -159,7 +165,8 @@ def simulate(
     _video_check(video)
     options = SimulateOptions(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate,
                               friction, restitution, seed, imu_noise, start, gui, stand,
-                              Feedback(posture, imu_posing, inclination, admittance), fail_on_fall)
+                              Feedback(posture, imu_posing, inclination, admittance), fail_on_fall,
+                              overwrite=overwrite)
     run_simulate(options, after=lambda run: _finish_outputs(run, bag, video))
 
 
@@ -214,7 +221,7 @@ def run_hw(
     input_mode: Annotated[str, typer.Option("--input", help="timeline (--velocity/--commands), commands:FILE, "
                                                             "stdin (JSON lines), keyboard, gamepad[:DEVICE].")]
     = "timeline",
-    velocity: Annotated[str, typer.Option(help="Velocity input VX,VY,WZ in the robot's input mode.")] = "0,0,0",
+    velocity: Annotated[str, typer.Option(help=VELOCITY_HELP)] = "0,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
     commands: CommandsOption = None,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-run-hw).")] = None,
@@ -229,12 +236,13 @@ def run_hw(
                                                         "between goals.")] = False,
     watchdog: Annotated[float, typer.Option(help="stdin: seconds without a line before the velocity goes to 0.")]
     = 0.5,
+    overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller on the robot's Dynamixel servos (Protocol 2.0), safely."""
     from shc_cli.commands.run_hw import run_hw as run
 
     run(robot, gait, port, baud, velocity, duration, commands, out, dry_run, on_fault, on_stop, input_mode, watchdog,
-        stop_state, profile_velocity)
+        stop_state, profile_velocity, overwrite)
 
 
 @app.command()
@@ -261,11 +269,13 @@ def sweep(
     scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address (default: a LocalCluster).")] = None,
     out: Annotated[Path | None, typer.Option(help="Output directory (default runs/<sweep name>).")] = None,
     resume: Annotated[bool, typer.Option(help="Continue a sweep: finished runs are read, not re-run.")] = False,
+    overwrite: Annotated[bool, typer.Option(help="Delete an existing sweep output at --out first and run it all "
+                                                 "again (only shc's own outputs).")] = False,
 ) -> None:
     """Run a grid of simulations in parallel and tabulate CoT, power, speed and stability per run."""
     from shc_cli.commands.sweep import run_sweep
 
-    run_sweep(file, workers, executor, scheduler, out, resume)
+    run_sweep(file, workers, executor, scheduler, out, resume, overwrite)
 
 
 @app.command()

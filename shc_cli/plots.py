@@ -55,8 +55,20 @@ def plot_workspace(report: WorkspaceReport, path: Path) -> None:
     plt.close(figure)
 
 
-def plot_plan(robot: Robot, outputs: list[CycleOutput], folder: Path) -> None:
-    """gait.png (paper Fig. 5), tips.png (Fig. 7: side and top view) and joints.png in ``folder``."""
+SWING_COLOUR = "black"
+"""Gait diagrams (paper Fig. 5): a leg in swing is a black bar, in stance white (left blank); start-up is grey."""
+STANCE_COLOUR = "white"
+STARTUP_COLOUR = "0.85"
+
+
+def run_title(robot: Robot, gait: str | None) -> str:
+    """``robot / gait``: the start of every run plot's title (``gait`` defaults to the robot's own)."""
+    return f"{robot.name} / {gait or robot.walker.gait}"
+
+
+def plot_plan(robot: Robot, outputs: list[CycleOutput], folder: Path, gait: str | None = None) -> None:
+    """gait.png (paper Fig. 5), tips.png (Fig. 7: side and top view) and joints.png in ``folder``; ``gait`` names
+    the run's gait in the titles (default: the robot's)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -67,9 +79,10 @@ def plot_plan(robot: Robot, outputs: list[CycleOutput], folder: Path) -> None:
     legs = list(robot.legs)
     t = np.arange(len(outputs)) * dt
     swing = np.array([o.swing_progress for o in outputs])
+    title = run_title(robot, gait)
+    startup = np.array([o.robot_state.name != "RUNNING" for o in outputs])
 
-    _leg_bars(legs, t, dt, swing >= 0.0, "time [s] (black: swing, white: stance)", f"{robot.name}: gait diagram",
-              folder / "gait.png")
+    _leg_bars(legs, t, dt, swing >= 0.0, f"{title}: gait diagram (planned)", folder / "gait.png", startup)
 
     walker = np.array([o.walker_tips for o in outputs])
     figure, (side, top) = plt.subplots(1, 2, figsize=(11, 4.5), dpi=110)
@@ -78,33 +91,38 @@ def plot_plan(robot: Robot, outputs: list[CycleOutput], folder: Path) -> None:
         top.plot(walker[:, row, 0], walker[:, row, 1], lw=0.8, label=leg)
     side.set_xlabel("x [m]")
     side.set_ylabel("z [m]")
-    side.set_title("tip trajectories, side view (walk plane)")
+    side.set_title("side view (walk plane)")
     top.set_xlabel("x [m]")
     top.set_ylabel("y [m]")
     top.set_aspect("equal", adjustable="datalim")
     top.set_title("top view")
     top.legend(fontsize=7, ncols=2)
+    figure.suptitle(f"{title}: foot tip trajectories")
     figure.tight_layout()
     figure.savefig(folder / "tips.png")
     plt.close(figure)
 
     joints = np.array([o.joints for o in outputs])
-    figure, axes_grid = plt.subplots(len(legs), 1, figsize=(9, 1.6 * len(legs)), dpi=110, sharex=True)
+    figure, axes_grid = plt.subplots(len(legs), 1, figsize=(10, 1.6 * len(legs) + 0.6), dpi=110, sharex=True,
+                                     squeeze=False)
     for row, (leg, spec) in enumerate(robot.legs.items()):
-        axis = axes_grid[row] if len(legs) > 1 else axes_grid
+        axis = axes_grid[row, 0]
         for k, name in enumerate(spec.joints):
             axis.plot(t, joints[:, row, k], lw=0.8, label=name)
         axis.set_ylabel(f"{leg} [rad]")
-        axis.legend(fontsize=6, loc="upper right", ncols=len(spec.joints))
-    (axes_grid[-1] if len(legs) > 1 else axes_grid).set_xlabel("time [s]")
+        # beside the plot, not on the curves
+        axis.legend(fontsize=6, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
+    axes_grid[-1, 0].set_xlabel("time [s]")
+    figure.suptitle(f"{title}: commanded joint positions")
     figure.tight_layout()
     figure.savefig(folder / "joints.png")
     plt.close(figure)
 
 
-def plot_simulation(robot: Robot, series: dict[str, list[Any]], folder: Path) -> None:
-    """trajectory.png (body path, top view), power.png (total electrical power) and contacts.png (feet on the
-    ground over time: the measured gait diagram) in ``folder``."""
+def plot_simulation(robot: Robot, series: dict[str, list[Any]], folder: Path, gait: str | None = None) -> None:
+    """trajectory.png (body path, top view), power.png (total electrical power) and contacts.png (feet off the
+    ground over time: the measured gait diagram, drawn like the planned one) in ``folder``; ``gait`` names the
+    run's gait in the titles (default: the robot's)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -120,7 +138,8 @@ def plot_simulation(robot: Robot, series: dict[str, list[Any]], folder: Path) ->
     axes.set_aspect("equal", adjustable="datalim")
     axes.set_xlabel("x [m]")
     axes.set_ylabel("y [m]")
-    axes.set_title(f"{robot.name}: body trajectory")
+    title = run_title(robot, gait)
+    axes.set_title(f"{title}: body trajectory")
     axes.legend(fontsize=8)
     figure.tight_layout()
     figure.savefig(folder / "trajectory.png")
@@ -130,33 +149,51 @@ def plot_simulation(robot: Robot, series: dict[str, list[Any]], folder: Path) ->
     axes.plot(t, series["power"], lw=0.8)
     axes.set_xlabel("time [s]")
     axes.set_ylabel("electrical power [W]")
-    axes.set_title(f"{robot.name}: total servo power")
+    axes.set_title(f"{title}: total servo power")
     axes.grid(True, lw=0.3)
     figure.tight_layout()
     figure.savefig(folder / "power.png")
     plt.close(figure)
 
     contact = np.array(series["contact"], dtype=bool)
-    _leg_bars(list(robot.legs), t, robot.time_delta, contact, "time [s] (black: foot on the ground)",
-              f"{robot.name}: measured foot contacts", folder / "contacts.png")
+    startup = ~np.array(series["running"], dtype=bool) if "running" in series else None
+    _leg_bars(list(robot.legs), t, robot.time_delta, ~contact, f"{title}: gait diagram (measured foot contacts)",
+              folder / "contacts.png", startup)
 
 
-def _leg_bars(legs: list[str], t: Any, dt: float, flags: Any, xlabel: str, title: str, path: Path) -> None:
-    """One row of black bars per leg where ``flags[:, leg]`` is set (cycles at times ``t`` [s], ``dt`` apart)."""
-    import matplotlib.pyplot as plt
+def _intervals(flags: Any) -> list[tuple[int, int]]:
+    """(first, last) index of every run of True in a 1-D boolean array."""
     import numpy as np
 
-    figure, axes = plt.subplots(figsize=(9, 0.45 * len(legs) + 1.2), dpi=110)
+    on = np.asarray(flags).astype(int)
+    starts = np.flatnonzero(np.diff(np.concatenate([[0], on])) == 1)
+    ends = np.flatnonzero(np.diff(np.concatenate([on, [0]])) == -1)
+    return [(int(a), int(b)) for a, b in zip(starts, ends, strict=True)]
+
+
+def _leg_bars(legs: list[str], t: Any, dt: float, swing: Any, title: str, path: Path, startup: Any = None) -> None:
+    """A gait diagram (paper Fig. 5): one row per leg, black where ``swing[:, leg]`` is set, white in stance, the
+    start-up (``startup``, cycles before RUNNING) shaded grey; cycles at times ``t`` [s], ``dt`` apart."""
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+
+    figure, axes = plt.subplots(figsize=(9, 0.45 * len(legs) + 1.4), dpi=110)
+    if startup is not None:
+        for a, b in _intervals(startup):
+            axes.axvspan(t[a], t[a] + (b - a + 1) * dt, color=STARTUP_COLOUR, lw=0, zorder=0)
     for row in range(len(legs)):
-        on = flags[:, row].astype(int)
-        starts = np.flatnonzero(np.diff(np.concatenate([[0], on])) == 1)
-        ends = np.flatnonzero(np.diff(np.concatenate([on, [0]])) == -1)
-        axes.broken_barh([(t[a], (b - a + 1) * dt) for a, b in zip(starts, ends, strict=True)],
-                         (row - 0.4, 0.8), facecolors="0.2")
+        axes.broken_barh([(t[a], (b - a + 1) * dt) for a, b in _intervals(swing[:, row])],
+                         (row - 0.4, 0.8), facecolors=SWING_COLOUR, zorder=2)
     axes.set_yticks(range(len(legs)), legs)
     axes.invert_yaxis()
-    axes.set_xlabel(xlabel)
+    axes.set_xlabel("time [s]")
     axes.set_title(title)
+    handles = [Patch(facecolor=SWING_COLOUR, label="swing"),
+               Patch(facecolor=STANCE_COLOUR, edgecolor="0.5", label="stance")]
+    if startup is not None and startup.any():
+        handles.append(Patch(facecolor=STARTUP_COLOUR, label="start-up"))
+    axes.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.25), ncols=len(handles), fontsize=7,
+                frameon=False)
     figure.tight_layout()
     figure.savefig(path)
     plt.close(figure)
@@ -173,8 +210,9 @@ def _save(figure: Any, path: Path) -> None:
     plt.close(figure)
 
 
-def _finish_time_plot(figure: Any, axes: Any, ylabel: str, path: Path) -> Path:
-    """Label a plot over time, add its grid and legend, save it atomically; returns ``path``."""
+def _finish_time_plot(figure: Any, axes: Any, ylabel: str, path: Path, title: str) -> Path:
+    """Title and label a plot over time, add its grid and legend, save it atomically; returns ``path``."""
+    axes.set_title(title, fontsize=10)
     axes.set_xlabel("time [s]")
     axes.set_ylabel(ylabel)
     axes.grid(True, lw=0.3)
@@ -186,6 +224,12 @@ def _finish_time_plot(figure: Any, axes: Any, ylabel: str, path: Path) -> Path:
 
 def _label(result: dict[str, Any]) -> str:
     return Path(str(result["run"])).name
+
+
+def _robots_and_gaits(results: list[dict[str, Any]]) -> str:
+    """``robot / gait`` of every run, each once, in order (for the titles of plots over several runs)."""
+    names = [" / ".join(str(x) for x in (r.get("robot"), r.get("gait")) if x) for r in results]
+    return ", ".join(dict.fromkeys(n for n in names if n))
 
 
 def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) -> list[Path]:
@@ -211,7 +255,8 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
         figure, axes = plt.subplots(figsize=(8, 3.5), dpi=110)
         for result, run in powered:
             axes.plot(run.t, run.power, lw=0.7, label=_label(result))
-        written.append(_finish_time_plot(figure, axes, "electrical power [W]", folder / "power.png"))
+        written.append(_finish_time_plot(figure, axes, "electrical power [W]", folder / "power.png",
+                                         f"{_robots_and_gaits([r for r, _ in powered])}: total servo power"))
 
     figure, axes = plt.subplots(1, 3, figsize=(10, 3.6), dpi=110)
     names = [_label(r) for r in results]
@@ -223,6 +268,7 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
             ax.set_xticks(range(1, len(names) + 1), names, rotation=30, ha="right", fontsize=7)
         ax.set_title(f"RMS {key.replace('_', ' ')} per gait cycle [{unit}]", fontsize=9)
         ax.grid(True, axis="y", lw=0.3)
+    figure.suptitle(f"{_robots_and_gaits(results)}: posture per gait cycle", fontsize=10)
     figure.tight_layout()
     _save(figure, folder / "cycles.png")
     written.append(folder / "cycles.png")
@@ -247,7 +293,8 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
         axes.set_aspect("equal", adjustable="datalim")
         axes.set_xlabel("x [m]")
         axes.set_ylabel("y [m]")
-        axes.set_title(f"{_label(result)}: ZMP and CoM over the support polygons", fontsize=9)
+        axes.set_title(f"{_label(result)} ({_robots_and_gaits([result])}): ZMP and CoM over the support polygons",
+                       fontsize=9)
         axes.legend(fontsize=7)
         figure.tight_layout()
         path = folder / f"zmp_{_label(result)}.png"
@@ -267,7 +314,8 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
                           label=f"{_label(result)}: ZMP")
         axes.axhline(0.0, color="0.3", lw=0.6)
         written.append(_finish_time_plot(figure, axes, "margin to the support polygon [m]",
-                                         folder / "stability.png"))
+                                         folder / "stability.png", f"{_robots_and_gaits([r for r, _ in margined])}: "
+                                         "static (CoM) and ZMP stability margins"))
 
     frequencies = {r["step_frequency_hz"] for r in results}
     if len(frequencies) > 1:
@@ -289,7 +337,8 @@ def plot_cot(results: list[dict[str, Any]], path: Path) -> Path:
     for r in results:
         group = r.get("group") or ""
         label = " / ".join(str(x) for x in (r.get("robot"), r.get("gait"), group) if x)
-        lines.setdefault(label, []).append((float(r["step_frequency_hz"]), r.get("cot"), r.get("mean_speed_mps")))
+        speed = r.get("displacement_speed_mps", r.get("mean_speed_mps"))
+        lines.setdefault(label, []).append((float(r["step_frequency_hz"]), r.get("cot"), speed))
     figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6.5), dpi=110, sharex=True)
     for label, points in sorted(lines.items()):
         points.sort()
@@ -300,7 +349,8 @@ def plot_cot(results: list[dict[str, Any]], path: Path) -> Path:
     top.set_ylabel("CoT (eq. 22)")
     top.grid(True, lw=0.3)
     top.legend(fontsize=6, ncol=2)
-    bottom.set_ylabel("mean speed [m/s]")
+    top.set_title(f"{_robots_and_gaits(results)}: cost of transport and speed vs step frequency", fontsize=10)
+    bottom.set_ylabel("displacement speed [m/s]")
     bottom.set_xlabel("step frequency [Hz]")
     bottom.grid(True, lw=0.3)
     figure.tight_layout()

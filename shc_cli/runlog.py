@@ -52,13 +52,19 @@ class RunDirectory:
     :meth:`flush`, so an interrupted run keeps every flushed row.
 
     Args:
-        directory: final run directory (must not exist yet).
+        directory: final run directory (must not exist yet, unless ``overwrite``).
+        overwrite: replace an existing run directory — only when the new run finishes (the old one stays whole until
+            then); a directory that is not a run directory is never replaced.
     """
 
-    def __init__(self, directory: Path) -> None:
+    def __init__(self, directory: Path, overwrite: bool = False) -> None:
         if directory.exists():
-            raise OutputError(f"{directory}: already exists (choose another --out or remove it)")
+            if not overwrite:
+                raise OutputError(f"{directory}: already exists (add --overwrite to replace it, or choose another "
+                                  "--out)")
+            check_replaceable(directory)
         self.directory = directory
+        self.overwrite = overwrite
         self.partial = directory.with_name(directory.name + PARTIAL_SUFFIX)
         try:
             self.partial.mkdir(parents=True, exist_ok=True)
@@ -111,8 +117,36 @@ class RunDirectory:
         """Write ``summary.json``, close the tables and give the directory its final name."""
         self.close()
         (self.partial / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
-        os.replace(self.partial, self.directory)
+        replace_directory(self.partial, self.directory, self.overwrite)
         return self.directory
+
+
+RUN_MARKERS = ("summary.json", ROBOT_FILE, "log.csv", "joints.csv", "results.csv", "results.partial.csv",
+               "sweep.toml")
+"""Files of which one marks a directory as shc output that ``--overwrite`` may replace."""
+
+
+def check_replaceable(directory: Path) -> None:
+    """Refuse (one line) to overwrite anything but an empty directory or one shc wrote (a run or a sweep)."""
+    if not directory.is_dir():
+        raise OutputError(f"{directory}: exists and is not a directory (choose another --out)")
+    if any(directory.iterdir()) and not any((directory / name).exists() for name in RUN_MARKERS):
+        raise OutputError(f"{directory}: not a run directory, so --overwrite leaves it alone (choose another --out)")
+
+
+def replace_directory(source: Path, target: Path, overwrite: bool) -> None:
+    """Rename ``source`` to ``target``; with ``overwrite`` an existing ``target`` is first moved aside and deleted
+    only once ``source`` is in its place."""
+    import shutil
+
+    if not (overwrite and target.exists()):
+        os.replace(source, target)
+        return
+    check_replaceable(target)
+    aside = target.with_name(f"{target.name}.replaced-{os.getpid()}")
+    os.replace(target, aside)
+    os.replace(source, target)
+    shutil.rmtree(aside, ignore_errors=True)
 
 
 def joint_columns(robot: Robot, suffix: str = "") -> list[str]:
@@ -189,12 +223,13 @@ class RunWriter(RunDirectory):
     """Streams controller outputs into a ``plan`` run directory (joints, tips, body tables).
 
     Args:
-        directory: final run directory (must not exist yet).
+        directory: final run directory (must not exist yet, unless ``overwrite``).
         robot: the robot (for column names).
+        overwrite: replace an existing run directory when this run finishes.
     """
 
-    def __init__(self, directory: Path, robot: Robot) -> None:
-        super().__init__(directory)
+    def __init__(self, directory: Path, robot: Robot, overwrite: bool = False) -> None:
+        super().__init__(directory, overwrite)
         self.robot = robot
         legs = list(robot.legs)
         joints = joint_columns(robot)

@@ -114,14 +114,47 @@ def read_run(path: Path) -> RunLog:
         summary = json.loads((path / "summary.json").read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise bad_run(path, "no summary.json", "give a directory written by shc plan or shc simulate") from None
-    except (OSError, json.JSONDecodeError) as error:
-        raise bad_run(path / "summary.json", f"unreadable: {error}", "re-run to regenerate it") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise bad_run(path / "summary.json", f"unreadable: {first_line(error)}", "re-run to regenerate it") from None
+    _check_summary(path / "summary.json", summary)
     robot = _robot(path, summary)
-    if (path / "log.csv").exists():
-        return _simulate_run(path, summary, robot)
-    if (path / "joints.csv").exists() and (path / "body.csv").exists():
-        return _plan_run(path, summary, robot)
+    try:
+        if (path / "log.csv").exists():
+            return _simulate_run(path, summary, robot)
+        if (path / "joints.csv").exists() and (path / "body.csv").exists():
+            return _plan_run(path, summary, robot)
+    except (KeyError, ValueError, IndexError, TypeError) as error:  # tables that do not fit together or the robot
+        raise bad_run(path, f"malformed run tables: {first_line(error)}", "re-run to regenerate it") from None
     raise bad_run(path, "neither log.csv (simulate) nor joints.csv and body.csv (plan)", "re-run to regenerate it")
+
+
+SUMMARY_NUMBERS = ("step_period_cycles", "step_frequency_hz", "duty_factor", "time_delta_s")
+"""Summary keys the readers of a run compute with: numbers when present."""
+SUMMARY_TEXTS = ("robot", "gait", "scenario")
+
+
+def first_line(error: BaseException) -> str:
+    text = str(error).strip().splitlines()
+    return f"{type(error).__name__}: {text[0].strip() if text else ''}".rstrip(": ")
+
+
+def _check_summary(file: Path, summary: Any) -> None:
+    """A summary is a JSON object whose keys that readers use have the right types; one line if not."""
+    import math
+
+    if not isinstance(summary, dict):
+        raise bad_run(file, f"a JSON {type(summary).__name__}, not an object", "re-run to regenerate it")
+    for key in SUMMARY_NUMBERS:
+        value = summary.get(key)
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)
+                                  or not math.isfinite(value) or value < 0):
+            raise bad_run(file, f"{key}: {value!r} is not a non-negative number", "re-run to regenerate it")
+    if isinstance(summary.get("step_period_cycles"), float):
+        raise bad_run(file, "step_period_cycles: not a whole number", "re-run to regenerate it")
+    for key in SUMMARY_TEXTS:
+        value = summary.get(key)
+        if value is not None and not isinstance(value, str):
+            raise bad_run(file, f"{key}: {value!r} is not text", "re-run to regenerate it")
 
 
 def is_bag(path: Path) -> bool:
@@ -152,6 +185,8 @@ def _table(file: Path) -> dict[str, np.ndarray]:
         lines = file.read_text(encoding="utf-8").splitlines()
     except OSError as error:
         raise OutputError(f"{file}: cannot read the table ({error})") from None
+    except UnicodeDecodeError as error:
+        raise bad_run(file, f"not UTF-8 text at byte {error.start}", "re-run to regenerate it") from None
     if len(lines) < 2:
         raise bad_run(file, "no rows", "re-run to regenerate it")
     header = lines[0].split(",")
@@ -222,14 +257,12 @@ def _plan_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
     body = _table(path / "body.csv")
     tips = _table(path / "tips.csv") if (path / "tips.csv").exists() else None
     rows = len(joints["t"])
+    for name, table in (("body.csv", body), ("tips.csv", tips)):
+        if table is not None and len(table["t"]) != rows:
+            raise bad_run(path / name, f"{len(table['t'])} rows where joints.csv has {rows}", "re-run to regenerate it")
     dt = float(robot.time_delta)
     desired = _stack(body, ["vel_x", "vel_y", "vel_wz"])
-    # The ideal body path: the commanded body-frame velocity integrated in the world (what a robot without
-    # slip would do); yaw first, so each cycle moves along the heading it had.
-    yaw = np.concatenate([[0.0], np.cumsum(desired[:-1, 2] * dt)])
-    step = np.stack([desired[:, 0] * np.cos(yaw) - desired[:, 1] * np.sin(yaw),
-                     desired[:, 0] * np.sin(yaw) + desired[:, 1] * np.cos(yaw)], axis=1) * dt
-    xy = np.concatenate([np.zeros((1, 2)), np.cumsum(step[:-1], axis=0)])
+    xy, yaw = ideal_path(desired, dt)
     z = body["pose_z"]  # the body pose in the walk plane: its z is the height above the ground plane
     position = np.column_stack([xy, z])
     rpy = np.column_stack([body["pose_roll"], body["pose_pitch"], yaw + body["pose_yaw"]])
@@ -250,3 +283,14 @@ def _plan_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
         joints=planned, contact=contact, height=z, commanded=planned, progress=progress, tips=tip_stages,
         states=np.column_stack([body["robot_state"], body["walk_state"]]),
     )
+
+
+def ideal_path(desired: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """The ideal body path of a plan: the commanded body-frame velocity ``desired`` ``(N, 3)`` [m/s, m/s, rad/s]
+    integrated in the world (what a robot without slip would do), yaw first so each cycle moves along the heading
+    it had. Returns ``xy`` ``(N, 2)`` [m] and ``yaw`` ``(N,)`` [rad] per logged row, the first row at the origin."""
+    yaw = np.concatenate([[0.0], np.cumsum(desired[:-1, 2] * dt)])
+    step = np.stack([desired[:, 0] * np.cos(yaw) - desired[:, 1] * np.sin(yaw),
+                     desired[:, 0] * np.sin(yaw) + desired[:, 1] * np.cos(yaw)], axis=1) * dt
+    xy = np.concatenate([np.zeros((1, 2)), np.cumsum(step[:-1], axis=0)])
+    return xy, yaw

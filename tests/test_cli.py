@@ -107,15 +107,17 @@ def test_missing_robot_is_one_line_with_the_bundled_names(capsys, monkeypatch) -
     code, out, err = run(["workspace", "bulet"], capsys, monkeypatch)
     assert code == 2 and out == ""
     assert err.strip().splitlines() == [
-        "error: bulet: no such robot file or bundled robot (did you mean 'bullet'? bundled: athena, bullet, "
-        "bullet_mammalian, octopod, openshc_default, quadruped)"]
+        "error: bulet: no such robot file or bundled robot (did you mean 'bullet'? bundled: athena, athena_paper, "
+        "bullet, bullet_insectoid_a, bullet_insectoid_b, bullet_mammalian, bullet_mammalian_a, bullet_mammalian_b, "
+        "octopod, openshc_default, quadruped)"]
 
 
 def test_workspace_json_has_the_documented_keys_and_nothing_else_on_stdout(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     code, out, err = run(["workspace", "bullet", "--json"], capsys, monkeypatch)
     assert code == 0 and err == ""
     document = json.loads(out)
-    for key in ("legs", "walkspace", "max_linear_speed", "max_angular_speed", "step_period_cycles"):
+    for key in ("legs", "walkspace", "max_linear_speed", "max_angular_speed", "step_period_cycles",
+                "walkspace_area_m2", "walkspace_stride_m"):
         assert key in document
     assert document["step_period_cycles"] == 184
     assert document["legs"]["AR"]["45"] == pytest.approx(0.363383191, abs=1e-6)

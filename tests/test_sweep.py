@@ -14,6 +14,7 @@ from .conftest import GOLDEN, ROOT
 from .test_cli import run
 
 GOLDEN_SWEEP = GOLDEN / "sweeps" / "ci_smoke.csv"
+GOLDEN_TABLE4 = GOLDEN / "sweeps" / "ci_table4.csv"
 TOLERANCES = {"cot": 0.05, "mean_speed_mps": 0.05, "mean_power_w": 0.05}
 """Relative tolerances of the golden CI sweep: PyBullet is deterministic on one machine; these leave room for other
 CPUs and library builds while catching real changes of the controller, the physics model or the analysis."""
@@ -60,6 +61,22 @@ def test_shipped_sweeps_load_and_bullet_cot_is_the_papers_grid() -> None:
     assert sweep.grid["walker.step_frequency"] == [0.4, 0.6, 0.8, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0, 2.2]  # F_s
     assert len(sweep.points) == 2 * 2 * 4 * 10
     assert len(load_sweep(ROOT / "sweeps" / "ci_smoke.toml").points) <= 8
+
+
+def test_the_papers_table4_and_cot_sweeps_are_its_rows_and_figures() -> None:
+    """Table IV: the paper's five rows × SA/WA/SG at 100 % stride; CoT: Fig. 14 (mammalian A, four strides), Fig. 15
+    (insectoid A tripod and bipod at 100 %), Fig. 16 (arrangement B, insectoid also at 60.27 %)."""
+    table4 = load_sweep(ROOT / "sweeps" / "openshc_table4.toml")
+    rows = {(p.values["robot"], p.values["gait"]) for p in table4.points}
+    assert rows == {("bullet_mammalian_a", "tripod"), ("bullet_mammalian_b", "tripod"),
+                    ("bullet_insectoid_a", "tripod"), ("bullet_insectoid_a", "bipod"), ("bullet_insectoid_b", "tripod")}
+    assert len(table4.points) == 15 and table4.fixed["stride_percent"] == 100
+    short = load_sweep(ROOT / "sweeps" / "ci_table4.toml")
+    assert [p.values for p in short.points] == [p.values for p in table4.points]
+    cot = load_sweep(ROOT / "sweeps" / "openshc_cot.toml")
+    cells = {(p.values["robot"], p.values["gait"], p.values["stride_percent"]) for p in cot.points}
+    assert ("bullet_mammalian_a", "tripod", 60) in cells and ("bullet_insectoid_a", "bipod", 100) in cells
+    assert ("bullet_insectoid_b", "tripod", 60.27) in cells and ("bullet_mammalian_b", "tripod", 100) in cells
 
 
 def test_a_variant_changes_only_the_swept_default(tmp_path: Path) -> None:
@@ -150,6 +167,8 @@ def test_ci_smoke_sweep_matches_its_golden_results(tmp_path: Path, capsys, monke
                 problems.append(f"{slug}: {key} {a:.6g} vs golden {b:.6g} ({(a - b) / b:+.1%}, tolerance "
                                 f"±{tolerance:.0%})")
     assert not problems, "ci_smoke moved beyond the golden tolerances:\n" + "\n".join(problems)
+    # every run walks long enough to hold its speed for a whole gait cycle: no empty steady-speed column
+    assert all(float(r["steady_speed_mps"]) > 0.0 for r in now.values())
 
     # --resume with every run finished re-reads them: same table, no simulation
     logs = sorted((out / "runs").glob("*/log.csv"))
@@ -160,6 +179,31 @@ def test_ci_smoke_sweep_matches_its_golden_results(tmp_path: Path, capsys, monke
     assert code == 0, err
     assert [p.stat().st_mtime_ns for p in logs] == stamps
     assert _rows(out / "results.csv") == _rows(tmp_path / "first.csv")
+
+
+def test_ci_table4_sweep_matches_its_golden_results(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The paper's Table IV cells in short runs (sweeps/ci_table4.toml): the reviewed power of every cell within ±5 %
+    (golden/sweeps/ci_table4.csv), no falls, and the paper's ordering walk air > stance air in every row."""
+    out = tmp_path / "ci_table4"
+    code, _, err = run(["sweep", str(ROOT / "sweeps" / "ci_table4.toml"), "--out", str(out), "--workers", "2"],
+                       capsys, monkeypatch)
+    assert code == 0, err
+    golden = {r["slug"]: r for r in _rows(GOLDEN_TABLE4)}
+    now = {r["slug"]: r for r in _rows(out / "results.csv")}
+    assert set(now) == set(golden) and len(now) == 15
+    problems = []
+    for slug, want in golden.items():
+        got = now[slug]
+        if (got["status"], got["fell"]) != ("ok", "False"):
+            problems.append(f"{slug}: status/fell {got['status']}/{got['fell']}")
+        a, b = float(got["mean_power_w"]), float(want["mean_power_w"])
+        if abs(a - b) > 0.05 * b:
+            problems.append(f"{slug}: mean_power_w {a:.6g} vs golden {b:.6g} ({(a - b) / b:+.1%}, tolerance ±5%)")
+    assert not problems, "ci_table4 moved beyond the golden tolerances:\n" + "\n".join(problems)
+    power = {(r["robot"], r["gait"], r["scenario"]): float(r["mean_power_w"]) for r in now.values()}
+    for (robot, gait, scenario), watts in power.items():
+        if scenario == "WA":
+            assert watts > power[(robot, gait, "SA")] + 5.0, (robot, gait)
 
 
 def test_an_existing_output_needs_resume(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]

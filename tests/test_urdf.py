@@ -101,8 +101,10 @@ def test_masses(name: str, tmp_path: Path) -> None:
         names = urdf.leg_names(robot)[leg_id]
         assert masses[names.base] == 0.0
         assert masses[names.foot] == urdf.FOOT_MASS
-        for joint, link in zip(leg.joints.values(), names.links, strict=True):
-            assert masses[link] == pytest.approx(urdf.link_mass(joint))
+        for joint, link in zip(leg.joints.values(), names.links, strict=True):  # a rotor link takes its mass
+            rotor = masses.get(link.removesuffix("_link") + "_rotor", 0.0)
+            assert rotor == (urdf.ROTOR_MASS if robot.servo.armature > 0.0 else 0.0)
+            assert masses[link] + rotor == pytest.approx(urdf.link_mass(joint))
 
 
 def test_bullet_mass_is_the_openshc_urdf_mass() -> None:

@@ -34,6 +34,27 @@ class Window:
     steady: bool = False
 
 
+def body_speeds(xy: np.ndarray, span_s: float) -> tuple[float, float]:
+    """The two mean speeds of a horizontal body path ``xy`` [m] ``(N, 2)`` (its first row where the window began)
+    over ``span_s`` [s]: the **path speed** (length of the path travelled / time — what a speedometer shows) and the
+    **displacement speed** (straight-line distance from start to end / time — what a turning path shortens; the
+    speed in paper eq. 22's cost of transport). Both 0 for an empty span."""
+    if span_s <= 0.0 or len(xy) < 2:
+        return 0.0, 0.0
+    path = float(np.linalg.norm(np.diff(xy, axis=0), axis=1).sum())
+    displacement = float(np.linalg.norm(xy[-1] - xy[0]))
+    return path / span_s, displacement / span_s
+
+
+def window_speeds(xy: np.ndarray, rows: np.ndarray, dt: float) -> tuple[float, float]:
+    """:func:`body_speeds` over the window ``rows`` (ascending row indices) of a logged path ``xy`` ``(N, 2)`` [m]
+    whose rows are positions after each cycle: the path starts where the row before the window ended."""
+    if len(rows) < 2:
+        return 0.0, 0.0
+    path = np.vstack([xy[max(rows[0] - 1, 0)], xy[rows[0]:rows[-1] + 1]])
+    return body_speeds(path, (rows[-1] - rows[0] + 1) * dt)
+
+
 def window_mask(run: RunLog, window: Window) -> np.ndarray:
     """Boolean mask of the analysed cycles."""
     mask = run.running.copy()
@@ -43,10 +64,10 @@ def window_mask(run: RunLog, window: Window) -> np.ndarray:
     skip = round(window.skip_s / run.dt)
     mask[first:first + skip] = False
     if window.steady:
-        period = int(run.summary.get("step_period_cycles") or 1)
+        period = max(int(run.summary.get("step_period_cycles") or 1), 1)
         same = np.zeros_like(mask)
-        change = np.abs(run.desired[period:] - run.desired[:-period]).max(axis=1) < 1e-9
-        same[period:] = change
+        if period < len(mask):
+            same[period:] = np.abs(run.desired[period:] - run.desired[:-period]).max(axis=1) < 1e-9
         mask &= same & (run.walk_state == "MOVING")
     return mask
 
@@ -205,22 +226,22 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
         "step_frequency_hz": summary.get("step_frequency_hz", run.robot.walker.step_frequency.default),
         "window_s": len(rows) * dt, "window_start_s": float(run.t[rows[0]]) if len(rows) else None,
     }
-    keys = ("cot", "mean_power_w", "mean_speed_mps", "steady_speed_mps", "commanded_speed_mps", "speed_ratio",
-            "distance_m", "duty_factor", "foot_slip_m", "height_median_m", "height_iqr_m", "pitch_rate_median_rps",
-            "pitch_rate_iqr_rps", "roll_rate_median_rps", "roll_rate_iqr_rps", "stability_margin_median_m",
-            "stability_margin_min_m", "zmp_margin_median_m", "zmp_margin_iqr_m", "zmp_centre_distance_median_m",
-            "zmp_centre_distance_iqr_m", "gait_cycles")
+    keys = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps", "steady_speed_mps",
+            "commanded_speed_mps", "speed_ratio", "distance_m", "duty_factor", "foot_slip_m", "height_median_m",
+            "height_iqr_m", "pitch_rate_median_rps", "pitch_rate_iqr_rps", "roll_rate_median_rps",
+            "roll_rate_iqr_rps", "stability_margin_median_m", "stability_margin_min_m", "zmp_margin_median_m",
+            "zmp_margin_iqr_m", "zmp_centre_distance_median_m", "zmp_centre_distance_iqr_m", "gait_cycles")
     out.update(dict.fromkeys(keys))
     if len(rows) < 2:
         return out
     mass = run.robot.total_mass()
     span = (rows[-1] - rows[0] + 1) * dt
-    displacement = run.position[rows[-1], :2] - _before(run, rows[0])
-    distance = float(np.linalg.norm(displacement))
-    speed = float(distance / span)
+    path_speed, speed = window_speeds(run.position[:, :2], rows, dt)
+    distance = speed * span
     commanded = float(np.linalg.norm(run.desired[rows, :2], axis=1).mean())
-    out.update(distance_m=distance, mean_speed_mps=float(speed), commanded_speed_mps=commanded,
-               speed_ratio=float(speed / commanded) if commanded > 1e-9 else None)
+    # mean_speed_mps: the displacement speed under its first name (sweep tables and older readers use it)
+    out.update(distance_m=distance, displacement_speed_mps=speed, path_speed_mps=path_speed, mean_speed_mps=speed,
+               commanded_speed_mps=commanded, speed_ratio=float(speed / commanded) if commanded > 1e-9 else None)
     steady = rows if window.steady else np.flatnonzero(window_mask(run, Window(window.skip_s, steady=True)))
     if len(steady) >= 2:
         moved = np.linalg.norm(run.position[steady[-1], :2] - _before(run, steady[0]))

@@ -53,6 +53,16 @@ class WorkspaceReport:
         plane = self.planes[leg]
         return plane[0] + plane[180]
 
+    def walkspace_area(self) -> float:
+        """Area of the walkspace polygon (the common, symmetric, non-overlapping region every foot may use about its
+        stance position, OpenSHC's ``generateWalkspace``) [m²]: our reading of the OpenSHC paper's Table II "area"."""
+        return polygon_area(self.walkspace)
+
+    def walkspace_stride(self) -> float:
+        """Walkspace extent along x, ``W(0°) + W(180°)`` [m]: the 100 % stride before OpenSHC's overshoot scaling,
+        our reading of the paper's Table II "stride length"."""
+        return self.walkspace[0] + self.walkspace[180]
+
     def to_json(self) -> dict[str, Any]:
         """The ``--json`` document: radii in m, speeds in m/s and rad/s, keyed by bearing in degrees."""
         by_bearing = self.limits.bearings
@@ -64,6 +74,8 @@ class WorkspaceReport:
             "leg_area_m2": {leg: self.area(leg) for leg in self.planes},
             "leg_forward_stride_m": {leg: self.forward_stride(leg) for leg in self.planes},
             "walkspace": {str(b): r for b, r in self.walkspace.items()},
+            "walkspace_area_m2": self.walkspace_area(),
+            "walkspace_stride_m": self.walkspace_stride(),
             "max_linear_speed": {str(b): lim.linear_speed for b, lim in by_bearing.items()},
             "max_linear_acceleration": {str(b): lim.linear_acceleration for b, lim in by_bearing.items()},
             "max_angular_speed": {str(b): lim.angular_speed for b, lim in by_bearing.items()},

@@ -16,9 +16,11 @@ __all__ = ["parse_velocity", "plan_to", "pose_sets_for", "run_plan", "walk_cycle
 
 
 def plan_to(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
-            commands: Path | None, out: Path | None, plots: bool) -> tuple[Path, dict[str, Any]]:
+            commands: Path | None, out: Path | None, plots: bool, overwrite: bool = False
+            ) -> tuple[Path, dict[str, Any]]:
     """Load, run through the one loop on the kinematic backend, log (silently); returns the run directory and its
-    summary (``complete`` false when a signal stopped it)."""
+    summary (``complete`` false when a signal stopped it; ``overwrite``: replace an existing run directory when the
+    run finishes)."""
     from shc_cli.backends.kinematic import KinematicBackend
     from shc_cli.control.controller import Controller
     from shc_cli.hardware.inputs import TimelineInput
@@ -32,7 +34,7 @@ def plan_to(robot_name: str, gait_name: str | None, velocity: str, duration: flo
     robot = inputs.robot
     directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-plan"
     controller = Controller(robot, inputs.gait, pose_sets=inputs.pose_sets)
-    writer = RunWriter(directory, robot)
+    writer = RunWriter(directory, robot, overwrite)
     writer.write_robot(robot)
     record = PlanRecord(controller)
     start_up = StartUp(round((robot.start_up.time_to_start + START_UP_MARGIN_S) / robot.time_delta))
@@ -43,7 +45,7 @@ def plan_to(robot_name: str, gait_name: str | None, velocity: str, duration: flo
     def plot(folder: Path) -> None:
         from shc_cli.plots import plot_plan
 
-        plot_plan(robot, record.outputs, folder)
+        plot_plan(robot, record.outputs, folder, gait=inputs.gait.name)
 
     path, summary, _ = execute(loop, writer, lambda _: plan_summary(robot, controller, record,
                                                                      time.perf_counter() - started),
@@ -52,16 +54,20 @@ def plan_to(robot_name: str, gait_name: str | None, velocity: str, duration: flo
 
 
 def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
-             commands: Path | None, out: Path | None, plots: bool, after: Callable[[Path], None] | None = None) -> Path:
+             commands: Path | None, out: Path | None, plots: bool, after: Callable[[Path], None] | None = None,
+             overwrite: bool = False) -> Path:
     """Load, run, log, print one line, then ``after(run directory)``; returns the run directory (exit 130/143 after
     SIGINT/SIGTERM)."""
+    from shc_cli.analysis.progress import progress_note
     from shc_cli.commands.outcome import exit_if_interrupted, interrupted_note
 
-    path, summary = plan_to(robot_name, gait_name, velocity, duration, commands, out, plots)
+    path, summary = plan_to(robot_name, gait_name, velocity, duration, commands, out, plots, overwrite)
     typer.echo(f"{summary['robot']} / {summary['gait']}: {summary['cycles']} cycles "
-               f"({summary['duration_s']:.2f} s), mean speed {summary['achieved_mean_speed_mps']:.4f} m/s "
-               f"(eq. 16: {summary['eq16_speed_mps']:.4f}), IK deviations {summary['ik_deviation_count']}, "
-               f"clamped {summary['ik_clamp_count']}{interrupted_note(summary)} → {path}")
+               f"({summary['duration_s']:.2f} s), path speed {summary['path_speed_mps']:.4f} m/s, displacement "
+               f"speed {summary['displacement_speed_mps']:.4f} m/s, stance feet "
+               f"{summary['achieved_mean_speed_mps']:.4f} m/s (eq. 16: {summary['eq16_speed_mps']:.4f}), "
+               f"IK deviations {summary['ik_deviation_count']}, "
+               f"clamped {summary['ik_clamp_count']}{progress_note(summary)}{interrupted_note(summary)} → {path}")
     if after is not None:
         after(path)
     exit_if_interrupted(summary)

@@ -49,9 +49,9 @@ INPUTS = "timeline, commands:FILE, stdin, keyboard, gamepad or gamepad:DEVICE"
 def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int | None, velocity: str,
            duration: float | None, commands: Path | None, out: Path | None, dry_run: bool, on_fault: str,
            on_stop: str, input_mode: str = "timeline", watchdog: float = 0.5, stop_state: str = "packed",
-           profile_velocity: bool = False) -> Path:
+           profile_velocity: bool = False, overwrite: bool = False) -> Path:
     """Start up, run the input on the servos, stop and shut down safely; returns the run directory (exit 3 after a
-    servo fault)."""
+    servo fault; ``overwrite``: replace an existing one when the run finishes)."""
     from shc_cli.backends.dynamixel import UNMEASURED, DynamixelBackend
     from shc_cli.commands.outcome import EXIT_FAULT
     from shc_cli.control.controller import Controller
@@ -96,7 +96,7 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
                        "baud rate, lower Return Delay Time (hardware.return_delay_us) or split the servos over "
                        "more buses", err=True)
         directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-run-hw"
-        run = RunDirectory(directory)
+        run = RunDirectory(directory, overwrite)
         backend = DynamixelBackend(robot, bus, dry_run, run, on_fault, on_stop)
         controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
                                 direct_shutdown=True)

@@ -105,6 +105,7 @@ class SimulateOptions:
         stand: start up on a stand (True), on the ground (False), or as ``start_up.simulation`` says (None).
         feedback: per-run switches of the sensor-driven features.
         fail_on_fall: the command exits 4 when the robot fell.
+        overwrite: replace an existing run directory at ``out`` when the run finishes.
     """
 
     robot: str = "bullet"
@@ -126,20 +127,23 @@ class SimulateOptions:
     stand: bool | None = None
     feedback: Feedback = field(default_factory=lambda: Feedback())
     fail_on_fall: bool = False
+    overwrite: bool = False
 
 
 def run_simulate(options: SimulateOptions, after: Callable[[Path], None] | None = None) -> Path:
     """Load, simulate, log, print one line, then ``after(run directory)``; returns the run directory. Exits 130/143
     when a signal stopped the run, 4 when it fell and ``fail_on_fall`` is set."""
+    from shc_cli.analysis.progress import progress_note
     from shc_cli.commands.outcome import EXIT_FELL, exit_if_interrupted, interrupted_note
 
     path, summary = simulate_to(options)
     typer.echo(f"{summary['robot']} / {summary['gait']} / {summary['scenario']} on {options.terrain}: "
                f"{summary['sim_time_s']:.1f} s simulated in {summary['wall_time_s']:.1f} s, distance "
-               f"{summary['distance_m']:.3f} m, mean speed {summary['mean_speed_mps']:.4f} m/s, mean power "
+               f"{summary['distance_m']:.3f} m, path speed {summary['path_speed_mps']:.4f} m/s, displacement speed "
+               f"{summary['displacement_speed_mps']:.4f} m/s, mean power "
                f"{summary['mean_power_w']:.1f} W, "
                f"CoT {summary['cot'] if summary['cot'] is None else round(summary['cot'], 3)}"
-               f"{', FELL' if summary['fell'] else ''}{interrupted_note(summary)} → {path}")
+               f"{', FELL' if summary['fell'] else progress_note(summary)}{interrupted_note(summary)} → {path}")
     if after is not None:
         after(path)
     exit_if_interrupted(summary)
@@ -193,7 +197,7 @@ def simulate_to(options: SimulateOptions | None = None, **changes: Any) -> tuple
         raise SpecError([Issue(None, None, "--start", f"'{o.start}' is not a start pose", "use unpacked or packed")])
     directory = o.out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-simulate"
     stand = robot.start_up.simulation == "stand" if o.stand is None else o.stand
-    with RunDirectory(directory) as run:  # refuses an existing --out before the physics opens
+    with RunDirectory(directory, o.overwrite) as run:  # refuses an existing --out before the physics opens
         world = open_world(robot, WorldOptions(terrain, substeps, airborne, o.friction, o.restitution, o.seed,
                                                o.imu_noise, o.start, o.gui, stand))
         with SimulatedBackend(robot, world) as backend:
@@ -221,7 +225,7 @@ def simulate_to(options: SimulateOptions | None = None, **changes: Any) -> tuple
             def plot(folder: Path) -> None:
                 from shc_cli.plots import plot_simulation
 
-                plot_simulation(robot, record.series, folder)
+                plot_simulation(robot, record.series, folder, gait=controller.gait.name)
 
             path, summary, _ = execute(loop, run, summarise, plot if o.plots else None)
     return path, summary

@@ -30,9 +30,10 @@ import typer
 from shc_cli.errors import Issue, OutputError, ShcError, SpecError
 from shc_cli.spec.sweep import Point, Sweep, load_sweep, variant_text
 
-METRICS = ("cot", "mean_power_w", "mean_speed_mps", "steady_speed_mps", "commanded_speed_mps", "speed_ratio",
-           "distance_m", "duty_factor", "foot_slip_m", "stability_margin_median_m", "zmp_margin_median_m",
-           "height_median_m", "height_iqr_m", "roll_rate_median_rps", "pitch_rate_median_rps", "step_frequency_hz")
+METRICS = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps", "steady_speed_mps",
+           "commanded_speed_mps", "speed_ratio", "distance_m", "duty_factor", "foot_slip_m",
+           "stability_margin_median_m", "zmp_margin_median_m", "height_median_m", "height_iqr_m",
+           "roll_rate_median_rps", "pitch_rate_median_rps", "step_frequency_hz")
 """Analysis keys copied into the results table."""
 RUN_KEYS = ("fell", "sim_time_s", "wall_time_s", "physics_time_s")
 """Summary keys copied into the results table (the timings differ from run to run; compare the others)."""
@@ -164,6 +165,9 @@ def check_points(sweep: Sweep) -> None:
             issue = error.issues[0]
             raise SpecError([Issue(sweep.path, document_lines.get("gait"), "gait",
                                    f"{key[0]} / {key[1] or 'own gait'}: {issue.problem}", issue.fix)]) from None
+        except ShcError as error:  # a gait that does not exist
+            raise SpecError([Issue(sweep.path, document_lines.get("gait"), "gait", str(error).splitlines()[0],
+                                   "name a bundled gait or a gait file")]) from None
 
 
 def _key_lines(sweep: Sweep) -> dict[str, int | None]:
@@ -244,8 +248,9 @@ def dask_results(points: list[Point], out: Path, workers: int, scheduler: str | 
 
 
 def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | None, out: Path | None,
-              resume: bool) -> Path:
-    """Check the sweep, run every point, write the results table and plots; returns the output directory."""
+              resume: bool, overwrite: bool = False) -> Path:
+    """Check the sweep, run every point, write the results table and plots; returns the output directory
+    (``overwrite``: delete an existing output directory first; ``resume``: continue it)."""
     sweep = load_sweep(file)
     if executor not in ("local", "dask"):
         raise SpecError([Issue(None, None, "--executor", f"'{executor}' is not an executor", "use local or dask")])
@@ -254,8 +259,16 @@ def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | N
                                "add --executor dask")])
     check_points(sweep)
     out = out or Path("runs") / sweep.name
+    if resume and overwrite:
+        raise SpecError([Issue(None, None, "--overwrite", "cannot be combined with --resume", "choose one")])
     if out.exists() and any(out.iterdir()) and not resume:
-        raise OutputError(f"{out}: already exists (add --resume to continue it, or choose another --out)")
+        if not overwrite:
+            raise OutputError(f"{out}: already exists (add --resume to continue it, --overwrite to run it again, or "
+                              "choose another --out)")
+        from shc_cli.runlog import check_replaceable
+
+        check_replaceable(out)
+        shutil.rmtree(out)
     (out / "runs").mkdir(parents=True, exist_ok=True)
     shutil.copyfile(sweep.path, out / "sweep.toml") if sweep.path.resolve() != (out / "sweep.toml").resolve() \
         else None
@@ -297,6 +310,9 @@ def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | N
     typer.echo(f"{sweep.name}: {len(rows)} runs in {time.perf_counter() - started:.1f} s with {count} "
                f"{executor} worker{'s' if count != 1 else ''}: {len(done)} ok ({fell} fell), {failed} failed "
                f"→ {out / 'results.csv'}")
+    if done and all(r.get("steady_speed_mps") in (None, "") for r in done):
+        typer.echo("note: steady_speed_mps is empty: no run held its velocity for a whole gait cycle after the "
+                   "acceleration ramp (make `duration` longer)")
     return out
 
 

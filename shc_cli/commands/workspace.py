@@ -38,7 +38,7 @@ def run_workspace(
     if json_output:
         typer.echo(json.dumps(report.to_json(), indent=1))
     else:
-        typer.echo(render_table(report))
+        typer.echo(render_table(report, terminal_width()))
         if out is not None:
             typer.echo(f"wrote {out}/workspace.csv, {out}/limits.csv, {out}/workspace.png")
 
@@ -47,25 +47,55 @@ def _option_issue(option: str, problem: str, fix: str) -> Issue:
     return Issue(None, None, option, problem, fix)
 
 
-def render_table(report: WorkspaceReport) -> str:
-    """The terminal table: legs (area, stride, radii), walkspace and limits per bearing."""
+def terminal_width() -> int | None:
+    """Columns of the terminal (or ``$COLUMNS``); ``None`` when printing to a pipe or file (no wrapping)."""
+    import shutil
+
+    columns = shutil.get_terminal_size((0, 0)).columns
+    return columns if columns > 0 else None
+
+
+LABEL_WIDTH = 49
+"""Characters before the first per-bearing column of the workspace table."""
+CELL_WIDTH = 9
+
+
+def render_table(report: WorkspaceReport, width: int | None = None) -> str:
+    """The terminal table: legs (area, stride, radii), walkspace and limits per bearing. Wider than ``width``
+    characters (many bearings), the bearings are split into blocks that fit, one under the other."""
+    import math
+    import textwrap
+
     bearings = [b for b in report.walkspace if b != 360]
+    header = (f"{report.robot.name} / {report.gait.name}: step frequency {report.step_frequency:g} Hz, "
+              f"cycle {report.cycle.period} cycles ({report.cycle.period * report.robot.time_delta:.2f} s, "
+              f"{report.cycle.frequency:.4f} Hz), swing {report.cycle.swing_period}, stance "
+              f"{report.cycle.stance_period}, duty factor {report.cycle.duty_factor:.3f}")
+    per_block = len(bearings)
+    if width is not None and LABEL_WIDTH + CELL_WIDTH * len(bearings) > width:
+        fit = max(1, (width - LABEL_WIDTH) // CELL_WIDTH)
+        blocks = math.ceil(len(bearings) / fit)
+        per_block = math.ceil(len(bearings) / blocks)
+    lines = textwrap.wrap(header, width) if width is not None else [header]
+    for first in range(0, len(bearings), per_block):
+        lines += ["", *_block(report, bearings[first:first + per_block])]
+    lines.append(f"walkspace area {report.walkspace_area():.4f} m², stride {report.walkspace_stride():.4f} m "
+                 "(the OpenSHC paper's Table II figure)")
+    lines.append(f"time to max stride {report.limits.time_to_max_stride:.3f} s, "
+                 f"stance radius {report.limits.stance_radius:.4f} m")
+    return "\n".join(lines)
+
+
+def _block(report: WorkspaceReport, bearings: list[int]) -> list[str]:
+    """The table's rows for some bearings."""
     head = "".join(f"{b:>8}°" for b in bearings)
-    lines = [
-        f"{report.robot.name} / {report.gait.name}: step frequency {report.step_frequency:g} Hz, "
-        f"cycle {report.cycle.period} cycles ({report.cycle.period * report.robot.time_delta:.2f} s, "
-        f"{report.cycle.frequency:.4f} Hz), swing {report.cycle.swing_period}, stance {report.cycle.stance_period}, "
-        f"duty factor {report.cycle.duty_factor:.3f}",
-        "",
-        f"{'leg':<6}{'area m²':>9}{'stride m':>10}   radius [m] at bearing{head}",
-    ]
+    lines = [f"{'leg':<6}{'area m²':>9}{'stride m':>10}   radius [m] at bearing{head}"]
     pad = " " * 24
     for leg, plane in report.planes.items():
         radii = "".join(f"{plane[b]:>9.4f}" for b in bearings)
         lines.append(f"{leg:<6}{report.area(leg):>9.4f}{report.forward_stride(leg):>10.4f}{pad}{radii}")
     walk = "".join(f"{report.walkspace[b]:>9.4f}" for b in bearings)
     lines.append(f"{'walkspace':<25}{pad}{walk}")
-    lines.append("")
     rows = [
         ("max linear speed m/s", "linear_speed"),
         ("max linear acc m/s²", "linear_acceleration"),
@@ -75,9 +105,7 @@ def render_table(report: WorkspaceReport) -> str:
     for label, field in rows:
         values = "".join(f"{getattr(report.limits.bearings[b], field):>9.4f}" for b in bearings)
         lines.append(f"{label:<49}{values}")
-    lines.append(f"time to max stride {report.limits.time_to_max_stride:.3f} s, "
-                 f"stance radius {report.limits.stance_radius:.4f} m")
-    return "\n".join(lines)
+    return lines
 
 
 def write_outputs(report: WorkspaceReport, out: Path) -> None:

@@ -702,7 +702,21 @@ def import_urdf(file: Path, out: Path | None = None, name: str | None = None, le
                 tips: list[str] | None = None, clearance: float | None = None, reach: float | None = None,
                 snap: float = 0.0, args: dict[str, str] | None = None) -> Result:
     """Write ``OUT/robots/NAME.toml`` and ``OUT/joint_map.csv`` from a URDF or xacro file; check the robot
-    (``shc validate``'s checks) and its forward kinematics against the URDF before returning."""
+    (``shc validate``'s checks) and its forward kinematics against the URDF before returning.
+
+    A URDF that yourdfpy reads but whose numbers or structure the import cannot use (a link outside the tree, a
+    zero-length chain, values the robot model refuses) is one line naming the file (found by
+    ``tests/test_fuzz_inputs.py``)."""
+    try:
+        return _import_urdf(file, out, name, legs, tips, clearance, reach, snap, args)
+    except (ValueError, LookupError, ArithmeticError) as error:  # pydantic's ValidationError is a ValueError
+        lines = str(error).strip().splitlines()
+        raise _fail(file, f"cannot import it: {type(error).__name__}: {lines[0] if lines else ''}",
+                    "check the URDF's links, joints, limits and inertias (check_urdf)") from None
+
+
+def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips: list[str] | None,
+                 clearance: float | None, reach: float | None, snap: float, args: dict[str, str] | None) -> Result:
     from shc_cli.outputs import write_text
     from shc_cli.spec.checks import check_robot
     from shc_cli.spec.loading import load_robot

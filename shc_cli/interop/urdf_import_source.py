@@ -198,7 +198,7 @@ def parse_urdf(path: Path, text: str) -> Any:
                                    build_collision_scene_graph=False, load_collision_meshes=False)
     except etree.XMLSyntaxError as error:
         raise _fail(path, f"malformed XML: {error}", "fix the XML (a URDF is one <robot> element)") from None
-    except (ValueError, KeyError, AttributeError, TypeError) as error:
+    except (ValueError, LookupError, AttributeError, TypeError, ArithmeticError) as error:
         raise _fail(path, f"not a URDF yourdfpy can read: {error}", "check it with check_urdf or a URDF viewer")\
             from None
     return model

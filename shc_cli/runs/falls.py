@@ -44,7 +44,8 @@ class PhysicsRecord:
 
     def __init__(self, robot: Robot, backend: Any, airborne: bool) -> None:
         self.robot, self.backend, self.airborne = robot, backend, airborne
-        self.series: dict[str, list[Any]] = {"t": [], "position": [], "power": [], "contact": [], "running": []}
+        self.series: dict[str, list[Any]] = {"t": [], "position": [], "power": [], "contact": [], "running": [],
+                                             "desired": []}
         self.window_start: np.ndarray | None = None
         self.max_tilt = 0.0
         self.fell = False
@@ -60,6 +61,7 @@ class PhysicsRecord:
         series["power"].append(self.backend.total_power)
         series["contact"].append(reading.foot_contact)
         series["running"].append(running)
+        series["desired"].append(out.velocity)
         if running:
             if self.window_start is None:  # where the body was when the first RUNNING cycle began
                 self.window_start = series["position"][-2] if len(series["position"]) > 1 else reading.position
@@ -84,6 +86,13 @@ class PhysicsRecord:
         start = self.window_start if self.window_start is not None else end
         distance = float(np.linalg.norm((end - start)[:2]))
         speed = distance / window if window > 0 else 0.0
+        from shc_cli.analysis.metrics import window_speeds
+        from shc_cli.analysis.progress import cycle_path_length, progress_fields
+
+        xy = np.array(series["position"])[:, :2] if series["position"] else np.zeros((0, 2))
+        path_speed, _ = window_speeds(xy, np.flatnonzero(running), dt)
+        desired = np.array(series["desired"]).reshape(-1, 3)[running[:len(series["desired"])], :2]
+        commanded = float(np.linalg.norm(desired, axis=1).mean()) if len(desired) else 0.0
         mean_power = float(power[running].mean()) if running.any() else 0.0
         mass = robot.total_mass()
         cot = cost_of_transport(mean_power, mass, speed) if scenario == "WG" else None
@@ -100,7 +109,12 @@ class PhysicsRecord:
             "physics_rate_hz": world.substeps / dt,
             "distance_m": distance,
             "forward_distance_m": float((end - start)[0]),
-            "mean_speed_mps": speed,
+            "mean_speed_mps": speed,  # = displacement_speed_mps, its first name
+            "displacement_speed_mps": speed,
+            "path_speed_mps": path_speed,
+            "commanded_speed_mps": commanded,
+            **progress_fields(cycle_path_length(_window_path(xy, running), controller.cycle.period), commanded,
+                              window),
             "mean_power_w": mean_power,
             "mass_kg": mass,
             "step_frequency_hz": controller.parameters["step_frequency"],
@@ -111,3 +125,11 @@ class PhysicsRecord:
             "max_tilt_rad": self.max_tilt,
             "fell": self.fell,
         }
+
+
+def _window_path(xy: np.ndarray, running: np.ndarray) -> np.ndarray:
+    """The body path over the RUNNING rows, starting where the row before the first of them ended."""
+    rows = np.flatnonzero(running)
+    if len(rows) == 0:
+        return np.zeros((0, 2))
+    return np.vstack([xy[max(rows[0] - 1, 0)], xy[rows[0]:rows[-1] + 1]])

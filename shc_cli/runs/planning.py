@@ -68,6 +68,15 @@ def plan_summary(robot: Any, controller: Controller, record: PlanRecord, seconds
             feet = (now.walker_tips[stance, :2] - before.walker_tips[stance, :2]).mean(axis=0)
             achieved.append(float(np.linalg.norm(feet)) / dt)
     distance = float(np.linalg.norm(walker.odometry_position)) if walker else 0.0
+    from shc_cli.analysis.metrics import window_speeds
+    from shc_cli.analysis.progress import cycle_path_length, progress_fields
+    from shc_cli.runread import ideal_path
+
+    xy, _ = ideal_path(np.array([o.velocity for o in outputs]).reshape(-1, 3), dt)
+    running = np.flatnonzero([o.robot_state == RobotState.RUNNING for o in outputs])
+    path_speed, displacement_speed = window_speeds(xy, running, dt)  # as `shc analyze` measures the plan
+    desired = np.array([o.velocity[:2] for o in outputs]).reshape(-1, 2)[running]
+    commanded = float(np.linalg.norm(desired, axis=1).mean()) if len(desired) else 0.0
     return {
         "robot": robot.name,
         "gait": controller.gait.name,
@@ -81,6 +90,10 @@ def plan_summary(robot: Any, controller: Controller, record: PlanRecord, seconds
         "duty_factor": cycle.duty_factor,
         "moving_cycles": len(predicted),
         "achieved_mean_speed_mps": float(np.mean(achieved)) if achieved else 0.0,
+        "path_speed_mps": path_speed,
+        "displacement_speed_mps": displacement_speed,
+        "commanded_speed_mps": commanded,
+        **progress_fields(cycle_path_length(xy[running], cycle.period), commanded, len(running) * dt),
         "eq16_speed_mps": float(np.mean(predicted)) if predicted else 0.0,
         "odometry_distance_m": distance,
         "odometry_yaw_rad": walker.odometry_yaw if walker else 0.0,

@@ -162,10 +162,10 @@ def _stance_reachable(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
         if (best < REACH_TOLERANCE).all():
             return []
     if len(robot.legs) > 1 and (best >= REACH_TOLERANCE).all():
-        short = sorted({f"{error * 1000:.0f}" for error in (best.min(), best.max())}, key=float)
+        short = sorted({f"{error:.3f}" for error in (best.min(), best.max())}, key=float)
         return [loaded.issue(
             ("walker", "body_clearance"),
-            f"no leg reaches its stance at body_clearance {clearance:g} m (short by {' to '.join(short)} mm "
+            f"no leg reaches its stance at body_clearance {clearance:g} m (short by {' to '.join(short)} m "
             "within the joint limits)",
             "lower walker.body_clearance, move the stances towards the legs' bases or widen the joint limits",
         )]
@@ -175,7 +175,7 @@ def _stance_reachable(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
             issues.append(loaded.issue(
                 ("legs", leg_id, "stance"),
                 f"stance ({leg.stance.x:g}, {leg.stance.y:g}) at body_clearance {clearance:g} m is out of reach "
-                f"by {best[i] * 1000:.0f} mm within the joint limits",
+                f"by {best[i]:.3f} m within the joint limits",
                 "move the stance towards the leg's base, lower walker.body_clearance or widen the joint limits",
             ))
     return issues

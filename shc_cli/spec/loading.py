@@ -52,12 +52,17 @@ def resolve(kind: str, name_or_path: str | Path, relative_to: Path | None = None
             return candidate
     stem = Path(text).stem if text.endswith(".toml") else text
     named = data_dir(kind) / f"{stem}.toml"
-    if named.is_file() and ("/" not in text or not Path(text).parent.exists()):
+    noun = kind.rstrip("s")
+    if text.endswith(".toml") or "/" in text or "\\" in text:  # a path: never silently the bundled file instead
+        where = f" (looked in {Path.cwd()}{f' and {relative_to}' if relative_to is not None else ''})"
+        if named.is_file():
+            raise NotFoundError(f"{text}: no such {noun} file{where}; the bundled {noun} of that name is "
+                                f"given without a path: '{stem}'")
+    elif named.is_file():
         return named
     names = bundled(kind)
     close = difflib.get_close_matches(stem, names, n=1)
     hint = f"did you mean '{close[0]}'? " if close else ""
-    noun = kind.rstrip("s")
     raise NotFoundError(
         f"{text}: no such {noun} file or bundled {noun} ({hint}bundled: {', '.join(names) or 'none'})"
     )

@@ -290,12 +290,34 @@ class Servo(Strict):
         0.0, description="share of negative mechanical power returned to the supply [ratio]")
     position_gain: Positive = Field(0.1, description="PyBullet position-control gain (Kp) [ratio]")
     velocity_gain: Positive = Field(1.0, description="PyBullet position-control velocity gain (Kd) [ratio]")
-    control: Literal["position", "pd"] = Field(
+    control: Literal["position", "pd", "dynamixel"] = Field(
         "position", description="'position': PyBullet's position motor, stiff up to the stall torque; 'pd': a "
         "compliant proportional servo, torque = stiffness·error − damping·speed within ± stall torque (PyBullet's "
-        "stable PD, implicit, every physics step): it sags under load as real servos do")
+        "stable PD, implicit, every physics step): it sags under load as real servos do; 'dynamixel': the "
+        "servo and gearbox model of shc_cli.backends.servo (firmware P gain in control-table units, supply "
+        "voltage, back-EMF, gearbox friction) — its stiffness and damping follow from the fields below")
     stiffness: Positive = Field(5.0, description="'pd' control: torque per rad of position error [N·m/rad]")
     damping: NonNegative = Field(0.05, description="'pd' control: torque per rad/s of joint speed [N·m·s/rad]")
+    supply_voltage: Positive = Field(12.0, description="'dynamixel': motor supply voltage [V]")
+    position_p_gain: NonNegative = Field(
+        850.0, description="'dynamixel': Position P Gain in control-table units (e-Manual: K_P = value/128 PWM "
+        "units per position tick)")
+    pwm_limit: Annotated[float, Field(gt=0, le=885)] = Field(
+        885.0, description="'dynamixel': PWM Limit in control-table units (885 = 100 % of the supply voltage)")
+    current_limit: Positive = Field(6.9, description="'dynamixel': Current Limit [A] (MX-106(2.0): 2047 × 3.36 mA)")
+    ticks_per_revolution: Annotated[int, Field(gt=0)] = Field(4096, description="position ticks per turn")
+    armature: NonNegative = Field(
+        0.0, description="reflected rotor inertia at the output shaft [kg·m²] (engines that support it)")
+    coulomb_friction: NonNegative = Field(
+        0.0, description="gearbox Coulomb friction at the output shaft [N·m] (electrical model; dynamics where the "
+        "engine supports it)")
+    viscous_friction: NonNegative = Field(
+        0.0, description="gearbox viscous friction at the output shaft [N·m·s/rad]")
+    holding_ratio: Annotated[float, Field(ge=0.0, le=1.0)] = Field(
+        1.0, description="motor torque needed to hold a static load, as a share of the load torque [ratio]: "
+        "the gear train's static friction carries the rest (back-drivability); 1 = an ideal gearbox")
+    static_speed: Positive = Field(
+        0.05, description="joint speed below which a joint counts as holding still (holding_ratio applies) [rad/s]")
 
 
 class ServoMap(Strict):

@@ -147,6 +147,10 @@ def _load_csv(path: Path) -> Timeline:
         text = path.read_text(encoding="utf-8")
     except OSError as error:
         raise SpecError([Issue(path, None, "", f"cannot read commands: {error.strerror}", "check the path")]) from None
+    except UnicodeDecodeError as error:
+        line = path.read_bytes()[:error.start].count(b"\n") + 1
+        raise SpecError([Issue(path, line, "", f"not UTF-8 text (byte {error.object[error.start]:#04x})",
+                               "save the file as UTF-8 text")]) from None
     rows = list(csv.reader(text.splitlines()))
     if not rows or [c.strip() for c in rows[0]] != ["cycle", "vx", "vy", "wz"]:
         raise SpecError([Issue(path, 1, "header", "expected the header 'cycle,vx,vy,wz'",

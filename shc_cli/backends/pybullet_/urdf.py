@@ -41,6 +41,10 @@ DEFAULT_FOOT_RADIUS = 0.01
 """Foot sphere radius of a leg whose ``foot_radius`` is 0 [m]."""
 FOOT_MASS = 0.001
 """Mass of each foot sphere, added to the robot file's masses [kg]."""
+ROTOR_MASS = 0.001
+"""Mass of each rotor link (``[servo] armature`` > 0), taken from the link it rides on [kg]."""
+ROTOR_RADIUS = 0.005
+"""Radius of a rotor link's collision sphere (inside the link's capsule) [m]."""
 LINK_RADIUS = 0.02
 """Capsule radius of a link, before the limits of :func:`link_radius` [m]."""
 RADIUS_FRACTION = 0.25
@@ -112,10 +116,15 @@ def foot_names(robot: Robot) -> list[str]:
 
 
 def link_names(robot: Robot) -> list[str]:
-    """Every link in URDF order: ``base_link``, then per leg its base frame, joint links and foot."""
+    """Every link in URDF order: ``base_link``, then per leg its base frame, joint links (each followed by its rotor
+    link ``LEG_J_rotor`` when the servo has an armature) and foot."""
     out = [BASE_LINK]
+    rotors = _armature(robot) > 0.0
     for names in leg_names(robot).values():
-        out += [names.base, *names.links, names.foot]
+        out.append(names.base)
+        for link in names.links:
+            out += [link, link.removesuffix("_link") + "_rotor"] if rotors else [link]
+        out.append(names.foot)
     return out
 
 
@@ -271,10 +280,11 @@ def _empty_link(root: ET.Element, name: str) -> None:
     _inertial(link, 0.0, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
 
 
-def _segment_link(root: ET.Element, name: str, leg: Leg, index: int, joint: Joint) -> None:
-    """The link moved by a joint: a capsule from its origin to the next joint's, mass at the midpoint."""
+def _segment_link(root: ET.Element, name: str, leg: Leg, index: int, joint: Joint, rotor: float = 0.0) -> None:
+    """The link moved by a joint: a capsule from its origin to the next joint's, mass at the midpoint (less
+    :data:`ROTOR_MASS` when the joint has a rotor link, ``rotor`` > 0)."""
     link = ET.SubElement(root, "link", name=name)
-    mass = link_mass(joint)
+    mass = link_mass(joint) - (ROTOR_MASS if rotor > 0.0 and link_mass(joint) > 2.0 * ROTOR_MASS else 0.0)
     end = joint_offset(joint)
     length = math.dist((0.0, 0.0, 0.0), end)
     middle = (end[0] / 2.0, end[1] / 2.0, end[2] / 2.0)
@@ -291,6 +301,25 @@ def _segment_link(root: ET.Element, name: str, leg: Leg, index: int, joint: Join
     _shapes(link, "link", middle, rpy, "capsule", radius=_num(radius), length=_num(straight))
 
 
+def _armature(robot: Robot) -> float:
+    """The servo's reflected rotor inertia [kg·m²] (0 without a ``[servo]`` section)."""
+    return float(getattr(getattr(robot, "servo", None), "armature", 0.0) or 0.0)
+
+
+def _rotor_link(root: ET.Element, link_name: str, armature: float) -> None:
+    """The servo's rotor inertia reflected through the gearbox (PyBullet has no joint armature): a link fixed to
+    the joint's link on the joint axis with inertia ``armature`` about it (a thin disc, half of it across). An
+    approximation: the joints closer to the body also feel it (a real rotor spins ``N`` times faster only relative to
+    its housing, so its inertia matters to its own joint alone)."""
+    name = link_name.removesuffix("_link") + "_rotor"
+    link = ET.SubElement(root, "link", name=name)
+    across = armature / 2.0  # a thin disc: PyBullet refuses (zeroes) moments that break I_x + I_y ≥ I_z
+    _inertial(link, ROTOR_MASS, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (across, across, armature))
+    # PyBullet zeroes the inertia of a link without collision geometry: a small sphere inside the joint's capsule
+    _shape(link, "collision", "link", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), "sphere", radius=_num(ROTOR_RADIUS))
+    _fixed(root, name + "_joint", link_name, name, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+
+
 def _foot_link(root: ET.Element, name: str, radius: float) -> None:
     link = ET.SubElement(root, "link", name=name)
     _inertial(link, FOOT_MASS, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (sphere_inertia(FOOT_MASS, radius),) * 3)
@@ -304,7 +333,8 @@ def _leg(root: ET.Element, robot: Robot, leg: Leg, names: LegNames) -> None:
     origin: tuple[tuple[float, float, float], tuple[float, float, float]] = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
     for index, (joint, joint_name, link_name) in enumerate(zip(leg.joints.values(), names.joints, names.links,
                                                                strict=True)):
-        _segment_link(root, link_name, leg, index, joint)
+        armature = _armature(robot)
+        _segment_link(root, link_name, leg, index, joint, armature)
         element = ET.SubElement(root, "joint", name=joint_name, type="revolute")
         _origin(element, *origin)
         ET.SubElement(element, "parent", link=parent)
@@ -313,6 +343,8 @@ def _leg(root: ET.Element, robot: Robot, leg: Leg, names: LegNames) -> None:
         effort, velocity = _limits(robot, joint)
         ET.SubElement(element, "limit", lower=_num(joint.min), upper=_num(joint.max),
                       effort=_num(effort), velocity=_num(velocity))
+        if armature > 0.0:
+            _rotor_link(root, link_name, armature)
         parent, origin = link_name, _dh_origin(joint)
     _foot_link(root, names.foot, foot_radius(leg))
     _fixed(root, names.foot_joint, parent, names.foot, *origin)

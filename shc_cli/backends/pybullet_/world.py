@@ -20,9 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from shc_cli.backends.pybullet_.power import servo_power
 from shc_cli.backends.pybullet_.terrain import TerrainSpec, build_terrain
 from shc_cli.backends.pybullet_.urdf import foot_radius, robot_urdf
+from shc_cli.backends.servo import ServoModel
 from shc_cli.errors import BackendError
 from shc_cli.spec.robot import Robot
 
@@ -197,6 +197,8 @@ class World:
             p.changeDynamics(self.body, link, lateralFriction=friction, restitution=restitution,
                              physicsClientId=c)
         servo = robot.servo
+        self.servo_model = ServoModel(servo)
+        self.gains = self.servo_model.gains()
         for index in self.flat_joints:  # the servo's no-load speed as the joint's speed limit
             p.changeDynamics(self.body, index, maxJointVelocity=servo.no_load_speed, physicsClientId=c)
         count = len(self.flat_joints)
@@ -206,6 +208,8 @@ class World:
         self._mean_torque = np.zeros(count)
         self._mean_power = np.full(count, servo.idle_power)
         self.compliant = servo.control == "pd"
+        self.explicit = servo.control == "dynamixel"
+        """The servo model's torque (:meth:`ServoModel.torque`) applied with TORQUE_CONTROL every physics step."""
         self._goals = np.zeros(count)
         for row, indices in enumerate(self.joint_index):
             for k, index in enumerate(indices):
@@ -230,7 +234,7 @@ class World:
         speed is the joints' velocity limit (set once with ``maxJointVelocity``, since POSITION_CONTROL
         ignores the URDF's limits)."""
         p = self.p
-        if self.compliant:  # stable PD is set before every physics step (step): it does not persist
+        if self.compliant or self.explicit:  # set before every physics step (step): it does not persist
             self._goals = targets[self.slot_rows, self.slot_cols].astype(float)
             return
         p.setJointMotorControlArray(self.body, self.flat_joints, p.POSITION_CONTROL,
@@ -250,13 +254,24 @@ class World:
         clock = time.perf_counter
         samples = []
         pd = self._stable_pd() if self.compliant else None
+        applied = []
+        state = self._states
+        if self.explicit and state is None:  # the explicit servo law needs the state before the first step
+            state = p.getJointStates(body, joints, physicsClientId=c)
         for _ in range(self.substeps):
             if pd is not None:
                 p.setJointMotorControlMultiDofArray(body, joints, p.STABLE_PD_CONTROL, **pd, physicsClientId=c)
+            elif self.explicit:
+                q = np.fromiter([s[0] for s in state], float, count)
+                qd = np.fromiter([s[1] for s in state], float, count)
+                torque = self.servo_model.torque(self._goals, q, qd)
+                applied.append(torque)
+                p.setJointMotorControlArray(body, joints, p.TORQUE_CONTROL, forces=torque.tolist(), physicsClientId=c)
             started = clock()
             p.stepSimulation(physicsClientId=c)
             self.physics_time += clock() - started
-            samples.append(p.getJointStates(body, joints, physicsClientId=c))
+            state = p.getJointStates(body, joints, physicsClientId=c)
+            samples.append(state)
         states = samples[-1]
         self._states = states
         positions = np.fromiter([state[0] for state in states], float, count)
@@ -264,26 +279,29 @@ class World:
         # speeds is exactly the displacement over the period: no per-step speed sampling needed.
         mean_speed = (positions - self._positions) / self.control_period
         self._positions = positions
-        if self.compliant:  # stable PD reports no motor torque: the PD law at each sub-step's end state
-            servo = self.robot.servo
+        if self.explicit:
+            self._mean_torque = np.mean(applied, axis=0)
+        elif self.compliant:  # stable PD reports no motor torque: the PD law at each sub-step's end state
+            g = self.gains
             values = np.array([[state[0], state[1]] for sample in samples for state in sample]).reshape(
                 self.substeps, count, 2)
-            torques = np.clip(servo.stiffness * (self._goals - values[:, :, 0]) - servo.damping * values[:, :, 1],
-                              -servo.stall_torque, servo.stall_torque)
+            torques = np.clip(g.stiffness * (self._goals - values[:, :, 0]) - g.damping * values[:, :, 1],
+                              -g.torque_limit, g.torque_limit)
             self._mean_torque = torques.mean(axis=0)
         else:
             torques = np.fromiter([state[3] for sample in samples for state in sample], float,
                                   self.substeps * count)
             self._mean_torque = torques.reshape(self.substeps, count).mean(axis=0)
-        self._mean_power = servo_power(self.robot.servo, self._mean_torque, mean_speed)
+        self._mean_power = self.servo_model.power(self._mean_torque, mean_speed)
 
     def _stable_pd(self) -> dict[str, Any]:
-        """Arguments of PyBullet's stable (implicit) PD motor for this period's goals: a proportional servo of
-        ``servo.stiffness`` and ``servo.damping``, at most its stall torque."""
-        servo, count = self.robot.servo, len(self.flat_joints)
+        """Arguments of PyBullet's stable (implicit) PD motor for this period's goals: the servo model's stiffness
+        and damping (:meth:`ServoModel.gains`), at most its torque limit. PyBullet has no joint armature, so the
+        rotor inertia is not simulated here; gearbox friction enters the electrical model only."""
+        g, count = self.gains, len(self.flat_joints)
         return {"targetPositions": [[goal] for goal in self._goals.tolist()], "targetVelocities": [[0.0]] * count,
-                "positionGains": [servo.stiffness] * count, "velocityGains": [servo.damping] * count,
-                "forces": [[servo.stall_torque]] * count}
+                "positionGains": [g.stiffness] * count, "velocityGains": [g.damping] * count,
+                "forces": [[g.torque_limit]] * count}
 
     def read(self) -> Reading:
         """Sensor readings now."""

@@ -1,0 +1,145 @@
+"""A geared position servo (Dynamixel-style) and its electrical power, independent of any physics engine.
+
+The model of one servo of the robot's ``[servo]`` table (every joint the same model), in output-shaft units:
+
+* **Firmware position control** (ROBOTIS e-Manual, MX-106(2.0) / X series position mode): the position error in
+  ticks times ``K_P = Position P Gain / 128`` is a PWM command in control-table units (885 = 100 % of the supply
+  voltage), limited to ``pwm_limit``. The motor voltage is that share of ``supply_voltage``.
+* **DC motor behind a gearbox**: torque ``τ = k_t·(V − k_e·ω)/R`` with ``k_t`` = ``torque_constant`` (stall torque
+  ÷ stall current), ``R`` = ``winding_resistance`` and ``k_e`` = supply voltage ÷ ``no_load_speed`` (the
+  torque–speed line through stall torque and no-load speed). Together: a proportional servo of stiffness
+  ``k_t/R · V·(K_P/885)·ticks/(2π)`` [N·m/rad] with the back-EMF damping ``k_t·k_e/R`` [N·m·s/rad] plus the gearbox's
+  viscous friction, within ± the stall torque (and ± ``k_t``·``current_limit``).
+* **Armature**: the rotor's inertia reflected through the gearbox, for engines that model joint armature.
+* **Gearbox friction with asymmetry**: a moving joint's motor must also overcome Coulomb and viscous friction
+  (motoring: more torque than the load; back-driven: friction carries part of the load); a joint holding a static
+  load needs only ``holding_ratio`` of the load torque from the motor, since the gear train's static friction
+  carries the rest — why a real geared servo stands cheaply. Between rest and ``static_speed`` the two blend.
+* **Electrical power**: idle electronics + copper loss ``I²R`` of the motor current + the motor's positive
+  mechanical power (load work plus friction work); negative motor power (the load back-driving the motor) is
+  dissipated in the winding and H-bridge and returns only ``regenerative_efficiency`` of itself to the supply.
+
+An engine uses it in one of two ways: implicit (stiffness, damping, torque limit from :meth:`ServoModel.gains`
+given to the engine's own PD motor, e.g. PyBullet's stable PD or a MuJoCo position actuator) or explicit
+(:meth:`ServoModel.torque` per physics step from goal, position and speed). Either way the engine reports the
+output torque and joint speed, and :meth:`ServoModel.electrical` turns them into motor current and supply power.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from shc_cli.spec.robot import Servo
+
+PWM_FULL_SCALE = 885.0
+"""e-Manual PWM units at 100 % duty (MX(2.0), X series)."""
+P_GAIN_DIVISOR = 128.0
+"""e-Manual: K_P = Position P Gain (control table) / 128."""
+
+
+@dataclass(frozen=True)
+class Gains:
+    """What an engine's PD motor needs: output-shaft units."""
+
+    stiffness: float
+    """Torque per rad of position error [N·m/rad]."""
+    damping: float
+    """Torque per rad/s of joint speed [N·m·s/rad] (back-EMF + gearbox viscous friction)."""
+    torque_limit: float
+    """Largest torque the servo gives [N·m]."""
+    max_speed: float
+    """No-load speed [rad/s]."""
+    armature: float
+    """Reflected rotor inertia [kg·m²]."""
+    coulomb_friction: float
+    """Gearbox Coulomb friction [N·m] (for engines that apply joint friction themselves)."""
+
+
+@dataclass(frozen=True)
+class Electrical:
+    """The electrical state of every servo (arrays of one shape)."""
+
+    motor_torque: np.ndarray
+    """Torque the motor makes, friction and holding included, at the output shaft [N·m]."""
+    current: np.ndarray
+    """Motor current [A]."""
+    power: np.ndarray
+    """Supply power [W]."""
+
+
+class ServoModel:
+    """One servo model (see the module docstring); vectorised over joints.
+
+    Args:
+        servo: the robot's ``[servo]`` table.
+    """
+
+    def __init__(self, servo: Servo) -> None:
+        self.servo = servo
+        s = servo
+        self.back_emf = s.supply_voltage / s.no_load_speed
+        """``k_e`` [V·s/rad] at the output shaft: the torque–speed line's slope ``k_t·k_e/R``."""
+        volts_per_rad = (s.supply_voltage * (s.position_p_gain / P_GAIN_DIVISOR) / PWM_FULL_SCALE
+                         * s.ticks_per_revolution / (2.0 * math.pi))
+        self.volts_per_rad = volts_per_rad
+        """Motor voltage per rad of position error [V/rad] before the PWM limit."""
+        self.max_voltage = s.supply_voltage * s.pwm_limit / PWM_FULL_SCALE
+        """Largest motor voltage [V]."""
+        self.torque_limit = min(s.stall_torque, s.torque_constant * self.max_voltage / s.winding_resistance,
+                                s.torque_constant * s.current_limit)
+        """Largest output torque [N·m]: stall torque, PWM limit and current limit."""
+
+    def gains(self) -> Gains:
+        """Stiffness, damping and limits for an engine's implicit PD motor (``control`` 'dynamixel' or 'pd')."""
+        s = self.servo
+        if s.control == "pd":
+            return Gains(s.stiffness, s.damping, s.stall_torque, s.no_load_speed, s.armature, s.coulomb_friction)
+        per_volt = s.torque_constant / s.winding_resistance
+        return Gains(stiffness=per_volt * self.volts_per_rad,
+                     damping=per_volt * self.back_emf + s.viscous_friction,
+                     torque_limit=self.torque_limit, max_speed=s.no_load_speed, armature=s.armature,
+                     coulomb_friction=s.coulomb_friction)
+
+    def torque(self, goal: np.ndarray, position: np.ndarray, speed: np.ndarray) -> np.ndarray:
+        """Output torque of the firmware's position control [N·m] (explicit form, one physics step).
+
+        The PWM voltage from the position error, limited; the motor's torque–speed line; the current limit;
+        gearbox viscous friction. (Coulomb friction is left to the engine or to :meth:`electrical`.)
+        """
+        s = self.servo
+        if s.control == "pd":
+            return np.asarray(np.clip(s.stiffness * (goal - position) - s.damping * speed, -s.stall_torque,
+                                      s.stall_torque), dtype=float)
+        voltage = np.clip(self.volts_per_rad * (goal - position), -self.max_voltage, self.max_voltage)
+        current = np.clip((voltage - self.back_emf * speed) / s.winding_resistance, -s.current_limit, s.current_limit)
+        return np.asarray(s.torque_constant * current - s.viscous_friction * speed, dtype=float)
+
+    def electrical(self, torque: np.ndarray, speed: np.ndarray, friction_in_engine: bool = False) -> Electrical:
+        """Motor torque, current and supply power from the output torque and joint speed the engine reports.
+
+        Args:
+            torque: output-shaft torque of each servo [N·m] (the engine's motor torque, net of viscous friction).
+            speed: joint speed [rad/s].
+            friction_in_engine: the engine applied the gearbox's Coulomb friction itself (then ``torque`` is
+                already the motor's torque while moving); otherwise it is added here.
+        """
+        s = self.servo
+        torque = np.asarray(torque, float)
+        speed = np.asarray(speed, float)
+        friction = 0.0 if friction_in_engine else s.coulomb_friction
+        moving = torque + np.sign(speed) * friction + s.viscous_friction * speed  # the engine's torque is net of it
+        holding = s.holding_ratio * torque
+        blend = np.minimum(np.abs(speed) / s.static_speed, 1.0)
+        motor = (1.0 - blend) * holding + blend * moving
+        current = np.clip(motor / s.torque_constant, -s.current_limit, s.current_limit)
+        mechanical = motor * speed
+        power = (s.idle_power + current * current * s.winding_resistance + np.maximum(mechanical, 0.0)
+                 + s.regenerative_efficiency * np.minimum(mechanical, 0.0))
+        return Electrical(motor_torque=motor, current=current, power=np.asarray(power))
+
+    def power(self, torque: np.ndarray, speed: np.ndarray, friction_in_engine: bool = False) -> np.ndarray:
+        """Supply power of each servo [W] (:meth:`electrical`'s ``power``)."""
+        return self.electrical(torque, speed, friction_in_engine).power

@@ -1,0 +1,96 @@
+"""The servo and gearbox model (shc_cli/backends/servo.py) against datasheet arithmetic, and its PyBullet wiring."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from shc_cli.backends.servo import ServoModel
+from shc_cli.spec.loading import load_robot
+from shc_cli.spec.robot import Servo
+
+from .conftest import ROOT
+
+MX106 = {"control": "dynamixel", "stall_torque": 8.4, "no_load_speed": 4.71, "torque_constant": 1.62,
+         "winding_resistance": 2.31, "supply_voltage": 12.0, "position_p_gain": 850.0, "idle_power": 0.89}
+
+
+def test_the_e_manual_gain_becomes_a_stiffness_and_the_motor_a_damping() -> None:
+    """K_P = 850/128 PWM units per tick, 885 units = 12 V, 4096 ticks per turn; τ = k_t·(V − k_e·ω)/R."""
+    gains = ServoModel(Servo(**MX106)).gains()
+    volts_per_tick = 850 / 128 * 12.0 / 885
+    assert gains.stiffness == pytest.approx(1.62 / 2.31 * volts_per_tick * 4096 / (2 * math.pi), rel=1e-12)
+    assert gains.stiffness == pytest.approx(41.17, abs=0.01)
+    assert gains.damping == pytest.approx(1.62 * (12.0 / 4.71) / 2.31, rel=1e-12)  # back-EMF, no viscous friction
+    assert gains.torque_limit == pytest.approx(8.4)
+
+
+def test_the_torque_follows_the_torque_speed_line_and_the_limits() -> None:
+    model = ServoModel(Servo(**MX106))
+    far = np.array([1.0])  # a position error that saturates the PWM
+    assert model.torque(far, np.zeros(1), np.zeros(1))[0] == pytest.approx(1.62 * 12.0 / 2.31)  # stall: 8.42 N·m
+    assert model.torque(far, np.zeros(1), np.array([4.71]))[0] == pytest.approx(0.0, abs=1e-9)  # no-load speed
+    assert model.torque(far, np.zeros(1), np.array([2.355]))[0] == pytest.approx(1.62 * 6.0 / 2.31)  # half way
+    limited = ServoModel(Servo(**MX106, current_limit=2.0))
+    assert limited.torque(far, np.zeros(1), np.zeros(1))[0] == pytest.approx(2.0 * 1.62)
+    assert limited.gains().torque_limit == pytest.approx(2.0 * 1.62)
+    small = np.array([0.001])  # inside the linear range: stiffness × error
+    assert model.torque(small, np.zeros(1), np.zeros(1))[0] == pytest.approx(model.gains().stiffness * 0.001)
+
+
+def test_holding_needs_less_current_than_moving_and_negative_work_is_not_returned() -> None:
+    servo = Servo(**MX106, coulomb_friction=0.7, holding_ratio=0.3, static_speed=0.1)
+    model = ServoModel(servo)
+    held = model.electrical(np.array([3.0]), np.array([0.0]))
+    assert held.current[0] == pytest.approx(0.3 * 3.0 / 1.62)  # the gear train carries 70 % of a static load
+    assert held.power[0] == pytest.approx(0.89 + (0.9 / 1.62) ** 2 * 2.31)
+    lifting = model.electrical(np.array([3.0]), np.array([1.0]))  # motoring: load plus friction
+    assert lifting.current[0] == pytest.approx(3.7 / 1.62)
+    assert lifting.power[0] == pytest.approx(0.89 + (3.7 / 1.62) ** 2 * 2.31 + 3.7 * 1.0)
+    lowering = model.electrical(np.array([3.0]), np.array([-1.0]))  # back-driven: friction helps, no regeneration
+    assert lowering.current[0] == pytest.approx(2.3 / 1.62)
+    assert lowering.power[0] == pytest.approx(0.89 + (2.3 / 1.62) ** 2 * 2.31)
+    creeping = model.electrical(np.array([3.0]), np.array([0.05]))  # half-way to static_speed: the two blend
+    assert creeping.motor_torque[0] == pytest.approx(0.5 * 0.9 + 0.5 * 3.7)
+
+
+def test_the_default_servo_keeps_the_old_power_formula() -> None:
+    """control = 'position' with no friction: P = idle + (τ/k_t)²R + max(τω, 0), as before the servo model."""
+    servo = Servo()
+    torque, speed = np.array([2.0, -1.0, 0.5]), np.array([1.0, 2.0, 0.0])
+    old = servo.idle_power + (torque / servo.torque_constant) ** 2 * servo.winding_resistance + np.maximum(
+        torque * speed, 0.0)
+    assert np.allclose(ServoModel(servo).power(torque, speed), old, rtol=1e-12)
+
+
+def test_pybullet_applies_the_model_torque_and_the_rotor_inertia() -> None:
+    """A leg held in the air settles where the servo model's torque holds it: mean torque = stiffness × error − damping
+    × speed at every joint (the engine's torque is the model's), and the rotor links carry the armature."""
+    from shc_cli.backends.pybullet_.terrain import TerrainSpec
+    from shc_cli.backends.pybullet_.world import World
+    from shc_cli.model.chains import Chains
+
+    robot = load_robot(ROOT / "robots" / "bullet_insectoid_b.toml").robot
+    joints = np.tile([0.0, 0.0, 1.088, -0.765, -1.212], (6, 1))
+    world = World(robot, TerrainSpec(kind="flat"), robot.time_delta, 4, True, joints)
+    try:
+        p = world.p
+        inertias = [p.getDynamicsInfo(world.body, j, physicsClientId=world.client)[2]
+                    for j in range(p.getNumJoints(world.body, physicsClientId=world.client))
+                    if p.getJointInfo(world.body, j, physicsClientId=world.client)[12].decode().endswith("_rotor")]
+        assert len(inertias) == 30
+        assert inertias[0][2] == pytest.approx(robot.servo.armature)
+        for _ in range(100):
+            world.command(joints)
+            world.step()
+        reading = world.read()
+        gains = world.gains
+        error = joints - reading.joints
+        expected = gains.stiffness * error - gains.damping * reading.joint_velocities
+        assert np.allclose(reading.joint_efforts, expected, atol=0.02)
+        assert np.abs(reading.joint_efforts).max() > 0.3  # gravity loads the joints: a real check, not zeros
+        assert Chains.from_robot(robot).joints == 5
+    finally:
+        world.close()
