@@ -309,6 +309,26 @@ def view(
 
 
 @app.command()
+def optimize(
+    file: Annotated[Path, typer.Argument(help="Study file (TOML): search space, objectives, constraints.")],
+    trials: Annotated[int | None, typer.Option(help="Trials to finish, earlier ones included (default: the "
+                                               "study's `trials`, else 20).")] = None,
+    workers: Annotated[int | None, typer.Option(help="Parallel runs (default: all cores).")] = None,
+    executor: Annotated[str, typer.Option(help="local (worker processes) or dask.")] = "local",
+    scheduler: Annotated[str | None, typer.Option(help="Dask scheduler address (default: a LocalCluster).")] = None,
+    out: Annotated[Path | None, typer.Option(help="Output directory (default runs/<study name>).")] = None,
+    resume: Annotated[bool, typer.Option(help="Continue a study from its storage: finished trials are kept.")] = False,
+    overwrite: Annotated[bool, typer.Option(help="Delete an existing study output (shc's only) and start again.")]
+    = False,
+) -> None:
+    """Multi-objective search (Optuna) of gait and robot parameters over simulated runs: Pareto front and robot
+    files."""
+    from shc_cli.commands.optimize import run_optimize
+
+    run_optimize(file, trials, workers, executor, scheduler, out, resume, overwrite)
+
+
+@app.command()
 def replay(
     source: Annotated[Path, typer.Argument(help="A recording prefix DIR/NAME (NAME_joints.csv.gz, NAME_tips.csv.gz, "
                                                 "NAME_body.csv.gz), a ROS 1 .bag or a ROS 2 bag directory.")],

@@ -122,7 +122,7 @@ class RunDirectory:
 
 
 RUN_MARKERS = ("summary.json", ROBOT_FILE, "log.csv", "joints.csv", "results.csv", "results.partial.csv",
-               "sweep.toml")
+               "sweep.toml", "study.toml", "study.db", "trials.csv")
 """Files of which one marks a directory as shc output that ``--overwrite`` may replace."""
 
 

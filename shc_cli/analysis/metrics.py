@@ -230,7 +230,8 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
             "commanded_speed_mps", "speed_ratio", "distance_m", "duty_factor", "foot_slip_m", "height_median_m",
             "height_iqr_m", "pitch_rate_median_rps", "pitch_rate_iqr_rps", "roll_rate_median_rps",
             "roll_rate_iqr_rps", "stability_margin_median_m", "stability_margin_min_m", "zmp_margin_median_m",
-            "zmp_margin_iqr_m", "zmp_centre_distance_median_m", "zmp_centre_distance_iqr_m", "gait_cycles")
+            "zmp_margin_iqr_m", "zmp_centre_distance_median_m", "zmp_centre_distance_iqr_m", "gait_cycles",
+            "joint_limit_fraction")
     out.update(dict.fromkeys(keys))
     if len(rows) < 2:
         return out
@@ -251,6 +252,9 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
         out["mean_power_w"] = power
         walking = summary.get("scenario", "WG") == "WG"
         out["cot"] = cost_of_transport(power, mass, speed) if walking else None  # eq. 22
+    from shc_cli.analysis.joint_limits import joint_limit_fraction
+
+    out["joint_limit_fraction"] = joint_limit_fraction(run, rows)
     contact = run.contact[rows]
     per_leg = contact.mean(axis=0)
     out["duty_factor"] = float(per_leg.mean())

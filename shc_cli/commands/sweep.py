@@ -39,37 +39,51 @@ RUN_KEYS = ("fell", "sim_time_s", "wall_time_s", "physics_time_s")
 """Summary keys copied into the results table (the timings differ from run to run; compare the others)."""
 
 
-def run_point(point: Point, out: str) -> dict[str, Any]:
+def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: float = 0.0) -> dict[str, Any]:
     """Simulate one grid point into ``out/runs/<slug>`` (or re-read it if finished) and analyse it; never raises.
 
-    Returns the results row: index, slug, the grid values, ``status`` (``ok``/``failed``), ``error`` and the
-    metrics.
+    Returns the results row: index, slug, the grid values, ``status`` (``ok``/``failed``), ``error``, the
+    :data:`RUN_KEYS` and the ``metrics`` (``shc analyze`` keys, leaving out the first ``skip`` seconds of running as
+    ``shc analyze --skip``). ``shc optimize`` runs its trials through it too.
     """
     row: dict[str, Any] = {"index": point.index, "slug": point.slug, **point.values, "status": "ok", "error": ""}
     directory = Path(out) / "runs" / point.slug
     try:
-        if _interrupted(directory):  # finished as an interrupted run (complete false) by an earlier Ctrl-C: re-run
+        if _stopped_by_signal(directory):  # finished as a partial run by an earlier Ctrl-C: run it again
             shutil.rmtree(directory)
         if not (directory / "summary.json").exists():
             partial = directory.with_name(directory.name + ".partial")
             if partial.exists():
                 shutil.rmtree(partial)  # a crashed earlier attempt
             _simulate(point, Path(out), directory)
-        from shc_cli.analysis.metrics import analyze_run
+        from shc_cli.analysis.metrics import Window, analyze_run
         from shc_cli.runs.opening import open_run
 
+        if _stopped_by_signal(directory):  # Ctrl-C during this run: it is kept (partial), the sweep stops
+            raise KeyboardInterrupt
         log = open_run(directory)
-        if _interrupted(directory):  # Ctrl-C reached this worker: the run is kept, marked, and re-run on --resume
-            row["status"] = "interrupted"
-        result = analyze_run(log)
+        result = analyze_run(log, Window(skip_s=skip))
         row.update({key: log.summary.get(key) for key in RUN_KEYS})
-        row.update({key: result.get(key) for key in METRICS})
+        row.update({key: result.get(key) for key in metrics})
     except Exception as error:  # a failing run is a row, not the end of the sweep
+        if _interrupted(error):
+            raise KeyboardInterrupt from error  # Ctrl-C during the run: stop the sweep, not just this run
         row.update(status="failed", error=_one_line(error))
     return row
 
 
-def _interrupted(directory: Path) -> bool:
+def _interrupted(error: BaseException) -> bool:
+    """Whether ``error`` stands for a Ctrl-C: ``simulate`` turns the KeyboardInterrupt into a one-line ShcError,
+    keeping it as the context."""
+    seen: BaseException | None = error
+    while seen is not None:
+        if isinstance(seen, KeyboardInterrupt):
+            return True
+        seen = seen.__cause__ or seen.__context__
+    return False
+
+
+def _stopped_by_signal(directory: Path) -> bool:
     """A finished run directory whose summary says it did not play to its end because of a signal."""
     import json
 
@@ -137,24 +151,29 @@ def _is_adjustable(robot: Any, dotted: str) -> bool:
 def check_points(sweep: Sweep) -> None:
     """Fail early, with the sweep file's line, on robot-file paths that do not exist and robots/gaits that do not
     load — before any simulation starts."""
+    check_runs(sweep.path, sweep.points, _key_lines(sweep))
+
+
+def check_runs(path: Path, points: list[Point], document_lines: dict[str, int | None]) -> None:
+    """Fail early with the line of the file at ``path`` (``document_lines``: line of each key) on robot-file paths
+    the robot lacks and robots/gaits that do not load; used by sweeps and studies."""
     from shc_cli.spec.checks import load_checked
     from shc_cli.spec.loading import load_robot, resolve
 
-    document_lines = _key_lines(sweep)
-    robots = {str(p.options["robot"]) for p in sweep.points}
+    robots = {str(p.options["robot"]) for p in points}
     for name in sorted(robots):
         try:
             robot = load_robot(resolve("robots", name)).robot
         except ShcError as error:
-            raise SpecError([Issue(sweep.path, document_lines.get("robot"), "robot", str(error).splitlines()[0],
+            raise SpecError([Issue(path, document_lines.get("robot"), "robot", str(error).splitlines()[0],
                                    "name a bundled robot or a robot file")]) from None
-        for dotted in {k for p in sweep.points for k in p.overrides}:
+        for dotted in {k for p in points for k in p.overrides}:
             if _field(robot, dotted) is None:
-                raise SpecError([Issue(sweep.path, document_lines.get(dotted), dotted,
+                raise SpecError([Issue(path, document_lines.get(dotted), dotted,
                                        f"robot '{name}' has no field '{dotted}'",
                                        "use a dotted path of `shc validate --show ROBOT`")])
     seen: set[tuple[str, str]] = set()
-    for point in sweep.points:
+    for point in points:
         key = (str(point.options["robot"]), str(point.options["gait"]))
         if key in seen:
             continue
@@ -163,10 +182,10 @@ def check_points(sweep: Sweep) -> None:
             load_checked(key[0], key[1] or None)
         except SpecError as error:
             issue = error.issues[0]
-            raise SpecError([Issue(sweep.path, document_lines.get("gait"), "gait",
+            raise SpecError([Issue(path, document_lines.get("gait"), "gait",
                                    f"{key[0]} / {key[1] or 'own gait'}: {issue.problem}", issue.fix)]) from None
         except ShcError as error:  # a gait that does not exist
-            raise SpecError([Issue(sweep.path, document_lines.get("gait"), "gait", str(error).splitlines()[0],
+            raise SpecError([Issue(path, document_lines.get("gait"), "gait", str(error).splitlines()[0],
                                    "name a bundled gait or a gait file")]) from None
 
 
@@ -204,16 +223,64 @@ def write_results(path: Path, columns: list[str], rows: list[dict[str, Any]]) ->
     write_text(path, buffer.getvalue())
 
 
-def local_results(points: list[Point], out: Path, workers: int) -> Iterator[dict[str, Any]]:
-    """Rows as the runs finish, from a pool of worker processes (one run per process at a time)."""
-    if workers <= 1:
-        for point in points:
-            yield run_point(point, str(out))
-        return
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+class RunPool:
+    """Where runs execute: in this process (one worker), a pool of worker processes, or a Dask cluster — kept
+    open across batches (``shc optimize`` submits one batch of trials at a time). Use as a context manager.
 
-    with ProcessPoolExecutor(max_workers=workers) as pool:
-        futures = {pool.submit(run_point, point, str(out)): point for point in points}
+    Dask: the scheduler at ``scheduler``, or a LocalCluster of ``workers`` single-threaded worker processes;
+    workers need shc installed and must see the output directory (a shared file system).
+    """
+
+    def __init__(self, executor: str, workers: int, scheduler: str | None) -> None:
+        self.executor, self.workers, self.scheduler = executor, workers, scheduler
+        self._pool: Any = None
+        self._client: Any = None
+        self._cluster: Any = None
+        self._dask: Any = None
+
+    def __enter__(self) -> RunPool:
+        if self.executor == "dask":
+            try:
+                from dask import distributed
+            except ImportError:
+                raise SpecError([Issue(None, None, "--executor", "dask is not installed", "pip install 'shc[dask]' "
+                                       "(dask[distributed]) or use --executor local")]) from None
+            self._dask = distributed  # untyped library
+            if self.scheduler is None:
+                self._cluster = self._dask.LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
+                                                        dashboard_address=None)
+            self._client = self._dask.Client(self._cluster if self._cluster is not None else self.scheduler)
+        elif self.workers > 1:
+            from concurrent.futures import ProcessPoolExecutor
+
+            self._pool = ProcessPoolExecutor(max_workers=self.workers)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._pool is not None:
+            interrupted = exc[0] is not None
+            self._pool.shutdown(wait=not interrupted, cancel_futures=interrupted)
+        if self._client is not None:
+            self._client.close()
+        if self._cluster is not None:
+            self._cluster.close()
+
+    def results(self, points: list[Point], out: Path, metrics: tuple[str, ...] = METRICS,
+                skip: float = 0.0) -> Iterator[dict[str, Any]]:
+        """Rows of :func:`run_point` as the runs finish (in order with one local worker)."""
+        if self._client is not None:
+            futures = self._client.map(run_point, points, out=str(out.resolve()), metrics=metrics, skip=skip,
+                                       pure=False)
+            for future in self._dask.as_completed(futures):
+                yield future.result()
+            return
+        if self._pool is None:
+            for point in points:
+                yield run_point(point, str(out), metrics, skip)
+            return
+        from concurrent.futures import as_completed
+
+        futures = {self._pool.submit(run_point, point, str(out), metrics, skip): point for point in points}
         for future in as_completed(futures):
             point = futures[future]
             error = future.exception()
@@ -224,27 +291,20 @@ def local_results(points: list[Point], out: Path, workers: int) -> Iterator[dict
                 yield future.result()
 
 
-def dask_results(points: list[Point], out: Path, workers: int, scheduler: str | None) -> Iterator[dict[str, Any]]:
-    """Rows as the runs finish on a Dask cluster: the scheduler at ``scheduler``, or a LocalCluster of ``workers``
-    single-threaded worker processes. Workers need shc installed and must see ``out`` (a shared file system)."""
-    try:
-        from dask import distributed
-    except ImportError:
-        raise SpecError([Issue(None, None, "--executor", "dask is not installed",
-                               "pip install 'shc[dask]' (dask[distributed]) or use --executor local")]) from None
-    dask: Any = distributed  # untyped library
-    cluster = None
-    if scheduler is None:
-        cluster = dask.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
-    client = dask.Client(cluster if cluster is not None else scheduler)
-    try:
-        futures = client.map(run_point, points, out=str(out.resolve()), pure=False)
-        for future in dask.as_completed(futures):
-            yield future.result()
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+def check_executor(executor: str, scheduler: str | None) -> None:
+    """One line for an unknown executor or a scheduler without Dask."""
+    if executor not in ("local", "dask"):
+        raise SpecError([Issue(None, None, "--executor", f"'{executor}' is not an executor", "use local or dask")])
+    if scheduler is not None and executor != "dask":
+        raise SpecError([Issue(None, None, "--scheduler", "only the dask executor has a scheduler",
+                               "add --executor dask")])
+
+
+def pool_results(points: list[Point], out: Path, executor: str, workers: int,
+                 scheduler: str | None) -> Iterator[dict[str, Any]]:
+    """Rows as the runs finish, from a :class:`RunPool` opened for these points."""
+    with RunPool(executor, workers, scheduler) as pool:
+        yield from pool.results(points, out)
 
 
 def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | None, out: Path | None,
@@ -252,11 +312,7 @@ def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | N
     """Check the sweep, run every point, write the results table and plots; returns the output directory
     (``overwrite``: delete an existing output directory first; ``resume``: continue it)."""
     sweep = load_sweep(file)
-    if executor not in ("local", "dask"):
-        raise SpecError([Issue(None, None, "--executor", f"'{executor}' is not an executor", "use local or dask")])
-    if scheduler is not None and executor != "dask":
-        raise SpecError([Issue(None, None, "--scheduler", "only the dask executor has a scheduler",
-                               "add --executor dask")])
+    check_executor(executor, scheduler)
     check_points(sweep)
     out = out or Path("runs") / sweep.name
     if resume and overwrite:
@@ -275,10 +331,7 @@ def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | N
     count = workers or os.cpu_count() or 1
     columns = result_columns(sweep)
     started = time.perf_counter()
-    if executor == "dask":
-        rows_iter = dask_results(sweep.points, out, count, scheduler)
-    else:
-        rows_iter = local_results(sweep.points, out, count)
+    rows_iter = pool_results(sweep.points, out, executor, count, scheduler)
     rows: list[dict[str, Any]] = []
     progress = _progress(len(sweep.points))
     partial = out / "results.partial.csv"

@@ -172,9 +172,9 @@ def load_sweep(path: Path) -> Sweep:
     return Sweep(document.path, name, str(data.get("description", "")), grid, fixed, points)
 
 
-def variant_text(base: Path, overrides: dict[str, Any], adjustable: set[str]) -> str:
-    """A robot file that ``extends`` ``base`` with ``overrides`` (dotted paths); paths in ``adjustable`` are
-    ``{ default, min, max, step }`` tables, whose ``default`` a plain number sets."""
+def variant_text(base: Path, overrides: dict[str, Any], adjustable: set[str], parent: str | None = None) -> str:
+    """A robot file that ``extends`` ``base`` (or the robot named ``parent``) with ``overrides`` (dotted paths);
+    paths in ``adjustable`` are ``{ default, min, max, step }`` tables, whose ``default`` a plain number sets."""
     from shc_cli.spec.toml_out import dump_toml
 
     tree: dict[str, Any] = {}
@@ -184,4 +184,4 @@ def variant_text(base: Path, overrides: dict[str, Any], adjustable: set[str]) ->
         for part in parts[:-1]:
             node = node.setdefault(part, {})
         node[parts[-1]] = {"default": value} if dotted in adjustable and not isinstance(value, dict) else value
-    return f'extends = "{base.resolve().as_posix()}"\n\n' + dump_toml(tree)
+    return f'extends = "{parent or base.resolve().as_posix()}"\n\n' + dump_toml(tree)
