@@ -84,11 +84,12 @@ def _velocity(value: Velocity) -> str:
 
 def plan(robot: str | Path = "bullet", *, gait: str | None = None, velocity: Velocity = "1,0,0",
          duration: float | None = None, commands: Path | str | None = None, out: Path | str | None = None,
-         plots: bool = True) -> Run:
+         plots: bool = True, overwrite: bool = False) -> Run:
     """``shc plan``: the controller run kinematically; returns the run (joints, tips and body tables)."""
     from shc_cli.commands.plan import plan_to
 
-    path, summary = plan_to(str(robot), gait, _velocity(velocity), duration, _path(commands), _path(out), plots)
+    path, summary = plan_to(str(robot), gait, _velocity(velocity), duration, _path(commands), _path(out), plots,
+                            overwrite)
     return Run(path, summary)
 
 
@@ -131,13 +132,13 @@ def open_run(path: Path | str) -> RunLog:
 
 
 def sweep(file: Path | str, *, workers: int | None = None, executor: str = "local", scheduler: str | None = None,
-          out: Path | str | None = None, resume: bool = False) -> SweepResult:
+          out: Path | str | None = None, resume: bool = False, overwrite: bool = False) -> SweepResult:
     """``shc sweep``: a grid of simulations; returns the output directory and the results table's rows."""
     import csv
 
     from shc_cli.commands.sweep import run_sweep
 
-    path = run_sweep(Path(file), workers, executor, scheduler, _path(out), resume)
+    path = run_sweep(Path(file), workers, executor, scheduler, _path(out), resume, overwrite)
     with (path / "results.csv").open(encoding="utf-8", newline="") as handle:
         rows = list(csv.DictReader(handle))
     return SweepResult(path, rows)
