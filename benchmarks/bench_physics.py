@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from shc_cli.backends.pybullet_ import world as world_module
-from shc_cli.backends.pybullet_.terrain import parse_terrain
 from shc_cli.backends.simulated import WorldOptions, open_world
+from shc_cli.backends.terrain import parse_terrain
 from shc_cli.commands.simulate import simulate_to
 from shc_cli.control.controller import Command, Controller, RobotState
 from shc_cli.spec.checks import load_checked

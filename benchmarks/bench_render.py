@@ -56,8 +56,9 @@ def _mujoco_frames(run_dir: Path, frames: int) -> tuple[list[float], float]:
 def _tiny_frames(run_dir: Path, frames: int) -> tuple[list[float], float]:
     import pybullet as p
 
-    from shc_cli.backends.pybullet_.terrain import build_terrain, parse_terrain
+    from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
     from shc_cli.backends.pybullet_.urdf import robot_urdf
+    from shc_cli.backends.terrain import parse_terrain
     from shc_cli.runread import read_run
 
     run = read_run(run_dir)

@@ -16,8 +16,8 @@ import time
 
 import numpy as np
 
-from shc_cli.backends.pybullet_.terrain import TerrainSpec
 from shc_cli.backends.pybullet_.world import World
+from shc_cli.backends.terrain import TerrainSpec
 from shc_cli.spec.loading import load_robot
 
 

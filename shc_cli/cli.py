@@ -154,11 +154,12 @@ def simulate(
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
     bag: BagOption = None,
     fail_on_fall: Annotated[bool, typer.Option(help="Exit with code 4 when the robot fell.")] = False,
+    engine: Annotated[str, typer.Option(help="Physics engine: pybullet or mujoco.")] = "pybullet",
     video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
                                                     "render with its defaults).", metavar="FILE")] = None,
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
-    """Run the controller on the robot in PyBullet physics: terrains, servos, sensors, power, CoT."""
+    """Run the controller on the robot in physics (PyBullet or MuJoCo): terrains, servos, sensors, power, CoT."""
     from shc_cli.commands.simulate import Feedback, SimulateOptions, run_simulate
 
     _bag_check(bag)
@@ -166,7 +167,7 @@ def simulate(
     options = SimulateOptions(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate,
                               friction, restitution, seed, imu_noise, start, gui, stand,
                               Feedback(posture, imu_posing, inclination, admittance), fail_on_fall,
-                              overwrite=overwrite)
+                              overwrite=overwrite, engine=engine)
     run_simulate(options, after=lambda run: _finish_outputs(run, bag, video))
 
 
@@ -271,11 +272,14 @@ def sweep(
     resume: Annotated[bool, typer.Option(help="Continue a sweep: finished runs are read, not re-run.")] = False,
     overwrite: Annotated[bool, typer.Option(help="Delete an existing sweep output at --out first and run it all "
                                                  "again (only shc's own outputs).")] = False,
+    engine: Annotated[
+        str | None, typer.Option(help="Physics engine (pybullet or mujoco) of runs the sweep file does not set.")
+    ] = None,
 ) -> None:
     """Run a grid of simulations in parallel and tabulate CoT, power, speed and stability per run."""
     from shc_cli.commands.sweep import run_sweep
 
-    run_sweep(file, workers, executor, scheduler, out, resume, overwrite)
+    run_sweep(file, workers, executor, scheduler, out, resume, overwrite, engine)
 
 
 @app.command()

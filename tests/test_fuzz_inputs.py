@@ -308,7 +308,7 @@ def _stub_simulation(monkeypatch: pytest.MonkeyPatch) -> None:
     def stub(robot: Any, options: Any) -> Any:  # the one place simulate builds its world
         import pybullet
 
-        from shc_cli.backends.pybullet_.terrain import build_terrain
+        from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
 
         client = pybullet.connect(pybullet.DIRECT)
         try:

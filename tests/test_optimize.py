@@ -328,3 +328,21 @@ def test_dask_and_local_workers_give_the_same_trials(tmp_path: Path, capsys, mon
         assert code == 0, err
         tables.append(_study_params(out))
     assert tables[0] == tables[1]
+
+
+def test_a_study_on_mujoco_runs_its_trials_in_mujoco(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """``engine = "mujoco"`` reaches every run of every trial (summary.json names the engine)."""
+    import json
+
+    pytest.importorskip("mujoco")
+    text = SMALL.format(duration=0.3, seeds="[0]").replace('terrain = "flat"\n',
+                                                           'terrain = "flat"\nengine = "mujoco"\n')
+    path = _write(tmp_path, text)
+    code, _, err = run(["optimize", str(path), "--trials", "2", "--workers", "1", "--out", str(tmp_path / "mj")],
+                       capsys, monkeypatch)
+    assert code == 0, err
+    rows = _rows(tmp_path / "mj" / "trials.csv")
+    assert len(rows) == 2
+    runs = [Path(r) for row in rows for r in row["runs"].split(";")]
+    engines = {json.loads((run_dir / "summary.json").read_text())["engine"] for run_dir in runs}
+    assert engines == {"mujoco"}

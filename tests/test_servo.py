@@ -68,8 +68,8 @@ def test_the_default_servo_keeps_the_old_power_formula() -> None:
 def test_pybullet_applies_the_model_torque_and_the_rotor_inertia() -> None:
     """A leg held in the air settles where the servo model's torque holds it: mean torque = stiffness × error − damping
     × speed at every joint (the engine's torque is the model's), and the rotor links carry the armature."""
-    from shc_cli.backends.pybullet_.terrain import TerrainSpec
     from shc_cli.backends.pybullet_.world import World
+    from shc_cli.backends.terrain import TerrainSpec
     from shc_cli.model.chains import Chains
 
     robot = load_robot(ROOT / "robots" / "bullet_insectoid_b.toml").robot

@@ -1,4 +1,4 @@
-"""``shc simulate`` end to end: PyBullet physics with the one controller (short runs)."""
+"""``shc simulate`` end to end: PyBullet and MuJoCo physics with the one controller (short runs)."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ from .test_cli import run
 
 TIMING = {"wall_time_s", "physics_time_s", "running_wall_time_s", "running_physics_time_s"}
 REQUIRED = {"sim_time_s", "wall_time_s", "physics_time_s", "distance_m", "mean_speed_mps", "mean_power_w", "cot",
-            "fell", "seed", "terrain"}
+            "fell", "seed", "terrain", "engine", "engine_version"}
+ENGINES = ["pybullet", "mujoco"]
 
 
 def _simulate(tmp_path: Path, name: str, args: list[str], capsys, monkeypatch) -> tuple[int, str, Path]:  # type: ignore[no-untyped-def]
@@ -22,11 +23,13 @@ def _simulate(tmp_path: Path, name: str, args: list[str], capsys, monkeypatch) -
     return code, stdout, out
 
 
-def test_bullet_walks_forward_on_flat_ground(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    code, stdout, out = _simulate(tmp_path, "walk", ["--duration", "4"], capsys, monkeypatch)
+@pytest.mark.parametrize("engine", ENGINES)
+def test_bullet_walks_forward_on_flat_ground(engine: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    code, stdout, out = _simulate(tmp_path, "walk", ["--duration", "4", "--engine", engine], capsys, monkeypatch)
     assert code == 0 and "bullet / tripod / WG on flat" in stdout
     summary = json.loads((out / "summary.json").read_text())
     assert set(summary) >= REQUIRED
+    assert summary["engine"] == engine and summary["versions"][engine] == summary["engine_version"]
     assert summary["fell"] is False and summary["terrain"] == "flat"  # shc view and render rebuild it from this
     assert summary["distance_m"] > 0.4  # accelerating towards 0.232 m/s for 4 s
     assert summary["forward_distance_m"] > 0.95 * summary["distance_m"]
@@ -40,8 +43,11 @@ def test_bullet_walks_forward_on_flat_ground(tmp_path: Path, capsys, monkeypatch
     assert {p.name for p in out.glob("*.png")} == {"trajectory.png", "power.png", "contacts.png"}
 
 
-def test_same_seed_gives_the_same_summary(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    args = ["--duration", "1", "--terrain", "blocks", "--seed", "7", "--imu-noise", "0.01", "--no-plots"]
+@pytest.mark.parametrize("engine", ENGINES)
+def test_same_seed_gives_the_same_summary(engine: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """Determinism per engine: the same options give byte-identical logs."""
+    args = ["--duration", "1", "--terrain", "blocks", "--seed", "7", "--imu-noise", "0.01", "--no-plots",
+            "--engine", engine]
     summaries = []
     for name in ("a", "b"):
         code, _, out = _simulate(tmp_path, name, args, capsys, monkeypatch)
@@ -52,9 +58,10 @@ def test_same_seed_gives_the_same_summary(tmp_path: Path, capsys, monkeypatch) -
     assert (tmp_path / "a" / "log.csv").read_bytes() == (tmp_path / "b" / "log.csv").read_bytes()
 
 
-def test_stance_in_the_air_holds_the_body_still(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    code, _, out = _simulate(tmp_path, "sa", ["--scenario", "SA", "--duration", "1", "--no-plots"], capsys,
-                             monkeypatch)
+@pytest.mark.parametrize("engine", ENGINES)
+def test_stance_in_the_air_holds_the_body_still(engine: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    code, _, out = _simulate(tmp_path, "sa", ["--scenario", "SA", "--duration", "1", "--no-plots", "--engine", engine],
+                             capsys, monkeypatch)
     assert code == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["distance_m"] < 1e-6 and summary["cot"] is None and summary["fell"] is False
@@ -64,6 +71,7 @@ def test_stance_in_the_air_holds_the_body_still(tmp_path: Path, capsys, monkeypa
     (["--terrain", "ramps:10"], "--terrain: unknown terrain 'ramps'"),
     (["--physics-rate", "333"], "--physics-rate: 333 Hz is not a whole multiple of the control rate 100 Hz"),
     (["--scenario", "XX"], "--scenario: 'XX' is not a scenario"),
+    (["--engine", "ode"], "--engine: 'ode' is not a physics engine"),
 ])
 def test_bad_options_are_one_line(tmp_path: Path, args: list[str], message: str, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     code, _, err = run(["simulate", *args, "--out", str(tmp_path / "x")], capsys, monkeypatch)
@@ -82,27 +90,32 @@ def test_export_urdf_writes_the_generated_model(tmp_path: Path, capsys, monkeypa
     assert sum(1 for link in root.iter("link") if link.get("name", "").endswith("_foot")) == 6
 
 
-def test_mammalian_starts_on_the_stand_and_walks_its_bipod(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+@pytest.mark.parametrize("engine", ENGINES)
+def test_mammalian_starts_on_the_stand_and_walks_its_bipod(engine: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """bullet_mammalian.toml sets ``start_up.simulation = "stand"``: no flag needed."""
-    code, _, out = _simulate(tmp_path, "mammal", ["bullet_mammalian", "--duration", "3", "--no-plots"],
-                             capsys, monkeypatch)
+    code, _, out = _simulate(tmp_path, "mammal", ["bullet_mammalian", "--duration", "3", "--no-plots", "--engine",
+                                                  engine], capsys, monkeypatch)
     assert code == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["gait"] == "bipod" and summary["fell"] is False
     assert summary["distance_m"] > 0.3
 
 
-def test_mammalian_cannot_lift_itself_off_the_ground(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+@pytest.mark.parametrize("engine", ENGINES)
+def test_mammalian_cannot_lift_itself_off_the_ground(engine: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """Why the mammalian starts on a stand: from the ground its front femurs saturate at the MX-106 stall torque
-    and it pitches onto its nose during the direct start-up."""
-    code, _, out = _simulate(tmp_path, "ground", ["bullet_mammalian", "--ground", "--duration", "1", "--no-plots"],
-                             capsys, monkeypatch)
+    and, in PyBullet, it pitches onto its nose during the direct start-up. In MuJoCo the front femurs saturate
+    too but the rear legs carry more (soft contacts share the load differently) and it gets up: a borderline
+    case (docs/physics-model.md, engines)."""
+    code, _, out = _simulate(tmp_path, "ground", ["bullet_mammalian", "--ground", "--duration", "1", "--no-plots",
+                                                  "--engine", engine], capsys, monkeypatch)
     assert code == 0
     with (out / "log.csv").open() as handle:
         rows = list(csv.DictReader(handle))
     stall = 8.4
     assert max(abs(float(row["AR_femur_torque"])) for row in rows[:150]) > 0.99 * stall
-    assert max(float(row["pitch"]) for row in rows if row["robot_state"] != "RUNNING") > 0.3  # nose down [rad]
+    pitch = max(float(row["pitch"]) for row in rows if row["robot_state"] != "RUNNING")
+    assert pitch > 0.3 if engine == "pybullet" else 0.03 < pitch < 0.3  # nose down [rad]
 
 
 @pytest.mark.parametrize("substeps", [8, 9])
@@ -111,8 +124,8 @@ def test_readings_are_those_after_the_last_physics_step(substeps: int) -> None:
     asking PyBullet again: they must equal a fresh read."""
     import numpy as np
 
-    from shc_cli.backends.pybullet_.terrain import parse_terrain
     from shc_cli.backends.simulated import WorldOptions, open_world
+    from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.controller import Command, Controller, RobotState
     from shc_cli.spec.checks import load_checked
 
@@ -137,9 +150,9 @@ def test_mean_joint_speed_from_the_displacement_equals_the_mean_of_every_physics
     speeds PyBullet reports after each sub-step and compare."""
     import numpy as np
 
-    from shc_cli.backends.pybullet_.power import servo_power
-    from shc_cli.backends.pybullet_.terrain import parse_terrain
+    from shc_cli.backends.power import servo_power
     from shc_cli.backends.simulated import WorldOptions, open_world
+    from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.controller import Command, Controller, RobotState
     from shc_cli.spec.checks import load_checked
 
@@ -179,13 +192,14 @@ def test_mean_joint_speed_from_the_displacement_equals_the_mean_of_every_physics
         world.close()
 
 
-def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(tmp_path: Path) -> None:
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(engine: str, tmp_path: Path) -> None:
     """``[servo] control = "pd"``: ATHENA standing on flat ground settles (no oscillation) lower than with the stiff
     position motor, and its femurs' steady errors halve when the stiffness doubles (a proportional servo)."""
     import numpy as np
 
-    from shc_cli.backends.pybullet_.terrain import parse_terrain
-    from shc_cli.backends.pybullet_.world import World
+    from shc_cli.backends.engine import open_engine
+    from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.startup import plan_direct_startup
     from shc_cli.model.chains import Chains
     from shc_cli.spec.loading import load_robot
@@ -202,7 +216,7 @@ def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(tmp_path:
         assert robot is not None
         chains = Chains.from_robot(robot)
         stance = plan_direct_startup(robot, chains, chains.default_joints())
-        world = World(robot, parse_terrain("flat"), robot.time_delta, 4, False, stance)
+        world = open_engine(engine, robot, parse_terrain("flat"), robot.time_delta, 4, False, stance)
         try:
             for _ in range(300):  # 3 s: settled
                 world.command(stance)

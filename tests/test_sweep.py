@@ -55,6 +55,23 @@ robot = "bullet_mammalian"
     assert len({p.slug for p in sweep.points}) == 12
 
 
+def test_engine_is_a_sweepable_option_and_sweep_engine_fills_it_in(tmp_path: Path) -> None:
+    from shc_cli.commands.sweep import with_engine
+
+    both = load_sweep(_write(tmp_path, '[grid]\nengine = ["pybullet", "mujoco"]\n"walker.step_frequency" = [1.0]\n'))
+    assert [p.options["engine"] for p in both.points] == ["pybullet", "mujoco"]
+    assert [p.slug for p in both.points] == ["engine=pybullet-walker.step_frequency=1",
+                                            "engine=mujoco-walker.step_frequency=1"]
+    assert with_engine(both, "mujoco") == both  # the file chooses
+    plain = load_sweep(ROOT / "sweeps" / "bullet_cot.toml")
+    assert {p.options["engine"] for p in plain.points} == {"pybullet"}  # the default
+    assert {p.options["engine"] for p in with_engine(plain, "mujoco").points} == {"mujoco"}
+    assert [p.slug for p in with_engine(plain, "mujoco").points] == [p.slug for p in plain.points]
+    for name in ("engines_agreement.toml", "engines_agreement_paper.toml"):
+        agreement = load_sweep(ROOT / "sweeps" / name)
+        assert len(agreement.points) == 12 and {p.options["engine"] for p in agreement.points} == {"pybullet", "mujoco"}
+
+
 def test_shipped_sweeps_load_and_bullet_cot_is_the_papers_grid() -> None:
     sweep = load_sweep(ROOT / "sweeps" / "bullet_cot.toml")
     assert sweep.grid["stride_percent"] == [60, 75, 90, 100]  # paper eq. 21 L_s
@@ -103,6 +120,7 @@ def test_a_variant_changes_only_the_swept_default(tmp_path: Path) -> None:
     ('[grid]\n"walker.step_freq" = [1.0]\n', 2, "has no field 'walker.step_freq'"),
     ('[grid]\ngait = ["tripod", "trot"]\n', 2, "trot"),
     ('colour = "red"\n', 1, "unknown key 'colour'"),
+    ('[grid]\nengine = ["pybullet", "ode"]\n', 2, "'ode' is not a physics engine"),
 ])
 def test_bad_sweep_files_are_one_line_with_the_line(tmp_path: Path, text: str, line: int, message: str, capsys,  # type: ignore[no-untyped-def]
                                                      monkeypatch) -> None:

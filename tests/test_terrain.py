@@ -17,14 +17,14 @@ import numpy as np
 import pybullet
 import pytest
 
-from shc_cli.backends.pybullet_.terrain import (
+from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
+from shc_cli.backends.terrain import (
     FEATURE_END_X,
     FEATURE_START_X,
     HALF_WIDTH,
     LANDING_END_X,
     Terrain,
     TerrainSpec,
-    build_terrain,
     parse_terrain,
 )
 from shc_cli.errors import SpecError
@@ -168,7 +168,7 @@ def test_bad_heightfield_files(tmp_path: Path, content: str, expected: str) -> N
 
 
 def test_parsing_does_not_import_pybullet() -> None:
-    code = ("import sys; from shc_cli.backends.pybullet_.terrain import parse_terrain; parse_terrain('blocks'); "
+    code = ("import sys; from shc_cli.backends.terrain import parse_terrain; parse_terrain('blocks'); "
             "print('pybullet' in sys.modules)")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)
     assert result.stdout.strip() == "False"

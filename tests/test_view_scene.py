@@ -89,7 +89,7 @@ def test_scene_xml_has_one_mocap_body_per_link_and_foot(bullet: Robot) -> None:
 
 
 def test_terrain_shapes_follow_the_summary(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    from shc_cli.backends.pybullet_.terrain import Terrain, parse_terrain
+    from shc_cli.backends.terrain import Terrain, parse_terrain
 
     assert scene.terrain_shapes({}) == scene.TerrainShapes("flat", [])
     stairs = scene.terrain_shapes({"terrain": "stairs:0.05,0.3", "seed": 0})

@@ -28,7 +28,7 @@ class WorldOptions:
     """How the simulated world is built (``shc simulate`` options).
 
     Attributes:
-        terrain: the terrain spec (:func:`shc_cli.backends.pybullet_.terrain.parse_terrain`).
+        terrain: the terrain spec (:func:`shc_cli.backends.terrain.parse_terrain`).
         substeps: physics steps per control period.
         airborne: hold the body in the air (scenarios SA, WA).
         friction: lateral friction of feet and terrain.
@@ -38,6 +38,7 @@ class WorldOptions:
         start_pose: ``"unpacked"`` or ``"packed"``.
         gui: open the engine's GUI.
         stand: start up held on a removable stand.
+        engine: the physics engine (:data:`shc_cli.backends.engine.ENGINES`).
     """
 
     terrain: Any
@@ -50,11 +51,12 @@ class WorldOptions:
     start_pose: str = "unpacked"
     gui: bool = False
     stand: bool = False
+    engine: str = "pybullet"
 
 
 def open_world(robot: Robot, options: WorldOptions) -> Any:
     """The physics world of a run, its robot spawned in the start pose (the one place an engine is built)."""
-    from shc_cli.backends.pybullet_.world import World
+    from shc_cli.backends.engine import open_engine
     from shc_cli.control.sequence import joint_configurations
     from shc_cli.model.chains import Chains
 
@@ -62,8 +64,9 @@ def open_world(robot: Robot, options: WorldOptions) -> Any:
     packed, unpacked = joint_configurations(robot, chains.joints)
     initial = np.clip(packed[-1] if options.start_pose == "packed" and len(packed) else unpacked, chains.lower,
                       chains.upper)
-    return World(robot, options.terrain, robot.time_delta, options.substeps, options.airborne, initial,
-                 options.friction, options.restitution, options.seed, options.imu_noise, options.gui, options.stand)
+    return open_engine(options.engine, robot, options.terrain, robot.time_delta, options.substeps, options.airborne,
+                       initial, options.friction, options.restitution, options.seed, options.imu_noise, options.gui,
+                       options.stand)
 
 
 class SimulatedBackend:

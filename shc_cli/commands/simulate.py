@@ -1,4 +1,4 @@
-"""``shc simulate``: the one controller driving the robot in PyBullet physics, logged and summarised."""
+"""``shc simulate``: the one controller driving the robot in physics (PyBullet or MuJoCo), logged and summarised."""
 
 from __future__ import annotations
 
@@ -106,6 +106,7 @@ class SimulateOptions:
         feedback: per-run switches of the sensor-driven features.
         fail_on_fall: the command exits 4 when the robot fell.
         overwrite: replace an existing run directory at ``out`` when the run finishes.
+        engine: the physics engine, ``pybullet`` or ``mujoco``.
     """
 
     robot: str = "bullet"
@@ -128,6 +129,7 @@ class SimulateOptions:
     feedback: Feedback = field(default_factory=lambda: Feedback())
     fail_on_fall: bool = False
     overwrite: bool = False
+    engine: str = "pybullet"
 
 
 def run_simulate(options: SimulateOptions, after: Callable[[Path], None] | None = None) -> Path:
@@ -167,8 +169,9 @@ def simulate_to(options: SimulateOptions | None = None, **changes: Any) -> tuple
     the given options).
     """
     from shc_cli import __version__
-    from shc_cli.backends.pybullet_.terrain import parse_terrain
+    from shc_cli.backends.engine import ENGINES
     from shc_cli.backends.simulated import SimulatedBackend, WorldOptions, open_world
+    from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.controller import Controller
     from shc_cli.hardware.inputs import TimelineInput
     from shc_cli.runlog import LogRecorder, RunDirectory
@@ -179,6 +182,9 @@ def simulate_to(options: SimulateOptions | None = None, **changes: Any) -> tuple
 
     o = replace(options or SimulateOptions(), **changes)
     check_display(o.gui)
+    if o.engine not in ENGINES:
+        raise SpecError([Issue(None, None, "--engine", f"'{o.engine}' is not a physics engine",
+                               f"use {' or '.join(ENGINES)}")])
     scenario = o.scenario.upper()
     if scenario not in SCENARIOS:
         raise SpecError([Issue(None, None, "--scenario", f"'{scenario}' is not a scenario",
@@ -199,7 +205,7 @@ def simulate_to(options: SimulateOptions | None = None, **changes: Any) -> tuple
     stand = robot.start_up.simulation == "stand" if o.stand is None else o.stand
     with RunDirectory(directory, o.overwrite) as run:  # refuses an existing --out before the physics opens
         world = open_world(robot, WorldOptions(terrain, substeps, airborne, o.friction, o.restitution, o.seed,
-                                               o.imu_noise, o.start, o.gui, stand))
+                                               o.imu_noise, o.start, o.gui, stand, o.engine))
         with SimulatedBackend(robot, world) as backend:
             controller = Controller(robot, inputs.gait, joints=backend.start(), pose_sets=inputs.pose_sets)
             run.write_robot(robot)
@@ -213,14 +219,12 @@ def simulate_to(options: SimulateOptions | None = None, **changes: Any) -> tuple
 
             def summarise(_: Any) -> dict[str, Any]:
                 import numpy as np
-                import pybullet
 
                 if progress is not None:
                     progress.stop()
                 return {**record.summary(scenario, controller.gait.name, controller), "seed": o.seed,
-                        "terrain": str(world.terrain.spec),
-                        "versions": {"shc": __version__, "pybullet": str(pybullet.getAPIVersion()),
-                                     "numpy": np.__version__}}
+                        "terrain": str(world.terrain.spec), "engine": world.name, "engine_version": world.version,
+                        "versions": {"shc": __version__, world.name: world.version, "numpy": np.__version__}}
 
             def plot(folder: Path) -> None:
                 from shc_cli.plots import plot_simulation

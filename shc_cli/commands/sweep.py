@@ -16,6 +16,7 @@ with ``status = failed`` and its error. ``--resume`` re-reads finished run direc
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import math
 import os
@@ -35,7 +36,7 @@ METRICS = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "p
            "stability_margin_median_m", "zmp_margin_median_m", "height_median_m", "height_iqr_m",
            "roll_rate_median_rps", "pitch_rate_median_rps", "step_frequency_hz")
 """Analysis keys copied into the results table."""
-RUN_KEYS = ("fell", "sim_time_s", "wall_time_s", "physics_time_s")
+RUN_KEYS = ("engine", "fell", "sim_time_s", "wall_time_s", "physics_time_s")
 """Summary keys copied into the results table (the timings differ from run to run; compare the others)."""
 
 
@@ -113,7 +114,8 @@ def _simulate(point: Point, out: Path, directory: Path) -> None:
                                 plots=False, terrain=options["terrain"], scenario=options["scenario"],
                                 physics_rate=float(options["physics_rate"]), friction=float(options["friction"]),
                                 restitution=float(options["restitution"]), seed=int(options["seed"]),
-                                imu_noise=float(options["imu_noise"]), start=options["start"], stand=options["stand"]))
+                                imu_noise=float(options["imu_noise"]), start=options["start"], stand=options["stand"],
+                                engine=options["engine"]))
 
 
 def _robot_for(point: Point, out: Path) -> str:
@@ -307,11 +309,28 @@ def pool_results(points: list[Point], out: Path, executor: str, workers: int,
         yield from pool.results(points, out)
 
 
+def with_engine(sweep: Sweep, engine: str | None) -> Sweep:
+    """The sweep with ``engine`` (``--engine``) for every run, unless the file chooses the engine itself."""
+    if engine is None:
+        return sweep
+    if engine not in ("pybullet", "mujoco"):
+        raise SpecError([Issue(None, None, "--engine", f"'{engine}' is not a physics engine",
+                               "use pybullet or mujoco")])
+    if "engine" in sweep.fixed or "engine" in sweep.grid:
+        return sweep
+    return dataclasses.replace(sweep, points=[dataclasses.replace(point, options={**point.options, "engine": engine})
+                                              for point in sweep.points])
+
+
 def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | None, out: Path | None,
-              resume: bool, overwrite: bool = False) -> Path:
+              resume: bool, overwrite: bool = False, engine: str | None = None) -> Path:
     """Check the sweep, run every point, write the results table and plots; returns the output directory
-    (``overwrite``: delete an existing output directory first; ``resume``: continue it)."""
-    sweep = load_sweep(file)
+    (``overwrite``: delete an existing output directory first; ``resume``: continue it).
+
+    ``engine`` is the physics engine of every run whose sweep file does not choose one (``engine`` in
+    ``[fixed]`` or ``[grid]``).
+    """
+    sweep = with_engine(load_sweep(file), engine)
     check_executor(executor, scheduler)
     check_points(sweep)
     out = out or Path("runs") / sweep.name

@@ -8,13 +8,13 @@ when the robot has fallen: body tilt above :data:`FALL_TILT`, or (on the ground)
 
 from __future__ import annotations
 
-import math
 import time
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from shc_cli.analysis.cot import cost_of_transport
+from shc_cli.backends.engine import tilt
 from shc_cli.control.controller import RobotState
 
 if TYPE_CHECKING:
@@ -25,12 +25,6 @@ FALL_TILT = 0.8
 """Body tilt above which the robot has fallen [rad] (≈ 46°)."""
 FALL_HEIGHT_SHARE = 0.3
 """The robot has fallen when its body is lower than this share of the body clearance above the terrain."""
-
-
-def tilt(rpy: np.ndarray) -> float:
-    """Angle between the body's z axis and the world's vertical [rad]."""
-    roll, pitch = float(rpy[0]), float(rpy[1])
-    return math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch))))
 
 
 class PhysicsRecord:

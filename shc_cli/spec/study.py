@@ -52,8 +52,8 @@ from shc_cli.spec.sweep import OPTIONS, Point, _check_value, _slug_value
 
 TOP_LEVEL = {"name", "description", "robot", "terrain", "scenario", "engine", "duration", "skip", "seeds", "trials",
              "fixed", "space", "objectives", "constraints", "sampler"}
-ENGINES = ("pybullet",)
-"""Physics engines a study can name (``shc simulate`` has only PyBullet on this version)."""
+ENGINES = ("pybullet", "mujoco")
+"""Physics engines a study can name (``shc simulate --engine``)."""
 SAMPLERS = ("nsga2", "nsga3", "tpe", "random")
 SAMPLER_KEYS = {"name", "seed", "population"}
 NOT_SEARCHED = ("seed", "duration", "robot")
@@ -243,6 +243,8 @@ def load_study(path: Path) -> Study:
     if engine not in ENGINES:
         raise _issue(document, ("engine",), f"'{engine}' is not an engine of this version",
                      f"use {' or '.join(ENGINES)}")
+    if "engine" in data:
+        fixed["engine"] = engine
     seeds = data.get("seeds", [0])
     if (not isinstance(seeds, list) or not seeds or not all(isinstance(s, int) and not isinstance(s, bool)
                                                             for s in seeds) or len(set(seeds)) != len(seeds)):

@@ -49,6 +49,7 @@ OPTIONS: dict[str, tuple[type | tuple[type, ...], Any]] = {
     "imu_noise": ((int, float), 0.0),
     "start": (str, "unpacked"),
     "stand": (bool, None),
+    "engine": (str, "pybullet"),
 }
 """Simulation options a sweep can set: type and default (as ``shc simulate``; ``gait`` "" = the robot's own)."""
 TOP_LEVEL = {"name", "description", "duration", "grid", "fixed"}
@@ -110,6 +111,9 @@ def _check_value(document: Document, where: tuple[str, ...], key: str, value: An
         names = " or ".join(t.__name__ for t in (kind if isinstance(kind, tuple) else (kind,)))
         raise SpecError([Issue(document.path, document.line(where), ".".join(where),
                                f"{value!r} is not a {names}", f"give {key} as a {names}")])
+    if key == "engine" and value not in ("pybullet", "mujoco"):
+        raise SpecError([Issue(document.path, document.line(where), ".".join(where),
+                               f"'{value}' is not a physics engine", "use pybullet or mujoco")])
     if key == "stride_percent" and not 0.0 < float(value) <= 100.0:
         raise SpecError([Issue(document.path, document.line(where), ".".join(where),
                                f"stride {value}% is outside (0, 100]", "give a percentage of the maximum stride")])

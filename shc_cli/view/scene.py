@@ -196,13 +196,13 @@ class TerrainShapes:
 def terrain_shapes(summary: dict[str, Any]) -> TerrainShapes:
     """The terrain a run walked on, from its summary (``terrain``, ``seed``), as the simulation built it. A terrain
     that cannot be rebuilt (a height-field file no longer there) is drawn flat."""
-    from shc_cli.backends.pybullet_.terrain import FEATURE_START_X, Terrain, parse_terrain
+    from shc_cli.backends.terrain import FEATURE_START_X, Terrain, parse_terrain
     from shc_cli.errors import ShcError
 
     text = str(summary.get("terrain") or "flat")
     try:
         terrain = Terrain(parse_terrain(text), int(summary.get("seed") or 0))
-        raw = terrain._boxes()
+        raw = terrain.boxes()
     except (ShcError, OSError, ValueError):
         return TerrainShapes(text, [])
     out = []

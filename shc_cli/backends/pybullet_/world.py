@@ -1,6 +1,6 @@
-"""The PyBullet world: robot, terrain, servos and sensors, advanced one control period at a time.
+"""The PyBullet engine (:class:`~shc_cli.backends.engine.Engine`): robot, terrain, servos and sensors.
 
-The simulation backend of the one controller: :meth:`World.command` sends the controller's joint targets
+Advanced one control period at a time: :meth:`World.command` sends the controller's joint targets
 to position-controlled servos (torque limit and no-load speed passed explicitly: POSITION_CONTROL
 ignores the URDF's limits), :meth:`World.step` runs the physics sub-steps of one control period and
 :meth:`World.read` returns what the robot's sensors see. ``pybullet`` is imported here only.
@@ -8,34 +8,31 @@ ignores the URDF's limits), :meth:`World.step` runs the physics sub-steps of one
 
 from __future__ import annotations
 
-import math
 import os
 import sys
 import tempfile
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
+from importlib import metadata
 from typing import Any
 
 import numpy as np
 
-from shc_cli.backends.pybullet_.terrain import TerrainSpec, build_terrain
-from shc_cli.backends.pybullet_.urdf import foot_radius, robot_urdf
+from shc_cli.backends.engine import GRAVITY, Reading, spawn_height, tilt
+from shc_cli.backends.imu import Imu
+from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
+from shc_cli.backends.pybullet_.urdf import robot_urdf
 from shc_cli.backends.servo import ServoModel
+from shc_cli.backends.terrain import TerrainSpec
 from shc_cli.errors import BackendError
 from shc_cli.spec.robot import Robot
 
-GRAVITY = 9.81
-"""Standard gravity [m/s²]."""
+__all__ = ["Reading", "World", "quiet_stdout", "tilt"]
 SOLVER_ITERATIONS = 30
 """Constraint solver iterations. Measured on the Bullet tripod walk at 400 Hz (docs/physics-model.md): 30 instead
 of 50 takes 21–29 % less physics time, lowers the walking body by 0.8 mm and changes speed by −1.3 % and power
 by +5 %; 20 sags 1.9 mm."""
-SPAWN_GAP = 0.01
-"""Height of the lowest foot above the ground when the robot is spawned [m]."""
-AIR_LIFT = 0.3
-"""In the air scenarios the body is held this far above its standing height, so no foot reaches the ground [m]."""
 
 
 @contextmanager
@@ -59,46 +56,8 @@ def quiet_stdout() -> Iterator[None]:
             os.close(copy)
 
 
-@dataclass(frozen=True)
-class Reading:
-    """What the robot's sensors report after a control period (legs in id order, joints leg by leg).
-
-    Attributes:
-        joints: joint positions ``(L, n)`` [rad] (0 where a leg has fewer joints).
-        joint_velocities: ``(L, n)`` [rad/s].
-        joint_efforts: motor torques averaged over the control period's physics steps ``(L, n)`` [N·m].
-        servo_power: electrical power of each servo averaged over the same steps ``(L, n)`` [W].
-        orientation: IMU orientation quaternion (x, y, z, w), body → world (rotates body-frame vectors into the
-            world, as PyBullet's base orientation).
-        angular_rate: IMU angular velocity in the body frame [rad/s].
-        linear_acceleration: IMU specific force in the body frame (gravity included, at rest +9.81 z) [m/s²].
-        foot_forces: contact normal force on each foot ``(L,)`` [N].
-        foot_contact: whether each foot touches anything ``(L,)``.
-        body_height: height of the body origin above the terrain below it (ray) [m].
-        position: ground-truth body position [m].
-        rpy: ground-truth roll, pitch, yaw [rad].
-        linear_velocity: ground-truth body velocity in the world frame [m/s].
-        angular_velocity: ground-truth body angular velocity in the world frame [rad/s].
-    """
-
-    joints: np.ndarray
-    joint_velocities: np.ndarray
-    joint_efforts: np.ndarray
-    servo_power: np.ndarray
-    orientation: np.ndarray
-    angular_rate: np.ndarray
-    linear_acceleration: np.ndarray
-    foot_forces: np.ndarray
-    foot_contact: np.ndarray
-    body_height: float
-    position: np.ndarray
-    rpy: np.ndarray
-    linear_velocity: np.ndarray
-    angular_velocity: np.ndarray
-
-
 class World:
-    """A PyBullet client holding one robot on one terrain.
+    """A PyBullet client holding one robot on one terrain: the PyBullet :class:`~shc_cli.backends.engine.Engine`.
 
     Args:
         robot: the robot.
@@ -123,13 +82,14 @@ class World:
             import pybullet
 
         self.p = pybullet
+        self.name = "pybullet"
+        self.version = metadata.version("pybullet")
         self.robot = robot
         self.control_period = control_period
         self.substeps = substeps
         self.physics_time = 0.0
         """Wall time spent inside ``stepSimulation`` [s]."""
-        self.rng = np.random.default_rng(seed)
-        self.imu_noise = imu_noise
+        self.imu = Imu(control_period, imu_noise, seed)
         with quiet_stdout():
             self.client = pybullet.connect(pybullet.GUI if gui else pybullet.DIRECT)
         if self.client < 0:
@@ -142,7 +102,6 @@ class World:
         self.terrain = build_terrain(c, terrain, friction, restitution, seed)
         self.stand: int | None = None
         self._load_robot(fixed_base, initial_joints, friction, restitution, stand and not fixed_base)
-        self._previous_velocity = np.zeros(3)
 
     # -- set-up ------------------------------------------------------------------------------------------------
 
@@ -152,15 +111,7 @@ class World:
 
         p, c, robot = self.p, self.client, self.robot
         chains = Chains.from_robot(robot)
-        tips = chains.tips(joints)
-        feet = [foot_radius(leg) for leg in robot.legs.values()]
-        ground = self.terrain.height_at(0.0, 0.0)
-        if fixed_base:
-            height = ground + robot.walker.body_clearance + AIR_LIFT
-        elif stand:
-            height = ground + robot.walker.body_clearance + max(feet)
-        else:
-            height = ground + SPAWN_GAP + max(-(tips[i, 2]) + feet[i] for i in range(len(feet)))
+        height = spawn_height(robot, self.terrain, joints, fixed_base, stand)
         with tempfile.NamedTemporaryFile("w", suffix=".urdf", delete=False) as handle:
             handle.write(robot_urdf(robot))
             path = handle.name
@@ -314,13 +265,7 @@ class World:
         rotation = np.array(p.getMatrixFromQuaternion(orientation)).reshape(3, 3)
         position = np.array(com) - rotation @ self.com_offset  # the base_link frame's origin
         linear_v, angular_v = np.array(linear), np.array(angular)
-        acceleration = (linear_v - self._previous_velocity) / self.control_period
-        self._previous_velocity = linear_v
-        specific_force = rotation.T @ (acceleration + np.array([0.0, 0.0, GRAVITY]))
-        rate = rotation.T @ angular_v
-        if self.imu_noise > 0.0:
-            specific_force = specific_force + self.rng.normal(0.0, self.imu_noise, 3)
-            rate = rate + self.rng.normal(0.0, self.imu_noise, 3)
+        specific_force, rate = self.imu.sense(rotation, linear_v, angular_v)
         forces = np.zeros(len(self.joint_index))
         for point in p.getContactPoints(bodyA=self.body, physicsClientId=c):
             foot = self.foot_leg.get(point[3])
@@ -359,8 +304,3 @@ class World:
     def close(self) -> None:
         self.p.disconnect(physicsClientId=self.client)
 
-
-def tilt(rpy: np.ndarray) -> float:
-    """Angle between the body's z axis and the vertical [rad]."""
-    roll, pitch = float(rpy[0]), float(rpy[1])
-    return math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch))))

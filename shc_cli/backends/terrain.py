@@ -1,29 +1,21 @@
-"""Terrains for the PyBullet simulator: parsed from ``--terrain`` text, built in a client, queried analytically.
+"""Terrains of the simulators: parsed from ``--terrain`` text, described as geometry, queried analytically.
 
 ``parse_terrain`` turns ``flat``, ``ramp:DEG``, ``blocks[:LOW,HIGH[,SIZE]]``, ``stairs:RISE,RUN`` or
 ``heightfield:FILE[,SCALE[,CELL]]`` into a :class:`TerrainSpec` (bad text raises one
-:class:`~shc_cli.errors.SpecError` line); ``build_terrain`` creates its bodies in an open PyBullet client
-and returns a :class:`Terrain` whose :meth:`Terrain.height_at` gives the ground height under any point from
-the same geometry (no ray casting). The robot starts at the origin facing +x; every terrain keeps the start
-area (x < 0.4 m) flat at z = 0. Geometry, defaults and units: ``docs/terrains.md``.
+:class:`~shc_cli.errors.SpecError` line); :class:`Terrain` holds what every physics engine builds from it — the
+boxes of ramps, stairs and block fields (:meth:`Terrain.boxes`), the height-field samples (:attr:`Terrain.field`)
+— and :meth:`Terrain.height_at` gives the ground height under any point from the same geometry (no ray
+casting). The robot starts at the origin facing +x; every terrain keeps the start area (x < 0.4 m) flat at
+z = 0. Geometry, defaults and units: ``docs/terrains.md``. Nothing here imports a physics engine: PyBullet builds
+the bodies in :mod:`shc_cli.backends.pybullet_.terrain_bodies`, MuJoCo in :mod:`shc_cli.backends.mujoco_.mjcf`.
 
-Every terrain has an infinite ground plane at z = 0; features stand on it. Ramps, stairs and blocks are
-boxes merged into ONE body with one compound collision shape, loaded from a generated single-link URDF:
-PyBullet's ``createCollisionShapeArray`` silently keeps only the first 16 shapes and ``createMultiBody``
-only 127 links (measured with pybullet 3.2.7), while a URDF link takes any number of ``<collision>``
-elements. Boxes give exact surfaces (ray hits agree with :meth:`Terrain.height_at` to float precision).
-``pybullet`` is imported inside the functions that need it so the CLI starts fast.
+Every terrain has an infinite ground plane at z = 0; features stand on it. Boxes give exact surfaces.
 """
 
 from __future__ import annotations
 
 import difflib
 import math
-import os
-import sys
-import tempfile
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -70,8 +62,10 @@ MAX_HEIGHTFIELD_SAMPLES = 250_000
 
 _SYNTAX = "flat, ramp:DEG, blocks[:LOW,HIGH[,SIZE]], stairs:RISE,RUN or heightfield:FILE[,SCALE[,CELL]]"
 _KINDS: tuple[TerrainKind, ...] = ("flat", "ramp", "blocks", "stairs", "heightfield")
-_GROUND_RGBA = (0.82, 0.82, 0.80, 1.0)
-_FEATURE_RGBA = (0.62, 0.55, 0.47, 1.0)
+GROUND_RGBA = (0.82, 0.82, 0.80, 1.0)
+"""Colour of the ground plane (red, green, blue, alpha)."""
+FEATURE_RGBA = (0.62, 0.55, 0.47, 1.0)
+"""Colour of ramps, stairs, blocks and height fields."""
 
 
 @dataclass(frozen=True)
@@ -264,7 +258,7 @@ def _read_grid(path: Path) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class _Box:
+class Box:
     """An axis-aligned box, or one pitched about y by ``pitch`` [rad] (a ramp)."""
 
     center: tuple[float, float, float]
@@ -284,22 +278,28 @@ def _stair_count(spec: TerrainSpec) -> int:
 
 
 class Terrain:
-    """A built terrain: its PyBullet bodies and the analytic ground height.
+    """A terrain's geometry (what an engine builds) and the analytic ground height.
 
     Attributes:
         spec: What was built.
         seed: The seed the block heights were drawn with.
-        body_ids: PyBullet body ids, the ground plane first; every one has the terrain's friction and restitution.
+        body_ids: The engine's ids of its bodies (PyBullet: body ids, the ground plane first); empty if not built.
         block_heights: Block heights ``(nx, ny)`` [m] for ``blocks`` (x index along +x from x = 0.4,
             y index along +y from the field's −y edge), otherwise ``None``.
+        field: Height-field samples ``(nx, ny)`` [m] for ``heightfield`` (as :attr:`TerrainSpec.heights`),
+            otherwise ``None``.
+        diagonal: Whose triangulation of the height-field cells :meth:`height_at` follows (``pybullet`` or
+            ``mujoco``: the engines split a cell along different diagonals).
     """
 
-    def __init__(self, spec: TerrainSpec, seed: int, body_ids: tuple[int, ...] = ()) -> None:
+    def __init__(self, spec: TerrainSpec, seed: int, body_ids: tuple[int, ...] = (),
+                 diagonal: Literal["pybullet", "mujoco"] = "pybullet") -> None:
         self.spec = spec
+        self.diagonal = diagonal
         self.seed = seed
         self.body_ids = body_ids
         self.block_heights: np.ndarray | None = None
-        self._field: np.ndarray | None = None
+        self.field: np.ndarray | None = None
         if spec.kind == "blocks":
             nx, ny = _block_grid(spec)
             heights = np.random.default_rng(seed).uniform(spec.low, spec.high, size=(nx, ny))
@@ -309,7 +309,7 @@ class Terrain:
         elif spec.kind == "heightfield":
             field = np.array(spec.heights, dtype=float)
             field.setflags(write=False)
-            self._field = field
+            self.field = field
 
     def height_at(self, x: float, y: float) -> float:
         """Ground height [m] under the point (x, y) [m], from the terrain's geometry.
@@ -341,9 +341,10 @@ class Terrain:
         return 0.0
 
     def _field_height(self, x: float, y: float) -> float:
-        """Height on PyBullet's triangulation: each cell split along its (i+1, j)–(i, j+1) diagonal."""
-        assert self._field is not None
-        field, cell = self._field, self.spec.cell
+        """Height on the engine's triangulation: PyBullet splits each cell along its (i+1, j)–(i, j+1) diagonal,
+        MuJoCo along its (i, j)–(i+1, j+1) one."""
+        assert self.field is not None
+        field, cell = self.field, self.spec.cell
         nx, ny = field.shape
         u = (x - FEATURE_START_X) / cell
         v = (y + (ny - 1) * cell / 2.0) / cell
@@ -352,11 +353,15 @@ class Terrain:
         i, j = min(int(u), nx - 2), min(int(v), ny - 2)
         fx, fy = u - i, v - j
         h00, h10, h01, h11 = field[i, j], field[i + 1, j], field[i, j + 1], field[i + 1, j + 1]
+        if self.diagonal == "mujoco":
+            if fx >= fy:
+                return float(h00 + fx * (h10 - h00) + fy * (h11 - h10))
+            return float(h00 + fy * (h01 - h00) + fx * (h11 - h01))
         if fx + fy <= 1.0:
             return float(h00 + fx * (h10 - h00) + fy * (h01 - h00))
         return float(h11 + (1.0 - fx) * (h01 - h11) + (1.0 - fy) * (h10 - h11))
 
-    def _boxes(self) -> list[_Box]:
+    def boxes(self) -> list[Box]:
         """The boxes of a ramp, stairs or block field (none for flat and height fields)."""
         spec = self.spec
         width = 2.0 * HALF_WIDTH
@@ -369,114 +374,22 @@ class Terrain:
             mid = (FEATURE_START_X + length / 2.0 * math.cos(theta), length / 2.0 * math.sin(theta))
             centre = (mid[0] - thickness / 2.0 * normal[0], 0.0, mid[1] - thickness / 2.0 * normal[1])
             plateau = LANDING_END_X - FEATURE_END_X
-            return [_Box(centre, (length, width, thickness), pitch=-theta),
-                    _Box((FEATURE_END_X + plateau / 2.0, 0.0, top / 2.0), (plateau, width, top))]
+            return [Box(centre, (length, width, thickness), pitch=-theta),
+                    Box((FEATURE_END_X + plateau / 2.0, 0.0, top / 2.0), (plateau, width, top))]
         if spec.kind == "stairs":
             steps = _stair_count(spec)
             boxes = []
             for k in range(1, steps + 1):
                 x0 = FEATURE_START_X + (k - 1) * spec.run
                 x1 = LANDING_END_X if k == steps else x0 + spec.run
-                boxes.append(_Box(((x0 + x1) / 2.0, 0.0, k * spec.rise / 2.0), (x1 - x0, width, k * spec.rise)))
+                boxes.append(Box(((x0 + x1) / 2.0, 0.0, k * spec.rise / 2.0), (x1 - x0, width, k * spec.rise)))
             return boxes
         if spec.kind == "blocks":
             assert self.block_heights is not None
             nx, ny = self.block_heights.shape
             y0 = -ny * spec.size / 2.0
-            return [_Box((BLOCKS_START_X + (i + 0.5) * spec.size, y0 + (j + 0.5) * spec.size, float(h) / 2.0),
+            return [Box((BLOCKS_START_X + (i + 0.5) * spec.size, y0 + (j + 0.5) * spec.size, float(h) / 2.0),
                          (spec.size, spec.size, float(h)))
                     for i in range(nx) for j in range(ny)
                     if (h := self.block_heights[i, j]) > 0.0]
         return []
-
-
-# -- building --------------------------------------------------------------------------------------------------
-
-
-@contextmanager
-def _quiet_stdout() -> Iterator[None]:
-    """Silence PyBullet's C-level messages, which go to file descriptor 1."""
-    sys.stdout.flush()
-    saved = os.dup(1)
-    try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 1)
-        yield
-    finally:
-        sys.stdout.flush()
-        os.dup2(saved, 1)
-        os.close(saved)
-
-
-def _boxes_urdf(boxes: list[_Box], shade: tuple[float, float] | None) -> str:
-    """A single fixed link holding every box as a ``<collision>`` (and a ``<visual>``) element."""
-
-    def number(value: float) -> str:
-        return repr(float(value))
-
-    lines = ['<?xml version="1.0"?>', '<robot name="terrain">', '<link name="terrain">',
-             '<inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>']
-    for box in boxes:
-        origin = f'<origin xyz="{" ".join(map(number, box.center))}" rpy="0 {number(box.pitch)} 0"/>'
-        geometry = f'<geometry><box size="{" ".join(map(number, box.size))}"/></geometry>'
-        light = 1.0
-        if shade is not None:  # blocks: lighter the higher, to tell them apart in the GUI
-            low, high = shade
-            light = 0.75 + 0.5 * (0.5 if high <= low else (box.size[2] - low) / (high - low))
-        color = " ".join(f"{min(1.0, c * light):.3f}" for c in _FEATURE_RGBA[:3]) + " 1"
-        lines.append(f"<collision>{origin}{geometry}</collision>")  # one element a line: long lines fail to load
-        lines.append(f'<visual>{origin}{geometry}<material name=""><color rgba="{color}"/></material></visual>')
-    lines += ["</link>", "</robot>", ""]
-    return "\n".join(lines)
-
-
-def build_terrain(client_id: int, spec: TerrainSpec, friction: float, restitution: float, seed: int) -> Terrain:
-    """Create the terrain's bodies in PyBullet client ``client_id``; returns them with the analytic height.
-
-    Args:
-        client_id: An open PyBullet client.
-        spec: The terrain (from :func:`parse_terrain`).
-        friction: Lateral friction of every terrain body.
-        restitution: Restitution of every terrain body.
-        seed: Seed of the block heights (``numpy.random.default_rng(seed)``); the same seed gives the same
-            terrain. Unused by the other terrains.
-    """
-    import pybullet as p
-
-    terrain = Terrain(spec, seed)
-    c = client_id
-    with _quiet_stdout():
-        plane = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=c)
-        plane_visual = p.createVisualShape(p.GEOM_PLANE, rgbaColor=list(_GROUND_RGBA), physicsClientId=c)
-        bodies = [p.createMultiBody(0.0, plane, plane_visual, physicsClientId=c)]
-        boxes = terrain._boxes()
-        if boxes:
-            shade = (spec.low, spec.high) if spec.kind == "blocks" else None
-            with tempfile.TemporaryDirectory(prefix="shc-terrain-") as folder:
-                path = Path(folder) / "terrain.urdf"
-                path.write_text(_boxes_urdf(boxes, shade), encoding="utf-8")
-                bodies.append(p.loadURDF(str(path), useFixedBase=True, physicsClientId=c))
-        if spec.kind == "heightfield":
-            bodies.append(_build_heightfield(c, terrain))
-    for body in bodies:
-        for link in range(-1, p.getNumJoints(body, physicsClientId=c)):
-            p.changeDynamics(body, link, lateralFriction=friction, restitution=restitution, physicsClientId=c)
-    terrain.body_ids = tuple(bodies)
-    return terrain
-
-
-def _build_heightfield(c: int, terrain: Terrain) -> int:
-    """A PyBullet height field: rows = samples along x; the shape is centred on the middle of its extent."""
-    import pybullet
-
-    assert terrain._field is not None
-    field, cell = terrain._field, terrain.spec.cell
-    nx, ny = field.shape
-    low, high = float(field.min()), float(field.max())
-    shape = pybullet.createCollisionShape(
-        pybullet.GEOM_HEIGHTFIELD, meshScale=[cell, cell, 1.0], heightfieldData=field.T.ravel().tolist(),
-        numHeightfieldRows=nx, numHeightfieldColumns=ny, physicsClientId=c)
-    centre = [FEATURE_START_X + (nx - 1) * cell / 2.0, 0.0, (low + high) / 2.0]
-    body = int(pybullet.createMultiBody(0.0, shape, basePosition=centre, physicsClientId=c))
-    pybullet.changeVisualShape(body, -1, rgbaColor=list(_FEATURE_RGBA), physicsClientId=c)
-    return body

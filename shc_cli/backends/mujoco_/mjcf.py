@@ -1,0 +1,277 @@
+"""MJCF text for MuJoCo, built in code from the robot file and the terrain: the same model PyBullet loads.
+
+The robot is the tree of ``shc_cli.backends.pybullet_.urdf`` (docs/physics-model.md), written as MJCF from the
+same functions — DH transforms, capsule radii, masses, inertias, foot spheres — so both engines simulate the
+same bodies (``tests/test_engines.py`` checks both engines' foot frames against the DH tips):
+
+* ``base_link``: the body box, mass and inertia at ``body.com``; a free joint ``root`` unless held in the air.
+* per leg and joint ``LEG_J_link`` with the hinge ``LEG_J_joint`` (axis z of its frame, range ``min``/``max``);
+  the first sits at the DH transform ``A(base)`` in ``base_link``, each next one at the previous joint's fixed
+  DH transform ``M = Rot_z(θ)·Trans_z(d)·Trans_x(r)·Rot_x(α)``. URDF's zero-mass leg frame link ``LEG_base``
+  is folded into the first joint's placement.
+* ``LEG_foot``: a body without joint at the tip, the foot sphere centred on it and a touch sensor ``LEG_touch``
+  whose site encloses the sphere (the foot's contact normal forces).
+* one actuator per joint (``LEG_J_servo``), the servo of :mod:`shc_cli.backends.mujoco_.world`.
+
+Terrain: the infinite ground plane, every box of :meth:`Terrain.boxes` as a static geom, a height field as an
+``hfield``. Robot geoms are in group 1 and collide only with terrain geoms (group 0): no self-collision, as in
+PyBullet. Friction and restitution are mapped to PyBullet's combined contact (docs/physics-model.md):
+PyBullet multiplies the two bodies' coefficients, MuJoCo takes the larger, so every geom gets ``friction²``.
+
+MJCF built in code rather than compiled from the generated URDF: MuJoCo's URDF reader has no capsules
+(PyBullet's ``<capsule>`` extension), no actuators, sensors, contact filters or solver options, so those would
+have to be patched into the compiled model anyway; MJCF text states all of it in one place, is deterministic
+(same robot, same bytes) and readable (``shc_cli.backends.mujoco_.mjcf.robot_mjcf``).
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from shc_cli.backends.pybullet_.urdf import (
+    CUBE_SIDE,
+    DEGENERATE_LENGTH,
+    FOOT_MASS,
+    box_inertia,
+    capsule_inertia,
+    foot_radius,
+    joint_offset,
+    leg_names,
+    link_mass,
+    link_radius,
+    sphere_inertia,
+)
+from shc_cli.backends.terrain import FEATURE_RGBA, FEATURE_START_X, GROUND_RGBA, Terrain
+from shc_cli.spec.robot import DH, Joint, Leg, Robot
+
+TOUCH_SHARE = 1.5
+"""Radius of a foot's touch-sensor site as a share of the foot radius: contact points lie inside the sphere (half
+the penetration below its surface), the site catches them and nothing of the next link, whose contacts do not
+count anyway (a touch sensor sees only its own body's contacts)."""
+CONTACT_TIME_CONSTANT = 0.005
+"""MuJoCo contact ``solref`` time constant [s]: stiff contacts, ≥ 2 physics steps at 400 Hz."""
+STAND_TIME_CONSTANT = 0.005
+"""Time constant of the stand's weld [s]."""
+ROBOT_GROUP = 1
+"""Geom group of the robot (the height ray sees only group 0, the terrain)."""
+
+
+@dataclass(frozen=True)
+class Options:
+    """How the world is built.
+
+    Attributes:
+        timestep: physics step [s].
+        base_height: height of ``base_link`` at spawn [m].
+        fixed_base: no free joint: the body is held in the air.
+        stand: a weld ``stand`` holds the body where it spawns until deactivated.
+        friction: PyBullet-style friction of feet and terrain (contact coefficient ``friction²``).
+        restitution: PyBullet-style restitution of feet and terrain (contact restitution ``restitution²``).
+    """
+
+    timestep: float
+    base_height: float
+    fixed_base: bool = False
+    stand: bool = False
+    friction: float = 0.9
+    restitution: float = 0.0
+
+
+def _num(value: float) -> str:
+    value = float(value)
+    return "0" if abs(value) < 1e-15 else repr(value)
+
+
+def _vec(values: tuple[float, ...] | list[float] | np.ndarray) -> str:
+    return " ".join(_num(v) for v in values)
+
+
+def _qmul(a: tuple[float, float, float, float], b: tuple[float, float, float, float]) -> tuple[float, ...]:
+    """Hamilton product of quaternions (w, x, y, z)."""
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return (w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2, w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2)
+
+
+def _axis_quat(axis: int, angle: float) -> tuple[float, float, float, float]:
+    q = [math.cos(angle / 2.0), 0.0, 0.0, 0.0]
+    q[1 + axis] = math.sin(angle / 2.0)
+    return (q[0], q[1], q[2], q[3])
+
+
+def dh_quat(dh: DH) -> tuple[float, ...]:
+    """Rotation of ``Rot_z(θ)·Rot_x(α)`` as a quaternion (w, x, y, z)."""
+    return _qmul(_axis_quat(2, dh.theta), _axis_quat(0, dh.alpha))
+
+
+def contact_restitution_ratio(restitution: float) -> float:
+    """MuJoCo ``solref`` damping ratio giving a bounce of ``restitution`` (PyBullet's combined one, r·r).
+
+    A contact is a damped spring; a half oscillation of damping ratio ζ returns ``e = exp(−πζ/√(1−ζ²))`` of the
+    impact speed, so ``ζ = −ln e / √(π² + ln² e)``; e = 0 is critical damping (ζ = 1, MuJoCo's default).
+    """
+    e = restitution * restitution
+    if e <= 0.0:
+        return 1.0
+    log = math.log(min(e, 0.999))
+    return -log / math.sqrt(math.pi**2 + log * log)
+
+
+def robot_mjcf(robot: Robot, terrain: Terrain, options: Options) -> str:
+    """The MJCF text of ``robot`` on ``terrain`` (deterministic: the same inputs give the same bytes)."""
+    root = ET.Element("mujoco", model=robot.name)
+    ET.SubElement(root, "compiler", angle="radian", autolimits="true", inertiafromgeom="false")
+    ET.SubElement(root, "option", timestep=_num(options.timestep), gravity="0 0 -9.81", integrator="implicitfast",
+                  cone="pyramidal")
+    ratio = contact_restitution_ratio(options.restitution)
+    mu = options.friction * options.friction
+    default = ET.SubElement(root, "default")
+    ET.SubElement(default, "geom", friction=f"{_num(mu)} 0.005 0.0001",
+                  solref=f"{_num(CONTACT_TIME_CONSTANT)} {_num(ratio)}", condim="3")
+    ET.SubElement(ET.SubElement(root, "visual"), "global", offwidth="1280", offheight="720")
+    asset = ET.SubElement(root, "asset")
+    world = ET.SubElement(root, "worldbody")
+    _terrain(asset, world, terrain)
+    _robot(world, robot, options)
+    if options.stand and not options.fixed_base:
+        equality = ET.SubElement(root, "equality")
+        ET.SubElement(equality, "weld", name="stand", body1="base_link", solref=f"{_num(STAND_TIME_CONSTANT)} 1")
+    _actuators(root, robot)
+    sensors = ET.SubElement(root, "sensor")
+    for names in leg_names(robot).values():
+        ET.SubElement(sensors, "touch", name=names.foot.replace("_foot", "_touch"), site=f"{names.foot}_site")
+    if len(asset) == 0:
+        root.remove(asset)
+    ET.indent(root)
+    return ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _terrain(asset: ET.Element, world: ET.Element, terrain: Terrain) -> None:
+    """Terrain geoms: group 0, colliding with the robot only (contype 1, conaffinity 2)."""
+    common: dict[str, Any] = {"contype": "1", "conaffinity": "2", "group": "0"}
+    ET.SubElement(world, "geom", name="ground", type="plane", size="0 0 1", rgba=_vec(GROUND_RGBA), **common)
+    for index, box in enumerate(terrain.boxes()):
+        quat = _axis_quat(1, box.pitch)
+        ET.SubElement(world, "geom", name=f"terrain_{index}", type="box", pos=_vec(box.center),
+                      quat=_vec(quat), size=_vec(tuple(s / 2.0 for s in box.size)), rgba=_vec(FEATURE_RGBA), **common)
+    if terrain.field is not None:
+        field, cell = terrain.field, terrain.spec.cell
+        nx, ny = field.shape
+        top = max(float(field.max()), 1e-6)
+        # MuJoCo's elevation: nrow × ncol, the first row at +y (as an image's top line), columns along +x; / top.
+        rows = field.T[::-1] / top
+        ET.SubElement(asset, "hfield", name="field", nrow=str(ny), ncol=str(nx),
+                      size=_vec(((nx - 1) * cell / 2.0, (ny - 1) * cell / 2.0, top, 0.01)),
+                      elevation=" ".join(_num(v) for v in rows.ravel()))
+        ET.SubElement(world, "geom", name="field", type="hfield", hfield="field",
+                      pos=_vec((FEATURE_START_X + (nx - 1) * cell / 2.0, 0.0, 0.0)), rgba=_vec(FEATURE_RGBA),
+                      **common)
+
+
+def _robot(world: ET.Element, robot: Robot, options: Options) -> None:
+    common: dict[str, Any] = {"contype": "2", "conaffinity": "1", "group": str(ROBOT_GROUP)}
+    body_spec = robot.body
+    base = ET.SubElement(world, "body", name="base_link", pos=_vec((0.0, 0.0, options.base_height)))
+    if not options.fixed_base:
+        ET.SubElement(base, "freejoint", name="root")
+    moments = body_spec.inertia if body_spec.inertia is not None else box_inertia(body_spec.mass, body_spec.size)
+    ET.SubElement(base, "inertial", pos=_vec(body_spec.com), mass=_num(body_spec.mass), diaginertia=_vec(moments))
+    ET.SubElement(base, "geom", name="body", type="box", pos=_vec(body_spec.com),
+                  size=_vec(tuple(s / 2.0 for s in body_spec.size)), rgba="0.35 0.38 0.42 1", **common)
+    ET.SubElement(base, "site", name="imu", pos="0 0 0", size="0.01")
+    for (leg_id, leg), names in zip(robot.legs.items(), leg_names(robot).values(), strict=True):
+        parent = base
+        pos, quat = joint_offset(leg.base), dh_quat(leg.base)
+        for index, (joint, joint_name, link_name) in enumerate(zip(leg.joints.values(), names.joints, names.links,
+                                                                   strict=True)):
+            body = ET.SubElement(parent, "body", name=link_name, pos=_vec(pos), quat=_vec(quat))
+            ET.SubElement(body, "joint", name=joint_name, type="hinge", axis="0 0 1",
+                          range=f"{_num(joint.min)} {_num(joint.max)}", armature=_num(armature(robot)))
+            _segment(body, leg, index, joint, common)
+            parent, pos, quat = body, joint_offset(joint), dh_quat(joint)
+        radius = foot_radius(leg)
+        foot = ET.SubElement(parent, "body", name=names.foot, pos=_vec(pos), quat=_vec(quat))
+        ET.SubElement(foot, "inertial", pos="0 0 0", mass=_num(FOOT_MASS),
+                      diaginertia=_vec((sphere_inertia(FOOT_MASS, radius),) * 3))
+        ET.SubElement(foot, "geom", name=f"{leg_id}_foot_geom", type="sphere", size=_num(radius),
+                      rgba="0.12 0.12 0.12 1", **common)
+        ET.SubElement(foot, "site", name=f"{names.foot}_site", type="sphere", size=_num(TOUCH_SHARE * radius))
+
+
+def _segment(body: ET.Element, leg: Leg, index: int, joint: Joint, common: dict[str, Any]) -> None:
+    """Mass, inertia and capsule of the link a joint moves (as the URDF's ``_segment_link``)."""
+    mass = link_mass(joint)
+    end = joint_offset(joint)
+    length = math.dist((0.0, 0.0, 0.0), end)
+    middle = tuple(e / 2.0 for e in end)
+    if length < DEGENERATE_LENGTH:
+        side = CUBE_SIDE
+        ET.SubElement(body, "inertial", pos=_vec(middle), mass=_num(mass),
+                      diaginertia=_vec(box_inertia(mass, (side, side, side))))
+        ET.SubElement(body, "geom", type="box", pos=_vec(middle), size=_vec((side / 2.0,) * 3),
+                      rgba="0.85 0.55 0.15 1", **common)
+        return
+    pitch, yaw = math.atan2(math.hypot(end[0], end[1]), end[2]), math.atan2(end[1], end[0])
+    radius = link_radius(leg, index)
+    straight = length - 2.0 * radius
+    ET.SubElement(body, "inertial", pos=_vec(middle), quat=_vec(_qmul(_axis_quat(2, yaw), _axis_quat(1, pitch))),
+                  mass=_num(mass), diaginertia=_vec(capsule_inertia(mass, radius, straight)))
+    unit = np.array(end) / length
+    start, stop = unit * radius, np.array(end) - unit * radius
+    ET.SubElement(body, "geom", type="capsule", fromto=_vec((*start, *stop)), size=_num(radius),
+                  rgba="0.85 0.55 0.15 1", **common)
+
+
+def _actuators(root: ET.Element, robot: Robot) -> None:
+    """One actuator per joint: for ``position`` servos a velocity actuator within ± the stall torque, driven by the
+    position loop every physics step; for ``pd`` and ``dynamixel`` servos a position actuator of the servo model's
+    stiffness and damping within ± its torque limit (:meth:`~shc_cli.backends.servo.ServoModel.gains`)."""
+    from shc_cli.backends.servo import ServoModel
+
+    servo = robot.servo
+    actuators = ET.SubElement(root, "actuator")
+    limit = f"{_num(-servo.stall_torque)} {_num(servo.stall_torque)}"
+    gains = ServoModel(servo).gains() if servo.control in ("pd", "dynamixel") else None
+    for names in leg_names(robot).values():
+        for joint_name in names.joints:
+            name = joint_name.removesuffix("_joint") + "_servo"
+            if gains is not None:
+                ET.SubElement(actuators, "position", name=name, joint=joint_name, kp=_num(gains.stiffness),
+                              kv=_num(gains.damping),
+                              forcerange=f"{_num(-gains.torque_limit)} {_num(gains.torque_limit)}")
+            else:
+                ET.SubElement(actuators, "velocity", name=name, joint=joint_name, kv=_num(velocity_stiffness(robot)),
+                              forcerange=limit)
+
+
+VELOCITY_ERROR_AT_STALL = 0.1
+"""The position servo's velocity loop reaches the stall torque at this share of the no-load speed (PyBullet's
+velocity-motor constraint is exact up to the stall torque; stiffer loops clamp more often, see :func:`armature`)."""
+ARMATURE_PER_NM = 0.00025
+"""Reflected rotor inertia per N·m of stall torque [kg·m²/(N·m)]: a geared servo's rotor inertia times the gear
+ratio squared, e.g. ≈ 1e-7 kg·m² × 225² ≈ 0.002 kg·m² for an 8.4 N·m MX-106 (pending the servo/gearbox model)."""
+
+
+def velocity_stiffness(robot: Robot) -> float:
+    """Gain of the servo's velocity loop [N·m·s/rad]: the stall torque at :data:`VELOCITY_ERROR_AT_STALL` of the
+    no-load speed."""
+    servo = robot.servo
+    return servo.stall_torque / (VELOCITY_ERROR_AT_STALL * servo.no_load_speed)
+
+
+def armature(robot: Robot) -> float:
+    """Reflected rotor inertia of every joint [kg·m²]: the servo's ``armature`` if the robot file gives one, else
+    :data:`ARMATURE_PER_NM` × stall torque.
+
+    MuJoCo integrates a clamped actuator explicitly: at 400 Hz the stall torque on a light link without it
+    (the Bullet tarsus: 0.0008 kg·m² about its joint) changes the speed by ``h·τ/I`` ≈ 27 rad/s in one step and
+    the joint chatters between ± the limit. PyBullet's motor, a solver constraint, needs none.
+    """
+    given = float(getattr(robot.servo, "armature", 0.0))
+    return given if given > 0.0 else ARMATURE_PER_NM * robot.servo.stall_torque

@@ -1,0 +1,233 @@
+"""The MuJoCo engine (:class:`~shc_cli.backends.engine.Engine`): robot, terrain, servos and sensors.
+
+The model is MJCF built in code (:mod:`shc_cli.backends.mujoco_.mjcf`), the same bodies PyBullet loads. Servos
+behave as PyBullet's (docs/physics-model.md):
+
+* ``position`` control: PyBullet's POSITION_CONTROL motor asks each physics step for the joint speed
+  ``v* = position_gain·(q* − q)/h + (1 − velocity_gain)·v`` (h the physics step) and reaches it within the stall
+  torque. Here every physics step sets ``v*`` (clipped to ± the no-load speed) as the target of a velocity
+  actuator of gain ``kv`` (:func:`~shc_cli.backends.mujoco_.mjcf.velocity_stiffness`, integrated implicitly)
+  limited to ± the stall torque. The joints carry the gearbox's reflected rotor inertia
+  (:func:`~shc_cli.backends.mujoco_.mjcf.armature`), which keeps light links stable when the torque limit
+  clamps (MuJoCo integrates a clamped actuator explicitly).
+* ``pd`` and ``dynamixel`` control: a position actuator ``τ = stiffness·(q* − q) − damping·q̇`` within ± the
+  torque limit, with the gains of :meth:`~shc_cli.backends.servo.ServoModel.gains` (implicit in the damping, as
+  PyBullet's stable PD); the servo's ``armature`` as joint armature.
+
+Torque and speed are averaged over each control period's physics steps and turned into electrical power by the
+engine-independent :func:`~shc_cli.backends.power.servo_power`, exactly as in PyBullet. ``mujoco`` is imported
+here only; it needs no GL to simulate.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from typing import Any
+
+import numpy as np
+
+from shc_cli.backends.engine import Reading, rpy_from_matrix, servo_slots, spawn_height
+from shc_cli.backends.imu import Imu
+from shc_cli.backends.mujoco_.mjcf import Options, robot_mjcf, velocity_stiffness
+from shc_cli.backends.power import servo_power
+from shc_cli.backends.pybullet_.urdf import leg_names
+from shc_cli.backends.terrain import Terrain, TerrainSpec
+from shc_cli.errors import BackendError
+from shc_cli.spec.robot import Robot
+
+RAY_GROUPS = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)
+"""Geom groups the height ray sees: the terrain's (0), not the robot's."""
+
+
+class MujocoWorld:
+    """A MuJoCo model and data holding one robot on one terrain.
+
+    Args:
+        robot: the robot.
+        terrain: the terrain.
+        control_period: the controller's period [s].
+        substeps: physics steps per control period.
+        fixed_base: hold the body in the air (no free joint), :data:`~shc_cli.backends.engine.AIR_LIFT` above its
+            standing height.
+        initial_joints: joint positions to spawn with ``(L, n)`` [rad].
+        friction: PyBullet-style friction of feet and terrain (docs/physics-model.md).
+        restitution: PyBullet-style restitution of feet and terrain.
+        seed: seed of every random thing (terrain blocks, IMU noise).
+        imu_noise: standard deviation of IMU noise; 0 = none.
+        stand: spawn at standing height held by a weld (:meth:`release_stand`).
+    """
+
+    def __init__(self, robot: Robot, terrain: TerrainSpec, control_period: float, substeps: int, fixed_base: bool,
+                 initial_joints: np.ndarray, friction: float = 0.9, restitution: float = 0.0, seed: int = 0,
+                 imu_noise: float = 0.0, stand: bool = False) -> None:
+        mujoco = import_mujoco()
+        self.mujoco = mujoco
+        self.name = "mujoco"
+        self.version = str(mujoco.__version__)
+        self.robot = robot
+        self.control_period = control_period
+        self.substeps = substeps
+        self.physics_time = 0.0
+        """Wall time spent inside ``mj_step`` [s]."""
+        self.terrain = Terrain(terrain, seed, diagonal="mujoco")
+        stand = stand and not fixed_base
+        self.fixed_base = fixed_base
+        height = spawn_height(robot, self.terrain, initial_joints, fixed_base, stand)
+        timestep = control_period / substeps
+        self.xml = robot_mjcf(robot, self.terrain, Options(timestep, height, fixed_base, stand, friction, restitution))
+        self.model = model = mujoco.MjModel.from_xml_string(self.xml)
+        self.data = data = mujoco.MjData(model)
+        self.slot_rows, self.slot_cols, self.width = servo_slots(robot)
+        joints = [name for names in leg_names(robot).values() for name in names.joints]
+        ids = [model.joint(name).id for name in joints]
+        self.qpos_index = np.array([model.jnt_qposadr[i] for i in ids], dtype=np.intp)
+        self.qvel_index = np.array([model.jnt_dofadr[i] for i in ids], dtype=np.intp)
+        self.touch_index = np.array([model.sensor_adr[model.sensor(names.foot.replace("_foot", "_touch")).id]
+                                     for names in leg_names(robot).values()], dtype=np.intp)
+        self.base = model.body("base_link").id
+        self.com_offset = np.array(robot.body.com, dtype=float)
+        self._legs = len(robot.legs)
+        self._unpadded = len(joints) == self._legs * self.width
+        flat = initial_joints[self.slot_rows, self.slot_cols].astype(float)
+        data.qpos[self.qpos_index] = flat
+        mujoco.mj_forward(model, data)
+        self.stand: int | None = model.equality("stand").id if stand else None
+        servo = robot.servo
+        self.compliant = servo.control in ("pd", "dynamixel")
+        """A position actuator of the servo model's stiffness and damping (no per-step servo loop in Python)."""
+        self._gain = servo.position_gain / timestep
+        self._keep = 1.0 - servo.velocity_gain
+        self._speed = servo.no_load_speed
+        self._kv = velocity_stiffness(robot)
+        self._stall = servo.stall_torque
+        self._goals = flat.copy()
+        self._positions = flat.copy()
+        self._mean_torque = np.zeros(len(joints))
+        self._mean_power = np.full(len(joints), servo.idle_power)
+        self.imu = Imu(control_period, imu_noise, seed)
+        self._q = _view(data.qpos, self.qpos_index)
+        """The servos' joint positions: a view into ``qpos`` (the hinges follow the free joint, legs in order)."""
+        self._v = _view(data.qvel, self.qvel_index)
+        self._work = np.zeros(len(joints))
+        self._ray_hit = np.zeros(1, dtype=np.int32)
+        self.command(initial_joints)
+
+    def release_stand(self) -> None:
+        """Deactivate the stand's weld: the robot now carries itself."""
+        if self.stand is not None:
+            self.data.eq_active[self.stand] = 0
+            self.stand = None
+
+    def command(self, targets: np.ndarray) -> None:
+        """Position targets of every servo ``(L, n)`` [rad]."""
+        self._goals = targets[self.slot_rows, self.slot_cols].astype(float)
+        if self.compliant:
+            self.data.ctrl[:] = self._goals
+
+    def step(self) -> None:
+        """Advance one control period; torque and speed averaged over its physics steps give the power."""
+        mujoco, model, data = self.mujoco, self.model, self.data
+        q, v, ctrl, goals, work = self._q, self._v, data.ctrl, self._goals, self._work
+        gain, keep, speed, kv, stall = self._gain, self._keep, self._speed, self._kv, self._stall
+        clock = time.perf_counter
+        total = np.zeros(len(goals))
+        physics = 0.0
+        for _ in range(self.substeps):
+            if not self.compliant:  # PyBullet's velocity motor: the speed that closes position_gain of the error
+                np.subtract(goals, q, out=work)
+                work *= gain
+                if keep != 0.0:
+                    work += keep * v
+                np.minimum(work, speed, out=work)
+                np.maximum(work, -speed, out=ctrl)
+            started = clock()
+            mujoco.mj_step(model, data)
+            physics += clock() - started
+            if self.compliant:
+                total += data.actuator_force
+            else:  # the implicit step applied kv·(ctrl − v_new); a clamped one (explicit) the stall torque
+                np.subtract(ctrl, v, out=work)
+                work *= kv
+                np.minimum(work, stall, out=work)
+                np.maximum(work, -stall, out=work)
+                total += work
+        self.physics_time += physics
+        positions = np.array(q)
+        # mj_step integrates q += v·h with the new v (semi-implicit Euler): the displacement is the mean speed.
+        mean_speed = (positions - self._positions) / self.control_period
+        self._positions = positions
+        self._mean_torque = total / self.substeps
+        self._mean_power = servo_power(self.robot.servo, self._mean_torque, mean_speed)
+
+    def read(self) -> Reading:
+        """Sensor readings now."""
+        data = self.data
+        rotation = data.xmat[self.base].reshape(3, 3).copy()
+        quat = data.xquat[self.base]
+        position = data.xpos[self.base].copy()
+        if self.fixed_base:
+            linear_origin, angular = np.zeros(3), np.zeros(3)
+        else:
+            linear_origin = data.qvel[0:3].copy()
+            angular = rotation @ data.qvel[3:6]  # a free joint's angular velocity is in the body frame
+        r = rotation @ self.com_offset
+        w = angular
+        velocity = linear_origin + np.array([w[1] * r[2] - w[2] * r[1], w[2] * r[0] - w[0] * r[2],
+                                             w[0] * r[1] - w[1] * r[0]])  # of the centre of mass, as PyBullet
+        specific_force, rate = self.imu.sense(rotation, velocity, angular)
+        forces = data.sensordata[self.touch_index].copy()
+        return Reading(
+            joints=self.padded(self._positions), joint_velocities=self.padded(np.array(self._v)),
+            joint_efforts=self.padded(self._mean_torque), servo_power=self.padded(self._mean_power),
+            orientation=np.array([quat[1], quat[2], quat[3], quat[0]]), angular_rate=rate,
+            linear_acceleration=specific_force, foot_forces=forces, foot_contact=forces > 0.0,
+            body_height=self._ray_height(position), position=position, rpy=rpy_from_matrix(rotation),
+            linear_velocity=velocity, angular_velocity=angular,
+        )
+
+    def padded(self, values: np.ndarray) -> np.ndarray:
+        """Per-servo values (servo order) as a padded ``(L, n)`` array, 0 where a leg has fewer joints."""
+        if self._unpadded:
+            return np.array(values, dtype=float).reshape(self._legs, self.width)
+        out = np.zeros((self._legs, self.width))
+        out[self.slot_rows, self.slot_cols] = values
+        return out
+
+    def _ray_height(self, position: np.ndarray) -> float:
+        """Body-origin height above the terrain, from a ray cast down that sees only terrain geoms."""
+        distance = self.mujoco.mj_ray(self.model, self.data, position, np.array([0.0, 0.0, -1.0]), RAY_GROUPS, 1, -1,
+                                      self._ray_hit)
+        if distance < 0.0:
+            return float(position[2] - self.terrain.height_at(float(position[0]), float(position[1])))
+        return float(distance)
+
+    def close(self) -> None:
+        """Nothing to free but the references."""
+        self.stand = None
+
+
+def import_mujoco() -> Any:
+    """``mujoco``, imported with the headless OpenGL ``shc render`` chooses (``shc_cli.view.render``).
+
+    MuJoCo fixes its GL backend when it is imported: a simulation that imports it first, in a process that renders
+    later (``simulate --video``, a test session), must not leave it with a windowed backend. OSMesa when libOSMesa
+    is installed; otherwise ``MUJOCO_GL`` is left as it is (the physics needs no GL).
+    """
+    if "MUJOCO_GL" not in os.environ:
+        import ctypes.util
+
+        if ctypes.util.find_library("OSMesa"):
+            os.environ["MUJOCO_GL"] = "osmesa"
+            os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
+    import mujoco
+
+    return mujoco
+
+
+def _view(values: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """``values[index]`` as a view (a slice) when ``index`` is a contiguous run, which it is for the servos."""
+    start = int(index[0])
+    if np.array_equal(index, np.arange(start, start + len(index))):
+        return values[start:start + len(index)]
+    raise BackendError("MuJoCo model: the servo joints are not contiguous in qpos/qvel")
