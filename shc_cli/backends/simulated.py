@@ -56,7 +56,7 @@ class WorldOptions:
 
 def open_world(robot: Robot, options: WorldOptions) -> Any:
     """The physics world of a run, its robot spawned in the start pose (the one place an engine is built)."""
-    from shc_cli.backends.engine import open_engine
+    from shc_cli.backends.engines import open_engine
     from shc_cli.control.sequence import joint_configurations
     from shc_cli.model.chains import Chains
 
