@@ -10,7 +10,7 @@ the per-cycle costs outside physics (controller step, sensor read, sub-step samp
 
 ``--floor``: wall time ÷ physics time of the walking loop built up layer by layer — physics alone; + the
 joint-state read after every physics step (the power model's torque samples); + the servo commands; + the
-controller; + the sensor read; and the whole ``Simulation.execute`` loop with its log — so the cost of each layer
+controller; + the sensor read; and the whole run loop (``simulate_to``) with its log — so the cost of each layer
 is a ratio measured in the same process.
 """
 
@@ -24,21 +24,27 @@ from pathlib import Path
 import numpy as np
 
 from shc_cli.backends.pybullet_ import world as world_module
+from shc_cli.backends.simulated import WorldOptions, open_world
 from shc_cli.backends.terrain import parse_terrain
-from shc_cli.commands.simulate import Simulation
-from shc_cli.control.controller import Command, RobotState
-from shc_cli.runlog import RunDirectory
+from shc_cli.commands.simulate import simulate_to
+from shc_cli.control.controller import Command, Controller, RobotState
 from shc_cli.spec.checks import load_checked
-from shc_cli.spec.timeline import constant
 
 LAYERS = ("physics", "+ joint-state samples", "+ servo commands", "+ controller", "+ sensor read")
 
 
-def started_bullet(rate: float) -> tuple[Simulation, Command]:
+class _Started:
+    """A world and its controller."""
+
+    def __init__(self, rate: float) -> None:
+        self.robot, self.gait, _ = load_checked("bullet", "tripod")
+        self.world = open_world(self.robot, WorldOptions(parse_terrain("flat"), round(rate * self.robot.time_delta)))
+        self.controller = Controller(self.robot, self.gait, joints=self.world.read().joints)
+
+
+def started_bullet(rate: float) -> tuple[_Started, Command]:
     """The Bullet insectoid on flat ground at ``rate`` [Hz], started up to RUNNING; and the full-speed command."""
-    robot, gait, _ = load_checked("bullet", "tripod")
-    substeps = round(rate * robot.time_delta)
-    sim = Simulation(robot, gait, {}, parse_terrain("flat"), "WG", substeps, 0.9, 0.0, 0, 0.0, "unpacked", False)
+    sim = _Started(rate)
     start = Command(state_request=RobotState.RUNNING)
     while sim.controller.state != RobotState.RUNNING:
         sim.world.command(sim.controller.step(start).joints)
@@ -105,12 +111,10 @@ def floor(cycles: int) -> None:
                 world.read()
         print(f"{name:24s} wall/physics {(clock() - began) / physics:.3f}", flush=True)
     world.close()
-    sim = Simulation(sim.robot, sim.gait, {}, parse_terrain("flat"), "WG", 4, 0.9, 0.0, 0, 0.0, "unpacked", False)
     with tempfile.TemporaryDirectory() as directory:
-        sim.execute(constant((1.0, 0.0, 0.0)), cycles, RunDirectory(Path(directory) / "run"))
-    sim.world.close()
-    wall, physics = sim.running_times
-    print(f"{'whole loop + log.csv':24s} wall/physics {wall / physics:.3f} (walking part of Simulation.execute)")
+        _, summary = simulate_to(duration=cycles * sim.robot.time_delta, out=Path(directory) / "run", plots=False)
+    wall, physics = summary["running_wall_time_s"], summary["running_physics_time_s"]
+    print(f"{'whole loop + log.csv':24s} wall/physics {wall / physics:.3f} (walking part of the run loop)")
 
 
 def main() -> None:

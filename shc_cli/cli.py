@@ -28,6 +28,12 @@ app = typer.Typer(
 
 _state = {"debug": False}
 
+# Options several commands share (one definition each: the same name, help and type everywhere).
+RobotArgument = Annotated[str, typer.Argument(help="Robot file or bundled robot name.")]
+GaitOption = Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")]
+CommandsOption = Annotated[Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan "
+                                                          "script.")]
+BagOption = Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")]
 OVERWRITE_HELP = "Replace an existing run directory at --out (when the new run finishes; only shc's own outputs)."
 VELOCITY_HELP = ("Constant velocity input VX,VY,WZ: throttle fractions −1..1 of the robot's maximum linear and "
                  "angular speed, unless the robot file's walker.velocity_input_mode is 'real' (then m/s, m/s, rad/s).")
@@ -65,8 +71,8 @@ def validate(
 
 @app.command()
 def workspace(
-    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
-    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    robot: RobotArgument = "bullet",
+    gait: GaitOption = None,
     step_frequency: Annotated[
         float | None, typer.Option(help="Step frequency [Hz] (default: the robot's).")
     ] = None,
@@ -83,18 +89,16 @@ def workspace(
 
 @app.command()
 def plan(
-    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
-    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    robot: RobotArgument = "bullet",
+    gait: GaitOption = None,
     velocity: Annotated[
         str, typer.Option(help=VELOCITY_HELP)
     ] = "1,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 10).")] = None,
-    commands: Annotated[
-        Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
-    ] = None,
+    commands: CommandsOption = None,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-plan).")] = None,
     plots: Annotated[bool, typer.Option(help="Write gait.png, tips.png and joints.png.")] = True,
-    bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
+    bag: BagOption = None,
     video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
                                                     "render with its defaults).", metavar="FILE")] = None,
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
@@ -104,20 +108,17 @@ def plan(
 
     _bag_check(bag)
     _video_check(video)
-    path = run_plan(robot, gait, velocity, duration, commands, out, plots, overwrite)
-    _write_bag(path, bag)
-    _write_video(path, video)
+    run_plan(robot, gait, velocity, duration, commands, out, plots, after=lambda run: _finish_outputs(run, bag, video),
+             overwrite=overwrite)
 
 
 @app.command()
 def simulate(
-    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
-    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    robot: RobotArgument = "bullet",
+    gait: GaitOption = None,
     velocity: Annotated[str, typer.Option(help=VELOCITY_HELP)] = "1,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
-    commands: Annotated[
-        Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
-    ] = None,
+    commands: CommandsOption = None,
     terrain: Annotated[
         str, typer.Option(help="flat, ramp:DEG, blocks[:LOW,HIGH[,SIZE]], stairs:RISE,RUN or heightfield:FILE[,SCALE]")
     ] = "flat",
@@ -151,22 +152,29 @@ def simulate(
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-simulate).")] = None,
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
-    bag: Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")] = None,
+    bag: BagOption = None,
+    fail_on_fall: Annotated[bool, typer.Option(help="Exit with code 4 when the robot fell.")] = False,
     engine: Annotated[str, typer.Option(help="Physics engine: pybullet or mujoco.")] = "pybullet",
     video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
                                                     "render with its defaults).", metavar="FILE")] = None,
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller on the robot in physics (PyBullet or MuJoCo): terrains, servos, sensors, power, CoT."""
-    from shc_cli.commands.simulate import Feedback, run_simulate
+    from shc_cli.commands.simulate import Feedback, SimulateOptions, run_simulate
 
     _bag_check(bag)
     _video_check(video)
-    path = run_simulate(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate,
-                        friction, restitution, seed, imu_noise, start, gui, stand,
-                        Feedback(posture, imu_posing, inclination, admittance), overwrite, engine)
-    _write_bag(path, bag)
-    _write_video(path, video)
+    options = SimulateOptions(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate,
+                              friction, restitution, seed, imu_noise, start, gui, stand,
+                              Feedback(posture, imu_posing, inclination, admittance), fail_on_fall,
+                              overwrite=overwrite, engine=engine)
+    run_simulate(options, after=lambda run: _finish_outputs(run, bag, video))
+
+
+def _finish_outputs(run: Path, bag: str | None, video: Path | None) -> None:
+    """``--bag`` and ``--video`` of a finished run (also an interrupted one, before its exit code)."""
+    _write_bag(run, bag)
+    _write_video(run, video)
 
 
 def _bag_check(fmt: str | None) -> None:
@@ -198,9 +206,9 @@ def _write_bag(run: Path, fmt: str | None) -> None:
     if fmt is None:
         return
     from shc_cli.interop.bag import export_bag
-    from shc_cli.runread import read_run
+    from shc_cli.runs.opening import open_run
 
-    path = export_bag(read_run(run), run / ("run.bag" if fmt == "ros1" else "bag"), fmt)
+    path = export_bag(open_run(run), run / ("run.bag" if fmt == "ros1" else "bag"), fmt)
     typer.echo(f"wrote {path}")
 
 
@@ -210,15 +218,13 @@ def run_hw(
     port: Annotated[list[str], typer.Option(metavar="DEV", help="Serial device of a servo bus, e.g. /dev/ttyUSB0; "
                                                                 "once per bus, bus 0 first.")],
     baud: Annotated[int | None, typer.Option(help="Baud rate [default: hardware.baud].")] = None,
-    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    gait: GaitOption = None,
     input_mode: Annotated[str, typer.Option("--input", help="timeline (--velocity/--commands), commands:FILE, "
                                                             "stdin (JSON lines), keyboard, gamepad[:DEVICE].")]
     = "timeline",
     velocity: Annotated[str, typer.Option(help=VELOCITY_HELP)] = "0,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
-    commands: Annotated[
-        Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan script.")
-    ] = None,
+    commands: CommandsOption = None,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-run-hw).")] = None,
     dry_run: Annotated[bool, typer.Option(help="Everything except current-limit, torque-enable and goal writes.")]
     = False,
@@ -331,7 +337,7 @@ def replay(
     source: Annotated[Path, typer.Argument(help="A recording prefix DIR/NAME (NAME_joints.csv.gz, NAME_tips.csv.gz, "
                                                 "NAME_body.csv.gz), a ROS 1 .bag or a ROS 2 bag directory.")],
     robot: Annotated[str, typer.Option(help="Robot file or bundled robot name: the robot that was recorded.")],
-    gait: Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")] = None,
+    gait: GaitOption = None,
     json_output: Annotated[bool, typer.Option("--json", help="Print one JSON object and nothing else.")] = False,
     out: Annotated[Path | None, typer.Option(help="Write differences.csv (per cycle) and differences.png here.")]
     = None,
@@ -353,7 +359,7 @@ app.add_typer(export_app, name="export")
 
 @export_app.command("urdf")
 def export_urdf(
-    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
+    robot: RobotArgument = "bullet",
     out: Annotated[Path | None, typer.Option(help="Write the URDF here (default: print it).")] = None,
 ) -> None:
     """The physics model generated from the robot file, as URDF (what `simulate` loads)."""
@@ -379,10 +385,14 @@ def export_bag(
 ) -> None:
     """Write a run as a ROS bag: joint states, tf, URDF, IMU, odometry, foot forces, OpenSHC LegState."""
     from shc_cli.interop.bag import export_bag as write_bag
-    from shc_cli.runread import read_run
+    from shc_cli.runs.opening import open_run
 
     target = out or run.with_name(run.name + (".bag" if format == "ros1" else "_bag"))
-    path = write_bag(read_run(run), target, format)
+    log = open_run(run)
+    note = log.partial_note()
+    if note is not None:
+        typer.echo(f"note: {note}", err=True)
+    path = write_bag(log, target, format)
     typer.echo(f"wrote {path}")
 
 
@@ -472,6 +482,11 @@ def main() -> None:
         for line in str(error).splitlines():
             typer.echo(f"error: {line}", err=True)
         sys.exit(2)
+    except KeyboardInterrupt:  # Ctrl-C outside a run's loop (a run's own signals finish its directory first)
+        if debug:
+            raise
+        typer.echo("error: interrupted", err=True)
+        sys.exit(130)
     except Exception as error:  # a bug in shc, not bad input: still one line unless --debug
         if debug:
             raise

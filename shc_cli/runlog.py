@@ -12,6 +12,18 @@ Tables (one row per control cycle, ``cycle`` and time ``t`` [s] first):
   ``<LEG>_swing_progress`` (−1 when not in that phase) — the format of the OpenSHC recordings;
 * ``body.csv`` — ``cmd_{vx,vy,wz}`` (input), ``vel_{x,y,wz}`` (desired velocity after limits) [m/s, rad/s],
   ``pose_{x,y,z,roll,pitch,yaw}`` (body pose in the walk plane) [m, rad], ``robot_state``, ``walk_state``.
+
+Runs on a measuring backend (``simulate``, ``run-hw``) have one table instead, ``log.csv``, whose columns
+:func:`log_columns` defines (the only place): commanded and measured joints, torques, servo power, foot forces
+and contacts, ground-truth body pose and twist, IMU, height, total power, input and desired velocity, states.
+The column set is the same for every measuring backend so every reader sees one schema; what a backend does
+not measure (a real robot: body pose, IMU, foot forces, power) is written as 0 and listed in the summary's
+``unmeasured`` (see docs/architecture.md).
+
+``summary.json`` of every run says whether it ran to its end: ``"complete"`` (true when the input or the
+duration was played to its end) and ``"stop_reason"`` (``"end"``, ``"SIGINT"``, ``"SIGTERM"``, ``"fault"``,
+``"fell"``). An interrupted run is still finished (summary written, directory renamed to its final name): it is
+marked only by ``"complete": false``.
 """
 
 from __future__ import annotations
@@ -61,6 +73,18 @@ class RunDirectory:
                               "(choose another --out)") from None
         self._handles: list[IO[str]] = []
 
+    def __enter__(self) -> RunDirectory:
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, *exc: object) -> None:
+        """Close the tables; an unfinished run keeps its ``.partial`` directory with every written row — unless it
+        failed before any table was opened (nothing half-written is left then)."""
+        self.close()
+        if kind is not None and not self._handles and self.partial.exists():
+            import shutil
+
+            shutil.rmtree(self.partial, ignore_errors=True)
+
     def table(self, name: str, columns: list[str], formats: list[str]) -> tuple[IO[str], str]:
         """A new table: its file (header written) and its row format (``cycle``, ``t`` come first)."""
         handle = (self.partial / name).open("w", encoding="utf-8")
@@ -81,8 +105,13 @@ class RunDirectory:
             handle.flush()
 
     def close(self) -> None:
+        """Flush and close every table: every written row is on disk."""
         for handle in self._handles:
             handle.close()
+
+    @property
+    def finished(self) -> bool:
+        return not self.partial.exists() and self.directory.exists()
 
     def finish(self, summary: dict[str, Any]) -> Path:
         """Write ``summary.json``, close the tables and give the directory its final name."""
@@ -125,12 +154,69 @@ def joint_columns(robot: Robot, suffix: str = "") -> list[str]:
     return [f"{leg}_{joint}{suffix}" for leg, spec in robot.legs.items() for joint in spec.joints]
 
 
+def joint_slots(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
+    """Rows (legs) and columns (joints) of every real joint in the padded ``(L, n)`` arrays, in
+    :func:`joint_columns` (servo, log) order: ``padded[rows, cols]`` is the log's joint values."""
+    pairs = [(i, k) for i, leg in enumerate(robot.legs.values()) for k in range(len(leg.joints))]
+    return (np.array([i for i, _ in pairs], dtype=np.intp), np.array([k for _, k in pairs], dtype=np.intp))
+
+
+MEASURED_BODY_COLUMNS = ["x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz", "wx", "wy", "wz", "imu_qx",
+                         "imu_qy", "imu_qz", "imu_qw", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z",
+                         "height", "power_w"]
+"""Body and IMU columns of ``log.csv`` after the per-leg ones: ground-truth position [m], roll/pitch/yaw [rad],
+world linear [m/s] and angular [rad/s] velocity, IMU quaternion (x, y, z, w, body → world), gyro [rad/s],
+specific force [m/s²], body height above the terrain [m], total servo power [W]."""
+
+
+def log_columns(robot: Robot) -> list[str]:
+    """The columns of ``log.csv`` after ``cycle`` and ``t``."""
+    legs = list(robot.legs)
+    return (joint_columns(robot, "_cmd") + joint_columns(robot) + joint_columns(robot, "_torque")
+            + joint_columns(robot, "_power") + [f"{leg}_force" for leg in legs] + [f"{leg}_contact" for leg in legs]
+            + MEASURED_BODY_COLUMNS + ["cmd_vx", "cmd_vy", "cmd_wz", "vel_x", "vel_y", "vel_wz", "robot_state",
+                                       "walk_state"])
+
+
+def measured_width(robot: Robot) -> int:
+    """How many values a backend's ``measured_row`` gives (the measured joints to ``power_w``)."""
+    return len(log_columns(robot)) - len(joint_columns(robot)) - 8
+
+
+class LogRecorder:
+    """Streams cycles of a measuring backend into ``log.csv`` (:func:`log_columns`).
+
+    Args:
+        run: the run directory.
+        robot: the robot (column names, joint order).
+        backend: gives each reading's measured values.
+    """
+
+    def __init__(self, run: RunDirectory, robot: Robot, backend: Any) -> None:
+        self.run = run
+        columns = log_columns(robot)
+        self.handle, self.row = run.table("log.csv", columns, ["%.6g"] * (len(columns) - 2) + ["%s", "%s"])
+        self.rows, self.cols = joint_slots(robot)
+        self.dt = robot.time_delta
+        self.measured_row = backend.measured_row
+
+    def record(self, cycle: int, command: Any, out: CycleOutput, applied: np.ndarray, reading: Any) -> None:
+        values = np.concatenate((applied[self.rows, self.cols], self.measured_row(reading), command.velocity,
+                                 out.velocity))
+        self.handle.write(self.row % (cycle, cycle * self.dt, *values.tolist(), out.robot_state.name,
+                                      out.walk_state.name))
+
+    def flush(self) -> None:
+        self.run.flush()
+
+
 def joint_values(robot: Robot, values: np.ndarray) -> list[float]:
     """The real joints' values of a padded ``(L, n)`` array, in :func:`joint_columns` order."""
     counts = {len(leg.joints) for leg in robot.legs.values()}
     if len(counts) == 1 and counts.pop() == values.shape[1]:  # no padding: every value, row by row
         return list(values.ravel().tolist())
-    return [float(v) for i, leg in enumerate(robot.legs.values()) for v in values[i, :len(leg.joints)]]
+    rows, cols = joint_slots(robot)
+    return list(values[rows, cols].tolist())
 
 
 class RunWriter(RunDirectory):
@@ -155,6 +241,10 @@ class RunWriter(RunDirectory):
         self._joints = self.table("joints.csv", joints, ["%.9g"] * len(joints))
         self._tips = self.table("tips.csv", tips, ["%.9g"] * len(tips))
         self._body = self.table("body.csv", body, ["%.9g"] * 12 + ["%s", "%s"])
+
+    def record(self, cycle: int, command: Any, out: CycleOutput, applied: np.ndarray, reading: Any) -> None:
+        """The loop's recorder interface: one cycle of the controller's tables."""
+        self.write(cycle, cycle * self.robot.time_delta, command.velocity, out)
 
     def write(self, cycle: int, time: float, command: tuple[float, float, float], out: CycleOutput) -> None:
         """Append one control cycle to every table."""

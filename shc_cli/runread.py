@@ -1,4 +1,7 @@
-"""The one run-log reader: a ``plan`` or ``simulate`` run directory as arrays, whatever wrote it.
+"""The one run-log reader: a ``plan``, ``simulate`` or ``run-hw`` run directory as arrays, whatever wrote it.
+
+:func:`shc_cli.runs.opening.open_run` opens any run — a directory here, or a bag through
+:mod:`shc_cli.interop.bagrun` — so this module does not know about bags (no import circle).
 
 :func:`read_run` gives a :class:`RunLog` with the same fields for every kind of run; what a kind cannot know
 is ``None`` (a plan has no measured power, forces or IMU). ``simulate`` logs what the sensors saw; a ``plan``
@@ -14,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from shc_cli.errors import OutputError, ShcError, SpecError
+from shc_cli.errors import OutputError, SpecError
 from shc_cli.runlog import PARTIAL_SUFFIX, ROBOT_FILE
 from shc_cli.spec.robot import Robot
 
@@ -84,29 +87,35 @@ class RunLog:
     def legs(self) -> list[str]:
         return list(self.robot.legs)
 
+    @property
+    def complete(self) -> bool:
+        """The run played its input to the end (runs written before ``complete`` existed count as complete)."""
+        return bool(self.summary.get("complete", True))
+
+    def partial_note(self) -> str | None:
+        """``"<path>: a partial run (stopped by SIGINT after 4.2 s)"`` for an interrupted run, else None."""
+        if self.complete:
+            return None
+        seconds = float(self.t[-1]) if len(self.t) else 0.0
+        return f"{self.path}: a partial run (stopped by {self.summary.get('stop_reason', '?')} after {seconds:.2f} s)"
+
 
 def read_run(path: Path) -> RunLog:
-    """Read a run directory written by ``shc plan`` or ``shc simulate``, or a bag written from one by
-    ``shc export bag``; raises :class:`SpecError` (exit 2) with one line when it is neither."""
+    """Read a run directory written by ``shc plan``, ``shc simulate`` or ``shc run-hw``; raises :class:`SpecError`
+    (exit 2) with one line when it is not one. Bags too: :func:`shc_cli.runs.opening.open_run`."""
     path = Path(path)
-    if (path / "metadata.yaml").exists() or (path.is_file() and path.suffix == ".bag"):
-        try:
-            return _bag_run(path)
-        except ShcError:
-            raise
-        except Exception as error:  # rosbags, YAML and the message decoders raise many kinds for a damaged bag
-            raise _bad(path, f"not a readable bag: {_first_line(error)}", "export the run again with shc export bag") \
-                from None
+    if is_bag(path):
+        raise bad_run(path, "a bag, not a run directory", "open it with shc_cli.runs.opening.open_run")
     if not path.is_dir():
-        raise _bad(path, "not a run directory", "give a directory written by shc plan or shc simulate")
+        raise bad_run(path, "not a run directory", "give a directory written by shc plan or shc simulate")
     if path.name.endswith(PARTIAL_SUFFIX) and not (path / "summary.json").exists():
-        raise _bad(path, "an unfinished run (no summary.json)", "analyse a finished run")
+        raise bad_run(path, "an unfinished run (no summary.json)", "analyse a finished run")
     try:
         summary = json.loads((path / "summary.json").read_text(encoding="utf-8"))
     except FileNotFoundError:
-        raise _bad(path, "no summary.json", "give a directory written by shc plan or shc simulate") from None
+        raise bad_run(path, "no summary.json", "give a directory written by shc plan or shc simulate") from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise _bad(path / "summary.json", f"unreadable: {_first_line(error)}", "re-run to regenerate it") from None
+        raise bad_run(path / "summary.json", f"unreadable: {first_line(error)}", "re-run to regenerate it") from None
     _check_summary(path / "summary.json", summary)
     robot = _robot(path, summary)
     try:
@@ -115,8 +124,8 @@ def read_run(path: Path) -> RunLog:
         if (path / "joints.csv").exists() and (path / "body.csv").exists():
             return _plan_run(path, summary, robot)
     except (KeyError, ValueError, IndexError, TypeError) as error:  # tables that do not fit together or the robot
-        raise _bad(path, f"malformed run tables: {_first_line(error)}", "re-run to regenerate it") from None
-    raise _bad(path, "neither log.csv (simulate) nor joints.csv and body.csv (plan)", "re-run to regenerate it")
+        raise bad_run(path, f"malformed run tables: {first_line(error)}", "re-run to regenerate it") from None
+    raise bad_run(path, "neither log.csv (simulate) nor joints.csv and body.csv (plan)", "re-run to regenerate it")
 
 
 SUMMARY_NUMBERS = ("step_period_cycles", "step_frequency_hz", "duty_factor", "time_delta_s")
@@ -124,7 +133,7 @@ SUMMARY_NUMBERS = ("step_period_cycles", "step_frequency_hz", "duty_factor", "ti
 SUMMARY_TEXTS = ("robot", "gait", "scenario")
 
 
-def _first_line(error: BaseException) -> str:
+def first_line(error: BaseException) -> str:
     text = str(error).strip().splitlines()
     return f"{type(error).__name__}: {text[0].strip() if text else ''}".rstrip(": ")
 
@@ -134,21 +143,26 @@ def _check_summary(file: Path, summary: Any) -> None:
     import math
 
     if not isinstance(summary, dict):
-        raise _bad(file, f"a JSON {type(summary).__name__}, not an object", "re-run to regenerate it")
+        raise bad_run(file, f"a JSON {type(summary).__name__}, not an object", "re-run to regenerate it")
     for key in SUMMARY_NUMBERS:
         value = summary.get(key)
         if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)
                                   or not math.isfinite(value) or value < 0):
-            raise _bad(file, f"{key}: {value!r} is not a non-negative number", "re-run to regenerate it")
+            raise bad_run(file, f"{key}: {value!r} is not a non-negative number", "re-run to regenerate it")
     if isinstance(summary.get("step_period_cycles"), float):
-        raise _bad(file, "step_period_cycles: not a whole number", "re-run to regenerate it")
+        raise bad_run(file, "step_period_cycles: not a whole number", "re-run to regenerate it")
     for key in SUMMARY_TEXTS:
         value = summary.get(key)
         if value is not None and not isinstance(value, str):
-            raise _bad(file, f"{key}: {value!r} is not text", "re-run to regenerate it")
+            raise bad_run(file, f"{key}: {value!r} is not text", "re-run to regenerate it")
 
 
-def _bad(path: Path, problem: str, fix: str) -> SpecError:
+def is_bag(path: Path) -> bool:
+    """A ROS 2 bag directory or a ROS 1 ``.bag`` file (what ``shc export bag`` writes)."""
+    return (path / "metadata.yaml").exists() or (path.is_file() and path.suffix == ".bag")
+
+
+def bad_run(path: Path, problem: str, fix: str) -> SpecError:
     from shc_cli.errors import Issue
 
     return SpecError([Issue(path, None, "", problem, fix)])
@@ -161,7 +175,7 @@ def _robot(path: Path, summary: dict[str, Any]) -> Robot:
     source: str | Path = path / ROBOT_FILE if (path / ROBOT_FILE).exists() else str(summary.get("robot", ""))
     loaded = load_robot(source)
     if loaded.robot is None:
-        raise _bad(path, f"robot '{source}' cannot be loaded", "keep robot.toml in the run directory")
+        raise bad_run(path, f"robot '{source}' cannot be loaded", "keep robot.toml in the run directory")
     return loaded.robot
 
 
@@ -172,9 +186,9 @@ def _table(file: Path) -> dict[str, np.ndarray]:
     except OSError as error:
         raise OutputError(f"{file}: cannot read the table ({error})") from None
     except UnicodeDecodeError as error:
-        raise _bad(file, f"not UTF-8 text at byte {error.start}", "re-run to regenerate it") from None
+        raise bad_run(file, f"not UTF-8 text at byte {error.start}", "re-run to regenerate it") from None
     if len(lines) < 2:
-        raise _bad(file, "no rows", "re-run to regenerate it")
+        raise bad_run(file, "no rows", "re-run to regenerate it")
     header = lines[0].split(",")
     first = lines[1].split(",")
     text = [index for index, cell in enumerate(first) if not _is_number(cell)]
@@ -184,7 +198,7 @@ def _table(file: Path) -> dict[str, np.ndarray]:
         numbers = np.loadtxt(lines[1:], delimiter=",", usecols=numeric, ndmin=2)
         strings = np.loadtxt(lines[1:], delimiter=",", usecols=text, dtype=str, ndmin=2) if text else None
     except ValueError as error:
-        raise _bad(file, f"malformed row ({error})", "re-run to regenerate it") from None
+        raise bad_run(file, f"malformed row ({error})", "re-run to regenerate it") from None
     for column, index in enumerate(numeric):
         out[header[index]] = numbers[:, column]
     for column, index in enumerate(text):
@@ -245,7 +259,7 @@ def _plan_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
     rows = len(joints["t"])
     for name, table in (("body.csv", body), ("tips.csv", tips)):
         if table is not None and len(table["t"]) != rows:
-            raise _bad(path / name, f"{len(table['t'])} rows where joints.csv has {rows}", "re-run to regenerate it")
+            raise bad_run(path / name, f"{len(table['t'])} rows where joints.csv has {rows}", "re-run to regenerate it")
     dt = float(robot.time_delta)
     desired = _stack(body, ["vel_x", "vel_y", "vel_wz"])
     xy, yaw = ideal_path(desired, dt)
@@ -280,85 +294,3 @@ def ideal_path(desired: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
                      desired[:, 0] * np.sin(yaw) + desired[:, 1] * np.cos(yaw)], axis=1) * dt
     xy = np.concatenate([np.zeros((1, 2)), np.cumsum(step[:-1], axis=0)])
     return xy, yaw
-
-
-def _bag_run(path: Path) -> RunLog:
-    """A bag from ``shc export bag`` (ROS 2 directory or ROS 1 file) as the run it was written from."""
-    import tempfile
-
-    from shc_cli.control.sensing import quaternion_matrix
-    from shc_cli.interop.bag import ROBOT_STATES, WALK_STATES, read_topics
-    from shc_cli.spec.loading import load_robot
-
-    topics = read_topics(path)
-    if "/shc/robot" not in topics or "/shc/state" not in topics:
-        raise _bad(path, "a bag without shc's /shc/robot and /shc/state topics", "export it with shc export bag")
-    summary = json.loads(topics["/shc/summary"][0][1].data)
-    with tempfile.TemporaryDirectory() as directory:
-        robot_file = Path(directory) / "robot.toml"
-        robot_file.write_text(topics["/shc/robot"][0][1].data, encoding="utf-8")
-        loaded = load_robot(robot_file).robot
-    if loaded is None:
-        raise _bad(path, "its /shc/robot does not load", "re-export it")
-    robot = loaded
-    legs = list(robot.legs)
-    width = max(len(leg.joints) for leg in robot.legs.values())
-    slots = [(i, k) for i, leg in enumerate(robot.legs.values()) for k in range(len(leg.joints))]
-    rows_, cols_ = [s[0] for s in slots], [s[1] for s in slots]
-
-    def joint_array(topic: str, field: str) -> np.ndarray:
-        values = np.array([getattr(m, field) for _, m in topics[topic]])
-        out = np.zeros((len(values), len(legs), width))
-        out[:, rows_, cols_] = values
-        return out
-
-    stamps = np.array([stamp for stamp, _ in topics["/joint_states"]], dtype=np.int64)
-    odom = [m for _, m in topics["/odom"]]
-    position = np.array([[o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z] for o in odom])
-    quaternion = np.array([[o.pose.pose.orientation.x, o.pose.pose.orientation.y, o.pose.pose.orientation.z,
-                            o.pose.pose.orientation.w] for o in odom])
-    rotation = quaternion_matrix(quaternion)
-    linear = np.array([[o.twist.twist.linear.x, o.twist.twist.linear.y, o.twist.twist.linear.z] for o in odom])
-    angular = np.array([[o.twist.twist.angular.x, o.twist.twist.angular.y, o.twist.twist.angular.z] for o in odom])
-    state = np.array([m.data for _, m in topics["/shc/state"]])
-    robot_names = {v: k for k, v in ROBOT_STATES.items()}
-    walk_names = {v: k for k, v in WALK_STATES.items()}
-    states = np.array([[robot_names[int(r)], walk_names[int(w)]] for r, w in state[:, :2]])
-    command = np.array([[m.linear.x, m.linear.y, m.angular.z] for _, m in topics["/cmd_vel"]])
-    simulated = "/shc/power" in topics
-    forces = np.stack([[m.wrench.force.z for _, m in topics[f"/{leg}/foot_force"]] for leg in legs], axis=1) \
-        if simulated else None
-    leg_states = [[m for _, m in topics[f"/shc/{leg}/state"]] for leg in legs]
-    progress = np.array([[[m.stance_progress, m.swing_progress] for m in per_leg] for per_leg in leg_states])
-    progress = progress.transpose(1, 0, 2)
-    joints = joint_array("/joint_states", "position")
-    height = state[:, 2]
-    if simulated:
-        imu = [m for _, m in topics["/imu/data"]]
-        contact = np.asarray(forces) > 0.0
-    else:
-        contact = progress[:, :, 0] >= 0.0
-    return RunLog(
-        path=path, kind="simulate" if simulated else "plan", summary=summary, robot=robot, t=stamps / 1e9,
-        running=states[:, 0] == "RUNNING", walk_state=states[:, 1], command=command, desired=state[:, 3:6],
-        position=position, rpy=_rpy(rotation), joints=joints, contact=contact,
-        power=np.array([m.data for _, m in topics["/shc/power"]]) if simulated else None, foot_force=forces,
-        body_rate=np.array([[m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z] for m in imu])
-        if simulated else None,
-        height=height, commanded=joint_array("/desired_joint_states", "position"),
-        efforts=joint_array("/joint_states", "effort") if simulated else None,
-        twist=np.hstack([np.einsum("nij,nj->ni", rotation, linear), np.einsum("nij,nj->ni", rotation, angular)])
-        if simulated else None,
-        imu=np.array([[m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w, m.angular_velocity.x,
-                       m.angular_velocity.y, m.angular_velocity.z, m.linear_acceleration.x, m.linear_acceleration.y,
-                       m.linear_acceleration.z] for m in imu]) if simulated else None,
-        progress=None if simulated else progress, states=states,
-    )
-
-
-def _rpy(rotation: np.ndarray) -> np.ndarray:
-    """Roll, pitch, yaw of ``Rz·Ry·Rx`` matrices ``(N, 3, 3)``."""
-    pitch = np.arcsin(-np.clip(rotation[:, 2, 0], -1.0, 1.0))
-    roll = np.arctan2(rotation[:, 2, 1], rotation[:, 2, 2])
-    yaw = np.arctan2(rotation[:, 1, 0], rotation[:, 0, 0])
-    return np.column_stack([roll, pitch, yaw])

@@ -21,8 +21,7 @@ def walked(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from shc_cli.commands.simulate import simulate_to
 
     out = tmp_path_factory.mktemp("bag") / "walk"
-    path, _ = simulate_to("bullet", "tripod", "1,0,0", 1.0, None, out, False, "flat", "WG", 400.0, 0.9, 0.0, 0, 0.0,
-                          "unpacked")
+    path, _ = simulate_to(robot="bullet", gait="tripod", duration=1.0, out=out, plots=False)
     return path
 
 

@@ -31,8 +31,15 @@ def run(argv: list[str], capsys: pytest.CaptureFixture[str], monkeypatch: pytest
 def test_help_lists_every_command_with_one_line(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     code, out, _ = run(["--help"], capsys, monkeypatch)
     assert code == 0
-    for command in ("validate", "workspace", "plan", "simulate", "analyze", "schema"):
-        assert f"  {command} " in out
+    from shc_cli.cli import app
+
+    names = [c.name or (c.callback.__name__ if c.callback else "") for c in app.registered_commands]
+    names += [g.name or "" for g in app.registered_groups]
+    assert {"validate", "workspace", "plan", "simulate", "run-hw", "analyze", "sweep", "schema", "export",
+            "import"} <= set(names)
+    for command in names:  # every registered command and group, with its one-line help
+        line = next((row for row in out.splitlines() if row.strip().startswith(f"{command} ")), "")
+        assert len(line.split()) > 1, f"{command} missing from --help"
 
 
 def test_version(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]

@@ -85,3 +85,20 @@ def test_dynamixel_sdk_drives_the_emulated_bus() -> None:
             assert handler.ping(port, 1)[1] == COMM_RX_TIMEOUT
         finally:
             port.closePort()
+
+
+def test_the_emulated_servo_moves_on_its_injected_clock() -> None:
+    """The motion model reads the clock it is given: one time constant after a goal step the servo has covered
+    1 − 1/e of it, without the test waiting."""
+    import math
+
+    from shc_cli.hardware.emulator import EmulatedServo
+    from shc_cli.hardware.models import MODELS
+
+    now = [10.0]
+    servo = EmulatedServo(1, MODELS["MX-106"], clock=lambda: now[0])
+    servo.write(servo.model.torque_enable, bytes([1]))
+    servo.write(servo.model.goal_position, (3048).to_bytes(4, "little", signed=True))
+    now[0] += servo.time_constant
+    position = int.from_bytes(servo.read(servo.model.present_position, 4), "little", signed=True)
+    assert position == round(2048 + 1000 * (1 - math.exp(-1)))

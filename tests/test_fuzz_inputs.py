@@ -159,7 +159,7 @@ def _recording_seeds() -> dict[str, bytes]:
 
 def _replay_bag_seeds(ros1: bool) -> Callable[[], dict[str, bytes]]:
     def seeds() -> dict[str, bytes]:
-        from shc_cli.replay.source import open_source
+        from shc_cli.replay.opening import open_source
 
         from .openshc_bags import write_openshc_bag
 
@@ -302,23 +302,22 @@ class _TerrainBuilt(Exception):
 def _stub_simulation(monkeypatch: pytest.MonkeyPatch) -> None:
     """No robot and no physics run: build the parsed terrain in a DIRECT PyBullet client (what PyBullet makes of the
     height field is exercised) and stop with a marker error."""
-    from shc_cli.commands import simulate
+    from shc_cli.backends import simulated
     from shc_cli.errors import ShcError
 
-    class Stub:
-        def __init__(self, robot: Any, gait: Any, pose_sets: Any, terrain: Any, *args: Any) -> None:
-            import pybullet
+    def stub(robot: Any, options: Any) -> Any:  # the one place simulate builds its world
+        import pybullet
 
-            from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
+        from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
 
-            client = pybullet.connect(pybullet.DIRECT)
-            try:
-                build_terrain(client, terrain, 0.9, 0.0, 0)
-            finally:
-                pybullet.disconnect(client)
-            raise ShcError("fuzz: terrain accepted")
+        client = pybullet.connect(pybullet.DIRECT)
+        try:
+            build_terrain(client, options.terrain, 0.9, 0.0, 0)
+        finally:
+            pybullet.disconnect(client)
+        raise ShcError("fuzz: terrain accepted")
 
-    monkeypatch.setattr(simulate, "Simulation", Stub)
+    monkeypatch.setattr(simulated, "open_world", stub)
 
 
 RUNS: dict[str, Path] = {}

@@ -85,12 +85,14 @@ def test_stdin_lines_hold_until_changed_and_the_watchdog_zeroes_the_velocity() -
     assert source.velocity == [0.5, 0.0, 0.1] and source.pose_velocity[2] == 1.0
     assert source.state == RobotState.READY  # the "flying" line was ignored
     assert source.gait is not None and source.gait.name == "wave"
-    held = StdinInput(io.StringIO(""), watchdog_s=0.05)
+    now = [100.0]  # an injected clock [s]: the watchdog is tested without waiting
+    held = StdinInput(io.StringIO(""), watchdog_s=0.05, clock=lambda: now[0])
     held.finished = False
     held.update(lambda h: setattr(h, "velocity", [1.0, 0.0, 0.0]))
+    now[0] += 0.04
     command = held.next()
     assert command is not None and command.velocity == (1.0, 0.0, 0.0)
-    time.sleep(0.1)
+    now[0] += 0.02
     command = held.next()
     assert command is not None and command.velocity == (0.0, 0.0, 0.0) and held.watchdog_trips == 1
 

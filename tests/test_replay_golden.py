@@ -15,7 +15,8 @@ import pytest
 
 from shc_cli.control.controller import RobotState
 from shc_cli.replay import Replay, replay
-from shc_cli.replay.source import Recorded, open_source
+from shc_cli.replay.opening import open_source
+from shc_cli.replay.source import Recorded
 from shc_cli.replay.states import StatePlan, infer_states
 from shc_cli.spec.gait import Gait
 from shc_cli.spec.loading import load_gait, load_robot

@@ -19,7 +19,8 @@ from shc_cli.control.controller import RobotState
 from shc_cli.errors import ShcError
 from shc_cli.interop.bag import LEG_STATE_MSG
 from shc_cli.replay import replay
-from shc_cli.replay.source import Recorded, open_source
+from shc_cli.replay.opening import open_source
+from shc_cli.replay.source import Recorded
 from shc_cli.replay.states import infer_states
 from shc_cli.spec.gait import Gait
 from shc_cli.spec.robot import Robot

@@ -115,7 +115,7 @@ def test_a_fault_mid_run_stops_commanding_within_two_cycles(fault: str, tmp_path
         else:
             bus.faults(42).hardware_error = 32
         _, stderr = process.communicate(timeout=60)
-        assert process.returncode == 0, stderr
+        assert process.returncode == 3, stderr  # a fault has its own exit code (docs/commands.md)
         reason = {"vanish": "no reply from CL_coxat", "corrupt_crc": "corrupt reply (CRC or length) from CL_coxat",
                   "overload": "CL_coxat: overload"}[fault]
         assert f"fault: {reason}" in stderr

@@ -431,7 +431,7 @@ def test_run_hw_stops_commanding_within_two_cycles_of_an_overload(tmp_path: Path
         faulty = 42  # CL_coxat; 2 packets a cycle: the fault comes near cycle 850, walking (MOVING from ~735)
         bus.faults(faulty).hardware_error_at_packet = 2 * 850
         result = run_hw(bus, out, "--velocity", "1,0,0", "--duration", "5")
-        assert result.returncode == 0, result.stderr
+        assert result.returncode == 3, result.stderr  # a fault has its own exit code (docs/commands.md)
         assert "fault:" in result.stderr and "CL_coxat" in result.stderr
         [event] = bus.fault_events
         assert event.servo_id == faulty

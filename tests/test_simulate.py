@@ -124,17 +124,17 @@ def test_readings_are_those_after_the_last_physics_step(substeps: int) -> None:
     asking PyBullet again: they must equal a fresh read."""
     import numpy as np
 
+    from shc_cli.backends.simulated import WorldOptions, open_world
     from shc_cli.backends.terrain import parse_terrain
-    from shc_cli.commands.simulate import Simulation
-    from shc_cli.control.controller import Command, RobotState
+    from shc_cli.control.controller import Command, Controller, RobotState
     from shc_cli.spec.checks import load_checked
 
     robot, gait, _ = load_checked("bullet", "tripod")
-    sim = Simulation(robot, gait, {}, parse_terrain("flat"), "WG", substeps, 0.9, 0.0, 0, 0.0, "unpacked", False)
-    world = sim.world
+    world = open_world(robot, WorldOptions(parse_terrain("flat"), substeps))
+    controller = Controller(robot, gait, joints=world.read().joints)
     try:
         for _ in range(5):
-            world.command(sim.controller.step(Command(state_request=RobotState.RUNNING)).joints)
+            world.command(controller.step(Command(state_request=RobotState.RUNNING)).joints)
             world.step()
         fresh = world.p.getJointStates(world.body, world.flat_joints, physicsClientId=world.client)
         reading = world.read()
@@ -151,14 +151,14 @@ def test_mean_joint_speed_from_the_displacement_equals_the_mean_of_every_physics
     import numpy as np
 
     from shc_cli.backends.power import servo_power
+    from shc_cli.backends.simulated import WorldOptions, open_world
     from shc_cli.backends.terrain import parse_terrain
-    from shc_cli.commands.simulate import Simulation
-    from shc_cli.control.controller import Command, RobotState
+    from shc_cli.control.controller import Command, Controller, RobotState
     from shc_cli.spec.checks import load_checked
 
     robot, gait, _ = load_checked("bullet", "tripod")
-    sim = Simulation(robot, gait, {}, parse_terrain("flat"), "WG", 4, 0.9, 0.0, 0, 0.0, "unpacked", False)
-    world = sim.world
+    world = open_world(robot, WorldOptions(parse_terrain("flat"), 4))
+    controller = Controller(robot, gait, joints=world.read().joints)
     recorded: list[list[tuple[float, float]]] = []
 
     class Recorder:
@@ -178,7 +178,7 @@ def test_mean_joint_speed_from_the_displacement_equals_the_mean_of_every_physics
         largest = 0.0
         for _ in range(300):  # start-up: the legs move fast
             recorded.clear()
-            world.command(sim.controller.step(Command(state_request=RobotState.RUNNING)).joints)
+            world.command(controller.step(Command(state_request=RobotState.RUNNING)).joints)
             world.step()
             samples = np.array(recorded)  # (sub-steps, servos, [speed, torque])
             assert samples.shape[0] == 4
@@ -198,7 +198,7 @@ def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(engine: s
     position motor, and its femurs' steady errors halve when the stiffness doubles (a proportional servo)."""
     import numpy as np
 
-    from shc_cli.backends.engine import open_engine
+    from shc_cli.backends.engines import open_engine
     from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.startup import plan_direct_startup
     from shc_cli.model.chains import Chains

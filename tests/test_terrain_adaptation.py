@@ -21,8 +21,8 @@ def _log(path: Path) -> list[dict[str, str]]:
 
 def _walk(tmp: Path, name: str, robot: str, seconds: float, feedback: Feedback,
           engine: str = "pybullet") -> list[dict[str, str]]:
-    path, summary = simulate_to(robot, None, "1,0,0", seconds, None, tmp / name, False, "ramp:10", "WG", 400.0, 0.9,
-                                0.0, 0, 0.0, "unpacked", False, None, feedback, engine=engine)
+    path, summary = simulate_to(robot=robot, duration=seconds, out=tmp / name, plots=False, terrain="ramp:10",
+                                feedback=feedback, engine=engine)
     assert summary["fell"] is False
     return _log(path)
 
@@ -85,9 +85,8 @@ def test_admittance_keeps_more_feet_on_the_ground_over_a_step(engine: str, tmp_p
     legs = ["AR", "BR", "CR", "CL", "BL", "AL"]
     counts = {}
     for name, on in (("off", False), ("on", True)):
-        path, summary = simulate_to(str(robot), None, "1,0,0", 8.0, None, tmp_path / name, False, "stairs:0.06,1.0",
-                                    "WG", 400.0, 0.9, 0.0, 0, 0.0, "unpacked", False, None, Feedback(admittance=on),
-                                    engine=engine)
+        path, summary = simulate_to(robot=str(robot), duration=8.0, out=tmp_path / name, plots=False,
+                                    terrain="stairs:0.06,1.0", feedback=Feedback(admittance=on), engine=engine)
         assert summary["fell"] is False
         rows = [r for r in _log(path) if r["robot_state"] == "RUNNING" and 0.2 < float(r["x"]) < 1.4]
         assert len(rows) > 300
@@ -139,9 +138,8 @@ def test_rough_terrain_mode_keeps_more_feet_down_on_blocks(engine: str, tmp_path
     legs = ["AR", "BR", "CR", "CL", "BL", "AL"]
     few = {}
     for name, robot_name in (("normal", "bullet"), ("rough", str(robot))):
-        path, summary = simulate_to(robot_name, "tripod", "1,0,0", 8.0, None, tmp_path / name, False,
-                                    "blocks:0.01,0.05", "WG", 400.0, 0.9, 0.0, 0, 0.0, "unpacked", False,
-                                    engine=engine)
+        path, summary = simulate_to(robot=robot_name, gait="tripod", duration=8.0, out=tmp_path / name, plots=False,
+                                    terrain="blocks:0.01,0.05", engine=engine)
         assert summary["fell"] is False
         rows = [r for r in _log(path) if r["robot_state"] == "RUNNING" and float(r["x"]) > 0.8]
         assert len(rows) > 150

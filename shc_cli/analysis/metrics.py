@@ -21,10 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from shc_cli.analysis.cot import cost_of_transport
 from shc_cli.runread import RunLog
-
-GRAVITY = 9.81
-"""[m/s²], as in the simulation."""
 
 
 @dataclass(frozen=True)
@@ -134,14 +132,18 @@ def polygon_centroid(polygon: np.ndarray) -> np.ndarray:
 
 
 def rotation_rpy(rpy: np.ndarray) -> np.ndarray:
-    """Rotation matrices body → world from roll, pitch, yaw (z-y-x), ``(N, 3, 3)``."""
-    r, p, y = rpy[:, 0], rpy[:, 1], rpy[:, 2]
-    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    return np.stack([
-        np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], axis=-1),
-        np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], axis=-1),
-        np.stack([-sp, cp * sr, cp * cr], axis=-1),
-    ], axis=1)
+    """Rotation matrices body → world from roll, pitch, yaw (``Rz·Ry·Rx``), ``(N, 3, 3)`` (scipy; off the hot
+    path). The inverse is :func:`rpy_of`."""
+    from scipy.spatial.transform import Rotation
+
+    return np.asarray(Rotation.from_euler("xyz", np.asarray(rpy, dtype=float)).as_matrix())
+
+
+def rpy_of(rotation: np.ndarray) -> np.ndarray:
+    """Roll, pitch, yaw of ``Rz·Ry·Rx`` matrices ``(N, 3, 3)`` → ``(N, 3)`` [rad]."""
+    from scipy.spatial.transform import Rotation
+
+    return np.asarray(Rotation.from_matrix(np.asarray(rotation, dtype=float)).as_euler("xyz"))
 
 
 def feet_and_com(run: RunLog, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -249,7 +251,7 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
         power = float(run.power[rows].mean())
         out["mean_power_w"] = power
         walking = summary.get("scenario", "WG") == "WG"
-        out["cot"] = float(power / (mass * GRAVITY * speed)) if walking and speed > 1e-3 else None  # eq. 22
+        out["cot"] = cost_of_transport(power, mass, speed) if walking else None  # eq. 22
     from shc_cli.analysis.joint_limits import joint_limit_fraction
 
     out["joint_limit_fraction"] = joint_limit_fraction(run, rows)

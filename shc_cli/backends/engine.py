@@ -1,15 +1,16 @@
 """The physics-engine interface of the simulator: what the simulation loop needs from PyBullet or MuJoCo.
 
-An :class:`Engine` holds one robot on one terrain in one scenario (on the ground, held in the air, or started on
-a stand) and is advanced one control period at a time: :meth:`Engine.command` takes the controller's joint
-targets for the servos, :meth:`Engine.step` runs the physics steps of one control period and
-:meth:`Engine.read` returns what the robot's sensors see (:class:`Reading`). :func:`open_engine` opens one by
-name. What does not depend on the engine lives beside this module and is used by both: the terrain geometry
-(:mod:`shc_cli.backends.terrain`), the IMU model and its noise (:mod:`shc_cli.backends.imu`), the servos'
-electrical power (:mod:`shc_cli.backends.power`) and the spawn height (:func:`spawn_height`). Fall detection,
-logging and the run directory belong to the loop, which sees only this interface.
+An :class:`Engine` holds one robot on one terrain in one scenario (on the ground, held in the air, or started on a
+stand) and is advanced one control period at a time: :meth:`Engine.command` takes the controller's joint targets for
+the servos, :meth:`Engine.step` runs the physics steps of one control period and :meth:`Engine.read` returns what
+the robot's sensors see (:class:`Reading`). :func:`shc_cli.backends.engines.open_engine` opens one by name. What
+does not depend on the engine lives beside this module and is used by both: the terrain geometry
+(:mod:`shc_cli.backends.terrain`), the IMU model and its noise (:mod:`shc_cli.backends.imu`), the servos' electrical
+power (:mod:`shc_cli.backends.power`) and the spawn height (:func:`spawn_height`). Fall detection, logging and the
+run directory belong to the loop, which sees only this interface.
 
-Nothing here imports an engine: ``pybullet`` and ``mujoco`` are imported by :func:`open_engine` when asked for.
+Nothing here imports an engine: ``pybullet`` and ``mujoco`` are imported by
+:func:`shc_cli.backends.engines.open_engine` when asked for.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 if TYPE_CHECKING:
-    from shc_cli.backends.terrain import Terrain, TerrainSpec
+    from shc_cli.backends.terrain import Terrain
     from shc_cli.spec.robot import Robot
 
 ENGINES = ("pybullet", "mujoco")
@@ -117,49 +118,6 @@ class Engine(Protocol):
 
     def close(self) -> None:
         """Free the engine's resources."""
-
-
-def open_engine(name: str, robot: Robot, terrain: TerrainSpec, control_period: float, substeps: int,
-                fixed_base: bool, initial_joints: np.ndarray, friction: float = 0.9, restitution: float = 0.0,
-                seed: int = 0, imu_noise: float = 0.0, gui: bool = False, stand: bool = False) -> Engine:
-    """Open physics engine ``name`` with the robot spawned on the terrain.
-
-    Args:
-        name: ``"pybullet"`` or ``"mujoco"`` (:data:`ENGINES`).
-        robot: the robot.
-        terrain: the terrain.
-        control_period: the controller's period [s].
-        substeps: physics steps per control period (physics rate = substeps / control_period).
-        fixed_base: hold the body in the air, :data:`AIR_LIFT` above its standing height (scenarios SA, WA).
-        initial_joints: joint positions to spawn with ``(L, n)`` [rad].
-        friction: friction of feet and terrain, as PyBullet's ``lateralFriction`` of both: the coefficient
-            between them is ``friction²`` in both engines (docs/physics-model.md).
-        restitution: restitution of feet and terrain, as PyBullet's ``restitution`` of both (docs/physics-model.md).
-        seed: seed of every random thing (terrain blocks, IMU noise).
-        imu_noise: standard deviation of IMU noise (rad/s, m/s² alike); 0 = none.
-        gui: open the engine's viewer (PyBullet only).
-        stand: spawn the body at its standing height held by a removable support (:meth:`Engine.release_stand`)
-            instead of on its feet just above the ground.
-
-    Raises:
-        BackendError: an unknown engine, or a GUI that cannot open.
-    """
-    from shc_cli.errors import BackendError
-
-    if name == "pybullet":
-        from shc_cli.backends.pybullet_.world import World
-
-        return World(robot, terrain, control_period, substeps, fixed_base, initial_joints, friction, restitution,
-                     seed, imu_noise, gui, stand)
-    if name == "mujoco":
-        if gui:
-            raise BackendError("MuJoCo: the simulator has no viewer here; run without --gui or with --engine "
-                               "pybullet")
-        from shc_cli.backends.mujoco_.world import MujocoWorld
-
-        return MujocoWorld(robot, terrain, control_period, substeps, fixed_base, initial_joints, friction,
-                           restitution, seed, imu_noise, stand)
-    raise BackendError(f"unknown physics engine '{name}'; use {' or '.join(ENGINES)}")
 
 
 def spawn_height(robot: Robot, terrain: Terrain, joints: np.ndarray, fixed_base: bool, stand: bool) -> float:

@@ -56,11 +56,17 @@ def table(results: list[dict[str, Any]]) -> str:
 def run_analyze(runs: list[Path], as_json: bool, out: Path | None, skip: float, steady: bool) -> None:
     from shc_cli.analysis.metrics import analyze_run
     from shc_cli.outputs import ensure_dir, write_text
-    from shc_cli.runread import read_run
+    from shc_cli.runs.opening import open_run
 
-    logs = [read_run(path) for path in runs]
+    logs = [open_run(path) for path in runs]
     window = Window(skip_s=skip, steady=steady)
     results = [analyze_run(log, window) for log in logs]
+    for log, result in zip(logs, results, strict=True):
+        result["complete"] = log.complete
+        result["stop_reason"] = log.summary.get("stop_reason", "end")
+        note = log.partial_note()
+        if note is not None:
+            typer.echo(f"note: {note}", err=True)
     if as_json:
         data: Any = public(results[0]) if len(results) == 1 else [public(r) for r in results]
         typer.echo(json.dumps(data, indent=2))

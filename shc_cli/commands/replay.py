@@ -18,8 +18,8 @@ def run_replay(source: Path, robot_name: str, gait_name: str | None, as_json: bo
     from shc_cli.commands.plan import pose_sets_for
     from shc_cli.outputs import ensure_dir, write_text
     from shc_cli.replay import replay
+    from shc_cli.replay.opening import open_source
     from shc_cli.replay.report import differences_csv, plot_differences, summary, text
-    from shc_cli.replay.source import open_source
     from shc_cli.spec.checks import load_checked
     from shc_cli.spec.timeline import constant
 

@@ -5,30 +5,21 @@ from __future__ import annotations
 import math
 import os
 import sys
-import time
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 from datetime import datetime
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import typer
 
-from shc_cli.commands.plan import parse_velocity, pose_sets_for, walk_cycles
-from shc_cli.control.controller import Command, Controller, RobotState
-from shc_cli.control.sensing import Sensors
-from shc_cli.errors import Issue, ShcError, SpecError
-from shc_cli.runlog import RunDirectory, joint_columns
+from shc_cli.backends.simulated import SCENARIOS
+from shc_cli.errors import Issue, SpecError
+from shc_cli.runs.falls import FALL_HEIGHT_SHARE, FALL_TILT
 from shc_cli.spec.robot import Robot
-from shc_cli.spec.timeline import Timeline, constant, load_timeline
 
-SCENARIOS = {"SA": (True, False), "WA": (True, True), "SG": (False, False), "WG": (False, True)}
-"""Paper §VII-A scenarios: (body held in the air, walking)."""
-FALL_TILT = 0.8
-"""Body tilt above which the robot has fallen [rad] (≈ 46°)."""
-FALL_HEIGHT_SHARE = 0.3
-"""The robot has fallen when its body is lower than this share of the body clearance above the terrain."""
-START_UP_MARGIN_S = 2.0
+__all__ = ["FALL_HEIGHT_SHARE", "FALL_TILT", "SCENARIOS", "Feedback", "SimulateOptions", "parse_posture",
+           "run_simulate", "simulate_to"]
 
 
 @dataclass(frozen=True)
@@ -90,267 +81,180 @@ def parse_posture(text: str) -> dict[str, Any]:
     return out
 
 
-def run_simulate(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
-                 commands: Path | None, out: Path | None, plots: bool, terrain_text: str, scenario: str,
-                 physics_rate: float, friction: float, restitution: float, seed: int, imu_noise: float,
-                 start_pose: str, gui: bool, stand: bool | None = None, feedback: Feedback | None = None,
-                 overwrite: bool = False, engine: str = "pybullet") -> Path:
-    """Load, simulate, log, print one line; returns the run directory."""
-    from shc_cli.analysis.progress import progress_note
+@dataclass(frozen=True)
+class SimulateOptions:
+    """Every option of ``shc simulate`` (the same names, the same defaults).
 
-    path, summary = simulate_to(robot_name, gait_name, velocity, duration, commands, out, plots, terrain_text,
-                                scenario, physics_rate, friction, restitution, seed, imu_noise, start_pose, gui,
-                                stand, feedback, overwrite, engine)
-    typer.echo(f"{summary['robot']} / {summary['gait']} / {summary['scenario']} on {terrain_text}: "
+    Attributes:
+        robot: robot file or bundled name.
+        gait: gait file or name (None: the robot's).
+        velocity: constant velocity input ``"VX,VY,WZ"`` in the robot's input mode.
+        duration: seconds to run after start-up (None: a timeline's length + 1 s, or 20 s).
+        commands: command timeline (CSV or TOML plan script).
+        out: run directory (None: ``runs/<timestamp>-simulate``).
+        plots: write trajectory.png, power.png and contacts.png.
+        terrain: ``flat``, ``ramp:DEG``, ``blocks[...]``, ``stairs:RISE,RUN`` or ``heightfield:FILE[,SCALE]``.
+        scenario: WG, SG, WA or SA.
+        physics_rate: physics steps per second [Hz] (a whole multiple of the control rate).
+        friction: lateral friction of feet and terrain.
+        restitution: restitution of feet and terrain.
+        seed: seed of every random thing.
+        imu_noise: IMU noise standard deviation (rad/s, m/s²).
+        start: spawn pose, ``unpacked`` or ``packed``.
+        gui: open the physics GUI (needs a display).
+        stand: start up on a stand (True), on the ground (False), or as ``start_up.simulation`` says (None).
+        feedback: per-run switches of the sensor-driven features.
+        fail_on_fall: the command exits 4 when the robot fell.
+        overwrite: replace an existing run directory at ``out`` when the run finishes.
+        engine: the physics engine, ``pybullet`` or ``mujoco``.
+    """
+
+    robot: str = "bullet"
+    gait: str | None = None
+    velocity: str = "1,0,0"
+    duration: float | None = None
+    commands: Path | None = None
+    out: Path | None = None
+    plots: bool = True
+    terrain: str = "flat"
+    scenario: str = "WG"
+    physics_rate: float = 400.0
+    friction: float = 0.9
+    restitution: float = 0.0
+    seed: int = 0
+    imu_noise: float = 0.0
+    start: str = "unpacked"
+    gui: bool = False
+    stand: bool | None = None
+    feedback: Feedback = field(default_factory=lambda: Feedback())
+    fail_on_fall: bool = False
+    overwrite: bool = False
+    engine: str = "pybullet"
+
+
+def run_simulate(options: SimulateOptions, after: Callable[[Path], None] | None = None) -> Path:
+    """Load, simulate, log, print one line, then ``after(run directory)``; returns the run directory. Exits 130/143
+    when a signal stopped the run, 4 when it fell and ``fail_on_fall`` is set."""
+    from shc_cli.analysis.progress import progress_note
+    from shc_cli.commands.outcome import EXIT_FELL, exit_if_interrupted, interrupted_note
+
+    path, summary = simulate_to(options)
+    typer.echo(f"{summary['robot']} / {summary['gait']} / {summary['scenario']} on {options.terrain}: "
                f"{summary['sim_time_s']:.1f} s simulated in {summary['wall_time_s']:.1f} s, distance "
                f"{summary['distance_m']:.3f} m, path speed {summary['path_speed_mps']:.4f} m/s, displacement speed "
                f"{summary['displacement_speed_mps']:.4f} m/s, mean power "
                f"{summary['mean_power_w']:.1f} W, "
                f"CoT {summary['cot'] if summary['cot'] is None else round(summary['cot'], 3)}"
-               f"{', FELL' if summary['fell'] else progress_note(summary)} → {path}")
+               f"{', FELL' if summary['fell'] else progress_note(summary)}{interrupted_note(summary)} → {path}")
+    if after is not None:
+        after(path)
+    exit_if_interrupted(summary)
+    if summary["fell"] and options.fail_on_fall:
+        raise typer.Exit(EXIT_FELL)
     return path
 
 
-def simulate_to(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
-                commands: Path | None, out: Path | None, plots: bool, terrain_text: str, scenario: str,
-                physics_rate: float, friction: float, restitution: float, seed: int, imu_noise: float,
-                start_pose: str, gui: bool = False, stand: bool | None = None,
-                feedback: Feedback | None = None, overwrite: bool = False,
-                engine: str = "pybullet") -> tuple[Path, dict[str, Any]]:
-    """Load, simulate, log (silently); returns the run directory and its summary (``overwrite``: replace an
-    existing run directory when the run finishes)."""
-    from shc_cli.backends.engine import ENGINES
-    from shc_cli.backends.terrain import parse_terrain
-    from shc_cli.spec.checks import load_checked
+def check_display(gui: bool) -> None:
+    """``--gui`` needs a display: on Linux without ``DISPLAY`` (or ``WAYLAND_DISPLAY``) a one-line error, exit 2."""
+    display = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    if gui and sys.platform.startswith("linux") and not display:
+        raise SpecError([Issue(None, None, "--gui", "no display (DISPLAY is not set)",
+                               "drop --gui, or set DISPLAY / run under a virtual display: xvfb-run shc simulate ...")])
 
-    robot, gait, loaded = load_checked(robot_name, gait_name)
-    if feedback is not None:
-        robot = feedback.apply(robot)
-    terrain = parse_terrain(terrain_text)
-    scenario = scenario.upper()
+
+def simulate_to(options: SimulateOptions | None = None, **changes: Any) -> tuple[Path, dict[str, Any]]:
+    """Load, simulate through the one loop, log (silently); returns the run directory and its summary.
+
+    ``simulate_to(SimulateOptions(duration=2))`` or ``simulate_to(duration=2)`` (keywords change the defaults or
+    the given options).
+    """
+    from shc_cli import __version__
+    from shc_cli.backends.engine import ENGINES
+    from shc_cli.backends.simulated import SimulatedBackend, WorldOptions, open_world
+    from shc_cli.backends.terrain import parse_terrain
+    from shc_cli.control.controller import Controller
+    from shc_cli.hardware.inputs import TimelineInput
+    from shc_cli.runlog import LogRecorder, RunDirectory
+    from shc_cli.runs.falls import PhysicsRecord
+    from shc_cli.runs.inputs import load_inputs
+    from shc_cli.runs.loop import START_UP_MARGIN_S, Observer, RunLoop, StartUp
+    from shc_cli.runs.session import execute
+
+    o = replace(options or SimulateOptions(), **changes)
+    check_display(o.gui)
+    if o.engine not in ENGINES:
+        raise SpecError([Issue(None, None, "--engine", f"'{o.engine}' is not a physics engine",
+                               f"use {' or '.join(ENGINES)}")])
+    scenario = o.scenario.upper()
     if scenario not in SCENARIOS:
         raise SpecError([Issue(None, None, "--scenario", f"'{scenario}' is not a scenario",
                                "use SA (stance air), WA (walk air), SG (stance ground) or WG (walk ground)")])
-    substeps = round(physics_rate * robot.time_delta)
-    if substeps < 1 or abs(substeps - physics_rate * robot.time_delta) > 1e-6:
-        raise SpecError([Issue(None, None, "--physics-rate", f"{physics_rate:g} Hz is not a whole multiple of the "
+    airborne, walking = SCENARIOS[scenario]
+    inputs = load_inputs(o.robot, o.gait, o.velocity, o.duration, o.commands, default_s=20.0, walking=walking,
+                         robot_change=o.feedback.apply)
+    robot = inputs.robot
+    terrain = parse_terrain(o.terrain)
+    substeps = round(o.physics_rate * robot.time_delta)
+    if substeps < 1 or abs(substeps - o.physics_rate * robot.time_delta) > 1e-6:
+        raise SpecError([Issue(None, None, "--physics-rate", f"{o.physics_rate:g} Hz is not a whole multiple of the "
                                f"control rate {1 / robot.time_delta:g} Hz",
                                f"e.g. {4 / robot.time_delta:g} Hz")])
-    if engine not in ENGINES:
-        raise SpecError([Issue(None, None, "--engine", f"'{engine}' is not a physics engine",
-                               f"use {' or '.join(ENGINES)}")])
-    if start_pose not in ("unpacked", "packed"):
-        raise SpecError([Issue(None, None, "--start", f"'{start_pose}' is not a start pose", "use unpacked or packed")])
-    walking = SCENARIOS[scenario][1]
-    timeline = load_timeline(commands, robot.time_delta) if commands else constant(
-        parse_velocity(velocity) if walking else (0.0, 0.0, 0.0))
-    cycles = walk_cycles(timeline, duration, robot.time_delta, commands is not None, default_s=20.0)
-    gait_file, _ = loaded.where(("walker", "gait"))
-    pose_sets = pose_sets_for(robot, gait, timeline, gait_file.parent)
-    directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-simulate"
-    if stand is None:
-        stand = robot.start_up.simulation == "stand"
-    run = Simulation(robot, gait, pose_sets, terrain, scenario, substeps, friction, restitution, seed, imu_noise,
-                     start_pose, gui, stand, engine)
-    log = RunDirectory(directory, overwrite)
-    log.write_robot(robot)
-    try:
-        summary, series = run.execute(timeline, cycles, log)
-    except KeyboardInterrupt:
-        log.close()
-        raise ShcError(f"interrupted: the cycles completed so far are in {log.partial}") from None
-    finally:
-        run.world.close()
-    if plots:
-        from shc_cli.plots import plot_simulation
+    if o.start not in ("unpacked", "packed"):
+        raise SpecError([Issue(None, None, "--start", f"'{o.start}' is not a start pose", "use unpacked or packed")])
+    directory = o.out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-simulate"
+    stand = robot.start_up.simulation == "stand" if o.stand is None else o.stand
+    with RunDirectory(directory, o.overwrite) as run:  # refuses an existing --out before the physics opens
+        world = open_world(robot, WorldOptions(terrain, substeps, airborne, o.friction, o.restitution, o.seed,
+                                               o.imu_noise, o.start, o.gui, stand, o.engine))
+        with SimulatedBackend(robot, world) as backend:
+            controller = Controller(robot, inputs.gait, joints=backend.start(), pose_sets=inputs.pose_sets)
+            run.write_robot(robot)
+            record = PhysicsRecord(robot, backend, airborne)
+            progress = _progress(inputs.cycles)
+            observers: list[Observer] = [record] if progress is None else [record, progress]
+            loop = RunLoop(controller, backend, TimelineInput(inputs.timeline.commands(inputs.cycles)),
+                           LogRecorder(run, robot, backend),
+                           StartUp(round((robot.start_up.time_to_start + START_UP_MARGIN_S) / robot.time_delta)),
+                           observers=observers, flush_every=200)
 
-        plot_simulation(robot, series, log.partial, gait=summary["gait"])
-    return log.finish(summary), summary
+            def summarise(_: Any) -> dict[str, Any]:
+                import numpy as np
 
+                if progress is not None:
+                    progress.stop()
+                return {**record.summary(scenario, controller.gait.name, controller), "seed": o.seed,
+                        "terrain": str(world.terrain.spec), "engine": world.name, "engine_version": world.version,
+                        "versions": {"shc": __version__, world.name: world.version, "numpy": np.__version__}}
 
-class Simulation:
-    """One simulated run: a physics :class:`~shc_cli.backends.engine.Engine` and the controller."""
+            def plot(folder: Path) -> None:
+                from shc_cli.plots import plot_simulation
 
-    def __init__(self, robot: Robot, gait: Any, pose_sets: dict[str, Any], terrain: Any, scenario: str,
-                 substeps: int, friction: float, restitution: float, seed: int, imu_noise: float,
-                 start_pose: str, gui: bool, stand: bool = False, engine: str = "pybullet") -> None:
-        from shc_cli.backends.engine import open_engine
-        from shc_cli.control.sequence import joint_configurations
-        from shc_cli.model.chains import Chains
+                plot_simulation(robot, record.series, folder, gait=controller.gait.name)
 
-        self.robot, self.gait, self.scenario, self.seed = robot, gait, scenario, seed
-        chains = Chains.from_robot(robot)
-        packed, unpacked = joint_configurations(robot, chains.joints)
-        initial = np.clip(packed[-1] if start_pose == "packed" and len(packed) else unpacked, chains.lower,
-                          chains.upper)
-        airborne, _ = SCENARIOS[scenario]
-        self.world = open_engine(engine, robot, terrain, robot.time_delta, substeps, airborne, initial, friction,
-                                 restitution, seed, imu_noise, gui, stand)
-        self.controller = Controller(robot, gait, joints=self.world.read().joints, pose_sets=pose_sets)
-        self.airborne = airborne
-
-    def execute(self, timeline: Timeline, walk_cycles: int, log: RunDirectory) -> tuple[dict[str, Any], dict[str, Any]]:
-        """Start up, play the timeline, log every control cycle; returns (summary, series for the plots)."""
-        from shc_cli.backends.engine import tilt
-
-        robot, world, controller = self.robot, self.world, self.controller
-        dt = robot.time_delta
-        legs = list(robot.legs)
-        columns = (joint_columns(robot, "_cmd") + joint_columns(robot) + joint_columns(robot, "_torque")
-                   + joint_columns(robot, "_power")
-                   + [f"{leg}_force" for leg in legs] + [f"{leg}_contact" for leg in legs]
-                   + ["x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz", "wx", "wy", "wz",
-                      "imu_qx", "imu_qy", "imu_qz", "imu_qw", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z",
-                      "height", "power_w", "cmd_vx", "cmd_vy", "cmd_wz", "vel_x", "vel_y", "vel_wz",
-                      "robot_state", "walk_state"])
-        handle, row = log.table("log.csv", columns, ["%.6g"] * (len(columns) - 2) + ["%s", "%s"])
-        rows, cols = world.slot_rows, world.slot_cols  # padded (L, n) arrays → the log's joint columns
-        limit = round((robot.start_up.time_to_start + START_UP_MARGIN_S) / dt)
-        series: dict[str, list[Any]] = {"t": [], "position": [], "power": [], "contact": [], "running": [],
-                                        "desired": []}
-        commands = iter(timeline.commands(walk_cycles))
-        started = time.perf_counter()
-        cycle, walked, fell, max_tilt = 0, 0, False, 0.0
-        window_start: np.ndarray | None = None
-        progress = _progress(walk_cycles)
-        sensors: Sensors | None = None
-        feedback_on = controller.uses_sensors
-        while walked < walk_cycles:
-            if controller.state != RobotState.RUNNING:
-                if cycle > limit:
-                    raise ShcError(f"{robot.name}: did not reach RUNNING within {limit} cycles of start-up")
-                command = Command(state_request=RobotState.RUNNING)
-            else:
-                command = next(commands)
-                walked += 1
-                if progress is not None and walked % 50 == 0:
-                    progress(walked)
-            out = controller.step(command, sensors)
-            world.command(out.joints)
-            world.step()
-            reading = world.read()
-            if feedback_on:  # what the controller sees next cycle
-                sensors = Sensors(reading.orientation, reading.angular_rate, reading.joints, reading.joint_efforts,
-                                  reading.foot_forces, reading.foot_contact, reading.body_height)
-            power = reading.servo_power[rows, cols]
-            total = float(power.sum())
-            running = out.robot_state == RobotState.RUNNING
-            if running and world.stand is not None:
-                world.release_stand()  # started up on the stand: now on its own feet
-            values = np.concatenate((out.joints[rows, cols], reading.joints[rows, cols],
-                                     reading.joint_efforts[rows, cols], power, reading.foot_forces,
-                                     reading.foot_contact, reading.position, reading.rpy, reading.linear_velocity,
-                                     reading.angular_velocity, reading.orientation, reading.angular_rate,
-                                     reading.linear_acceleration, (reading.body_height, total), command.velocity,
-                                     out.velocity))
-            handle.write(row % (cycle, cycle * dt, *values.tolist(), out.robot_state.name, out.walk_state.name))
-            series["t"].append(cycle * dt)
-            series["position"].append(reading.position)
-            series["power"].append(total)
-            series["contact"].append(reading.foot_contact)
-            series["running"].append(running)
-            series["desired"].append(out.velocity)
-            if running:
-                if window_start is None:  # where the body was when the first RUNNING cycle began
-                    window_start = series["position"][-2] if len(series["position"]) > 1 else reading.position
-                    self._running_since = (time.perf_counter(), world.physics_time)
-                max_tilt = max(max_tilt, tilt(reading.rpy))
-                low = reading.body_height < FALL_HEIGHT_SHARE * robot.walker.body_clearance
-                if max_tilt > FALL_TILT or (low and not self.airborne):
-                    fell = True
-                    break
-            cycle += 1
-            if cycle % 200 == 0:
-                log.flush()
-        wall = time.perf_counter() - started
-        since_wall, since_physics = getattr(self, "_running_since", (time.perf_counter(), world.physics_time))
-        self.running_times = (time.perf_counter() - since_wall, world.physics_time - since_physics)
-        if progress is not None:
-            progress(walk_cycles)
-        return self._summary(series, window_start, wall, fell, max_tilt), series
-
-    def _summary(self, series: dict[str, list[Any]], window_start: np.ndarray | None, wall: float, fell: bool,
-                 max_tilt: float) -> dict[str, Any]:
-        """Paper eq. 22 cost of transport over the RUNNING window: mean power / (m·g·v)."""
-        from shc_cli import __version__
-
-        robot, dt = self.robot, self.robot.time_delta
-        running = np.array(series["running"], dtype=bool)
-        power = np.array(series["power"])
-        window = float(running.sum()) * dt
-        end = series["position"][-1] if series["position"] else np.zeros(3)
-        start = window_start if window_start is not None else end
-        distance = float(np.linalg.norm((end - start)[:2]))
-        speed = distance / window if window > 0 else 0.0
-        from shc_cli.analysis.metrics import window_speeds
-
-        xy = np.array(series["position"])[:, :2] if series["position"] else np.zeros((0, 2))
-        path_speed, _ = window_speeds(xy, np.flatnonzero(running), dt)
-        from shc_cli.analysis.progress import cycle_path_length, progress_fields
-
-        desired = np.array(series["desired"]).reshape(-1, 3)[running[:len(series["desired"])], :2]
-        commanded = float(np.linalg.norm(desired, axis=1).mean()) if len(desired) else 0.0
-        mean_power = float(power[running].mean()) if running.any() else 0.0
-        mass = robot.total_mass()
-        walking_on_ground = self.scenario == "WG"
-        cot = mean_power / (mass * 9.81 * speed) if walking_on_ground and speed > 1e-3 else None  # eq. 22, WG only
-        return {
-            "robot": robot.name,
-            "gait": self.controller.gait.name,
-            "scenario": self.scenario,
-            "sim_time_s": len(series["t"]) * dt,
-            "analysed_time_s": window,
-            "wall_time_s": wall,
-            "running_wall_time_s": self.running_times[0],
-            "running_physics_time_s": self.running_times[1],
-            "physics_time_s": self.world.physics_time,
-            "physics_rate_hz": self.world.substeps / dt,
-            "engine": self.world.name,
-            "engine_version": self.world.version,
-            "distance_m": distance,
-            "forward_distance_m": float((end - start)[0]),
-            "mean_speed_mps": speed,  # = displacement_speed_mps, its first name
-            "displacement_speed_mps": speed,
-            "path_speed_mps": path_speed,
-            "commanded_speed_mps": commanded,
-            **progress_fields(cycle_path_length(_window_path(xy, running), self.controller.cycle.period), commanded,
-                              window),
-            "mean_power_w": mean_power,
-            "mass_kg": mass,
-            "step_frequency_hz": self.controller.parameters["step_frequency"],
-            "step_period_cycles": self.controller.cycle.period,
-            "cycle_frequency_hz": self.controller.cycle.frequency,
-            "duty_factor": self.controller.cycle.duty_factor,
-            "cot": cot,
-            "max_tilt_rad": max_tilt,
-            "fell": fell,
-            "seed": self.seed,
-            "terrain": str(self.world.terrain.spec),
-            "versions": {"shc": __version__, self.world.name: self.world.version, "numpy": np.__version__},
-        }
+            path, summary, _ = execute(loop, run, summarise, plot if o.plots else None)
+    return path, summary
 
 
-def _window_path(xy: np.ndarray, running: np.ndarray) -> np.ndarray:
-    """The body path over the RUNNING rows, starting where the row before the first of them ended."""
-    rows = np.flatnonzero(running)
-    if len(rows) == 0:
-        return np.zeros((0, 2))
-    return np.vstack([xy[max(rows[0] - 1, 0)], xy[rows[0]:rows[-1] + 1]])
+class _Progress:
+    """The progress bar over the walking cycles (an observer of the loop)."""
 
+    def __init__(self, bar: Any) -> None:
+        self.bar, self.walked = bar, 0
 
-def _progress(total: int) -> Any:
-    """A rich progress bar on a terminal; None in pipes and CI (quiet)."""
-    if not sys.stderr.isatty() or os.environ.get("CI"):
+    def __call__(self, cycle: int, command: Any, out: Any, reading: Any) -> str | None:
+        if command.state_request is None or out.robot_state.name == "RUNNING":
+            self.walked += 1
+            if self.walked % 50 == 0:
+                self.bar.update(self.walked)
         return None
-    from rich.progress import Progress
 
-    bar = Progress(transient=True)
-    task = bar.add_task("simulating", total=total)
-    bar.start()
+    def stop(self) -> None:
+        self.bar.stop()
 
-    def update(done: int) -> None:
-        bar.update(task, completed=done)
-        if done >= total:
-            bar.stop()
 
-    return update
+def _progress(total: int) -> _Progress | None:
+    """A progress bar on a terminal; None in pipes and CI (quiet)."""
+    from shc_cli.progress import progress_bar
+
+    bar = progress_bar("simulating", total)
+    return None if bar is None else _Progress(bar)

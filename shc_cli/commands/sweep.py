@@ -21,7 +21,6 @@ import io
 import math
 import os
 import shutil
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -51,15 +50,19 @@ def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: 
     row: dict[str, Any] = {"index": point.index, "slug": point.slug, **point.values, "status": "ok", "error": ""}
     directory = Path(out) / "runs" / point.slug
     try:
+        if _stopped_by_signal(directory):  # finished as a partial run by an earlier Ctrl-C: run it again
+            shutil.rmtree(directory)
         if not (directory / "summary.json").exists():
             partial = directory.with_name(directory.name + ".partial")
             if partial.exists():
                 shutil.rmtree(partial)  # a crashed earlier attempt
             _simulate(point, Path(out), directory)
         from shc_cli.analysis.metrics import Window, analyze_run
-        from shc_cli.runread import read_run
+        from shc_cli.runs.opening import open_run
 
-        log = read_run(directory)
+        if _stopped_by_signal(directory):  # Ctrl-C during this run: it is kept (partial), the sweep stops
+            raise KeyboardInterrupt
+        log = open_run(directory)
         result = analyze_run(log, Window(skip_s=skip))
         row.update({key: log.summary.get(key) for key in RUN_KEYS})
         row.update({key: result.get(key) for key in metrics})
@@ -81,6 +84,17 @@ def _interrupted(error: BaseException) -> bool:
     return False
 
 
+def _stopped_by_signal(directory: Path) -> bool:
+    """A finished run directory whose summary says it did not play to its end because of a signal."""
+    import json
+
+    try:
+        summary = json.loads((directory / "summary.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return summary.get("stop_reason") in ("SIGINT", "SIGTERM")
+
+
 def _one_line(error: BaseException) -> str:
     if isinstance(error, SpecError):
         return "; ".join(str(issue) for issue in error.issues)
@@ -89,17 +103,19 @@ def _one_line(error: BaseException) -> str:
 
 
 def _simulate(point: Point, out: Path, directory: Path) -> None:
-    from shc_cli.commands.simulate import simulate_to
+    from shc_cli.commands.simulate import SimulateOptions, simulate_to
 
     options = point.options
     robot = _robot_for(point, out)
     velocity = options["velocity"]
     if options["stride_percent"] is not None:
         velocity = f"{float(options['stride_percent']) / 100.0:g},0,0"
-    simulate_to(robot, options["gait"] or None, velocity, float(options["duration"]), None, directory, False,
-                options["terrain"], options["scenario"], float(options["physics_rate"]), float(options["friction"]),
-                float(options["restitution"]), int(options["seed"]), float(options["imu_noise"]), options["start"],
-                False, options["stand"], engine=options["engine"])
+    simulate_to(SimulateOptions(robot, options["gait"] or None, velocity, float(options["duration"]), out=directory,
+                                plots=False, terrain=options["terrain"], scenario=options["scenario"],
+                                physics_rate=float(options["physics_rate"]), friction=float(options["friction"]),
+                                restitution=float(options["restitution"]), seed=int(options["seed"]),
+                                imu_noise=float(options["imu_noise"]), start=options["start"], stand=options["stand"],
+                                engine=options["engine"]))
 
 
 def _robot_for(point: Point, out: Path) -> str:
@@ -373,18 +389,10 @@ def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | N
 
 
 def _progress(total: int) -> Callable[[int, dict[str, Any]], None] | None:
-    """A rich progress bar on a terminal; ``None`` (quiet) in pipes and CI."""
-    if not sys.stderr.isatty() or os.environ.get("CI"):
+    """The progress bar over the sweep's runs (``None``, quiet, in pipes and CI)."""
+    from shc_cli.progress import progress_bar
+
+    bar = progress_bar("sweep", total)
+    if bar is None:
         return None
-    from rich.progress import Progress
-
-    bar = Progress(transient=True)
-    task = bar.add_task("sweep", total=total)
-    bar.start()
-
-    def update(done: int, row: dict[str, Any]) -> None:
-        bar.update(task, completed=done, description=f"sweep ({row['slug'][:40]})")
-        if done >= total:
-            bar.stop()
-
-    return update
+    return lambda done, row: bar.update(done, str(row["slug"])[:40])

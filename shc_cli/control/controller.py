@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from enum import IntEnum
 
 import numpy as np
 
@@ -21,6 +20,8 @@ from shc_cli.control.autopose import AutoPoser
 from shc_cli.control.bezier import cubic
 from shc_cli.control.gait import StepCycle, step_cycle
 from shc_cli.control.limits import Limits, generate_limits
+from shc_cli.control.manipulation import MAX_MANUAL_LEGS as MAX_MANUAL_LEGS
+from shc_cli.control.manipulation import LegManipulation
 from shc_cli.control.pose import Pose, PoseController, PoseReset
 from shc_cli.control.sensing import (
     ContactDetector,
@@ -31,10 +32,11 @@ from shc_cli.control.sensing import (
     support_centroid_pose,
 )
 from shc_cli.control.startup import iterations, plan_direct_startup
+from shc_cli.control.states import LegMode as LegMode
+from shc_cli.control.states import RobotState as RobotState  # re-exported: the controller's interface
 from shc_cli.control.walk import WalkController, WalkState
 from shc_cli.model import kernels
 from shc_cli.model.chains import Chains, FloatArray
-from shc_cli.model.ik import IK_TOLERANCE
 from shc_cli.model.workspace import Workplane, plane_at, search_workspaces, volumetric_workspaces, walkspace
 from shc_cli.spec.autopose import AutoPoseSet
 from shc_cli.spec.gait import Gait
@@ -42,15 +44,6 @@ from shc_cli.spec.robot import Robot
 
 UNDEFINED = float(2147483647)
 """OpenSHC's 'undefined position' value, published before a tip has been posed."""
-
-
-class RobotState(IntEnum):
-    """OpenSHC ``RobotState``."""
-
-    UNKNOWN = -1
-    PACKED = 0
-    READY = 1
-    RUNNING = 2
 
 
 @dataclass
@@ -86,17 +79,6 @@ class Command:
     tip_position: dict[str, tuple[float, float, float]] = field(default_factory=dict)
 
 
-class LegMode(IntEnum):
-    """OpenSHC ``LegState``: who drives a leg."""
-
-    WALKING = 0
-    MANUAL = 1
-    WALKING_TO_MANUAL = 2
-    MANUAL_TO_WALKING = 3
-
-
-MAX_MANUAL_LEGS = 2
-"""At most this many legs can be manipulated at once (OpenSHC)."""
 
 # Enum members bound once: attribute access on an Enum class is slow, and these are read every cycle.
 _UNKNOWN, _RUNNING = RobotState.UNKNOWN, RobotState.RUNNING
@@ -198,7 +180,7 @@ class Model:
         return np.where((self._flags & 1) != 0, self._proximity, 0.0)
 
 
-class Controller:
+class Controller(LegManipulation):
     """OpenSHC's high-level controller for one robot.
 
     Args:
@@ -329,15 +311,6 @@ class Controller:
             self.requested = command.state_request
             if self.state == _UNKNOWN or command.state_request != self.state:
                 self.transition_pending = True
-
-    def _receive_manipulation(self, command: Command) -> None:
-        legs = list(self.stance)
-        if command.leg_toggle is not None and self.pending_toggle is None:
-            if command.leg_toggle not in legs:
-                raise ValueError(f"no leg '{command.leg_toggle}' to toggle (legs: {', '.join(legs)})")
-            self.pending_toggle = legs.index(command.leg_toggle)
-        self.tip_velocities = {legs.index(k): np.array(v, dtype=float) for k, v in command.tip_velocity.items()}
-        self.tip_positions = {legs.index(k): np.array(v, dtype=float) for k, v in command.tip_position.items()}
 
     # -- the cycle ---------------------------------------------------------------------------------------------
 
@@ -627,88 +600,6 @@ class Controller:
         walking = self.leg_modes == _WALKING_LEG
         self.poser_tips = self.poser_tips.copy()
         self.poser_tips[walking, 2] += delta[walking]
-
-    def _toggle_leg(self, leg: int) -> None:
-        """Walking ↔ manual for one leg, once stopped (OpenSHC ``legStateToggle``, study §9.5)."""
-        assert self.walker is not None
-        if self.walker.state != WalkState.STOPPED:
-            self._stop_walking()
-            return
-        mode = LegMode(self.leg_modes[leg])
-        if mode == LegMode.WALKING:
-            if int((self.leg_modes == LegMode.MANUAL).sum()) < MAX_MANUAL_LEGS:
-                self.leg_modes[leg] = LegMode.WALKING_TO_MANUAL
-                self._manual_legs += 1
-                self.walker.legs.floats[leg, stepping.SWING_PROGRESS] = -1.0
-                self.walker.legs.floats[leg, stepping.STANCE_PROGRESS] = -1.0
-            else:
-                self.pending_toggle = None  # refused: OpenSHC allows two manual legs
-        elif mode == LegMode.MANUAL:
-            self.leg_modes[leg] = LegMode.MANUAL_TO_WALKING
-        else:
-            self._forced_pose_reset = True  # the manual body pose goes back to the default at once
-            if self._pose_for_manipulation() == sequence.PROGRESS_COMPLETE:
-                self.leg_modes[leg] = LegMode.MANUAL if mode == LegMode.WALKING_TO_MANUAL else LegMode.WALKING
-                self._manual_legs -= int(self.leg_modes[leg] == _WALKING_LEG)
-                self.pending_toggle = None
-                self._forced_pose_reset = False
-
-    def _pose_for_manipulation(self) -> int:
-        """Every leg steps to its default tip; a leg going manual is raised to swing height above the body
-        origin's plane, no lift (OpenSHC ``poseForLegManipulation``). Returns the smallest progress."""
-        assert self.walker is not None
-        height = self.parameters["swing_height"]
-        duration = 1.0 / self.parameters["step_frequency"]
-        body = self.poser.current
-        walking_pose = Pose(body.position - self.poser.manual[:3], body.rotation)
-        lifted_pose = Pose(np.array([0.0, 0.0, -height]))
-        vectors = self.walker.legs.vectors
-        rising = self.leg_modes == LegMode.WALKING_TO_MANUAL
-        targets = np.empty((len(self.stance), 3))
-        for leg in range(len(self.stance)):
-            default = vectors[leg, stepping.DEFAULT]
-            targets[leg] = (lifted_pose if rising[leg] else walking_pose).inverse_transform(default)
-            if rising[leg]:
-                vectors[leg, stepping.CURRENT] = targets[leg]
-            elif self.leg_modes[leg] == LegMode.MANUAL_TO_WALKING:
-                vectors[leg, stepping.CURRENT] = default
-        lifted = self._manipulator.step(self.model.tips, targets, 0.0, duration, rising)  # no lift for this one
-        stepping_legs = self._manipulator.step(self.model.tips, targets, height, duration, ~rising)
-        progress = np.where(rising, lifted, stepping_legs)
-        moving = progress != sequence.PROGRESS_COMPLETE
-        if moving.any():
-            ik = self.robot.ik
-            self.poser_tips = np.where(moving[:, None], self._manipulator.current, self.poser_tips)
-            self.model.step_ik(self._manipulator.current, self.dt, ik.clamp_joint_positions,
-                               ik.clamp_joint_velocities, active=moving)
-        return int(progress.min())
-
-    def _update_manual_legs(self) -> None:
-        """Move manual legs by their inputs (OpenSHC ``WalkController::updateManual``, study §9.5)."""
-        assert self.walker is not None
-        vectors = self.walker.legs.vectors
-        spec = self.robot
-        for leg in np.flatnonzero(self.leg_modes == LegMode.MANUAL).tolist():
-            velocity = self.tip_velocities.get(leg)
-            if velocity is not None and np.any(velocity):
-                joints = list(spec.legs.values())[leg].joints
-                if spec.manipulation.mode == "joint_control" and len(joints) == 3:
-                    step = spec.pose.max_rotation_velocity * self.dt
-                    self.model.joints = self.model.joints.copy()  # outputs hold the previous array: never mutate
-                    self.model.joints[leg, 0] += velocity[1] * step
-                    self.model.joints[leg, 2] += velocity[0] * step
-                    self.model.tips = self.model.chains.tips(self.model.joints)
-                    vectors[leg, stepping.CURRENT] = self.model.tips[leg]
-                elif spec.manipulation.mode == "tip_control":
-                    error = self.poser_tips[leg] - self.model.tips[leg]
-                    change = velocity * spec.pose.max_translation_velocity * self.dt
-                    size = float(np.linalg.norm(error))
-                    if size >= IK_TOLERANCE:  # at the edge of reach: back off along the error
-                        change = float(np.linalg.norm(change)) * -(error / size)
-                    vectors[leg, stepping.CURRENT] = vectors[leg, stepping.CURRENT] + change
-            position = self.tip_positions.get(leg)
-            if position is not None and np.any(position) and spec.manipulation.mode == "tip_control":
-                vectors[leg, stepping.CURRENT] = position
 
     def _stop_walking(self) -> None:
         """OpenSHC forces a stop before gait, leg-state and plan changes by zeroing the velocity inputs."""

@@ -16,9 +16,11 @@ import math
 import numpy as np
 from numba import njit
 
+from shc_cli.control.states import WalkState
+
 # Step states (OpenSHC StepState) and walk states (WalkState).
 SWING, STANCE, FORCE_STANCE, FORCE_STOP = 0, 1, 2, 3
-STARTING, MOVING, STOPPING, STOPPED = 0, 1, 2, 3
+STARTING, MOVING, STOPPING, STOPPED = (int(state) for state in WalkState)  # plain ints for the kernels
 
 # Vector slots, (L, V, 3), walk-plane frame [m, m/s].
 CURRENT, DEFAULT, TARGET, VELOCITY, STRIDE, SWING_ORIGIN, SWING_ORIGIN_VELOCITY, STANCE_ORIGIN, IDENTITY, \

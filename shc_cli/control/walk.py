@@ -8,25 +8,16 @@ walking leg's tip (compiled in :mod:`shc_cli.control.stepping`) and integrates i
 from __future__ import annotations
 
 import math
-from enum import IntEnum
 
 import numpy as np
 
 from shc_cli.control import stepping
 from shc_cli.control.gait import StepCycle
 from shc_cli.control.limits import Limits
+from shc_cli.control.states import WalkState as WalkState  # re-exported
 from shc_cli.control.stepping import LegArrays
 
 Vector = np.ndarray
-
-
-class WalkState(IntEnum):
-    """OpenSHC ``WalkState``."""
-
-    STARTING = 0
-    MOVING = 1
-    STOPPING = 2
-    STOPPED = 3
 
 
 

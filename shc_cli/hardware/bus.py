@@ -155,10 +155,19 @@ class ServoBus:
                 line.state_reader.addParam(servo_id)
 
     def close(self) -> None:
+        """Close every port (again: nothing)."""
         for line in self.lines:
             if line.port is not None:
                 line.port.closePort()
                 line.port = None
+
+    def __enter__(self) -> ServoBus:
+        """``with ServoBus(...) as bus:`` opens the ports and closes them at the end."""
+        self.open()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
     def check(self) -> list[str]:
         """Every problem that must stop a start (one text each): missing servos (a broadcast ping, then a unicast

@@ -22,6 +22,7 @@ import select
 import threading
 import time
 import tty
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from shc_cli.hardware import protocol2 as p2
@@ -55,10 +56,13 @@ class EmulatedServo:
     table: bytearray = field(default_factory=lambda: bytearray(TABLE_SIZE))
     faults: Faults = field(default_factory=Faults)
     packets_seen: int = 0
-    _updated: float = field(default_factory=time.monotonic)
+    clock: Callable[[], float] = time.monotonic
+    """The clock the motion model reads [s] (a test gives its own to move the servos without waiting)."""
+    _updated: float = math.nan
     _position: float = 2048.0
 
     def __post_init__(self) -> None:
+        self._updated = self.clock()
         self.write(self.model.model_number_address, self.model.model_number.to_bytes(2, "little"))
         self.write(self.model.firmware_address, bytes([self.firmware]))
         self.write(7, bytes([self.servo_id]))
@@ -97,7 +101,7 @@ class EmulatedServo:
 
     def _advance(self) -> None:
         """First-order motion towards the goal since the last access (torque on only)."""
-        now = time.monotonic()
+        now = self.clock()
         elapsed, self._updated = now - self._updated, now
         if self.table[self.model.torque_enable] != 1 or elapsed <= 0.0:
             self.table[self.model.present_velocity:self.model.present_velocity + 4] = bytes(4)
@@ -137,10 +141,13 @@ class BusEmulator:
     Args:
         servos: servo id → model name (see :data:`shc_cli.hardware.models.MODELS`).
         return_delay: seconds each reply waits (a real servo's return delay time).
+        clock: the servos' clock [s] (default the monotonic clock).
     """
 
-    def __init__(self, servos: dict[int, str], return_delay: float = 0.0) -> None:
-        self.servos = {servo_id: EmulatedServo(servo_id, MODELS[model]) for servo_id, model in sorted(servos.items())}
+    def __init__(self, servos: dict[int, str], return_delay: float = 0.0,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self.servos = {servo_id: EmulatedServo(servo_id, MODELS[model], clock=clock)
+                       for servo_id, model in sorted(servos.items())}
         self.return_delay = return_delay
         self.packets: list[p2.Packet] = []
         """Every instruction packet received, in order (for tests)."""

@@ -70,9 +70,12 @@ class HeldInput:
     Args:
         gaits: the gaits ``next_gait`` cycles through (the robot's bundled gaits).
         watchdog_s: seconds without an event after which the velocities become zero (``None``: no watchdog).
+        clock: the monotonic clock the watchdog reads [s] (a test gives its own).
     """
 
-    def __init__(self, gaits: list[Gait] | None = None, watchdog_s: float | None = None) -> None:
+    def __init__(self, gaits: list[Gait] | None = None, watchdog_s: float | None = None,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self.clock = clock
         self.gaits = gaits or []
         self.watchdog_s = watchdog_s
         self.velocity = [0.0, 0.0, 0.0]
@@ -82,14 +85,14 @@ class HeldInput:
         self.gait_index = 0
         self.finished = False
         self.watchdog_trips = 0
-        self.last = time.monotonic()
+        self.last = clock()
         self._lock = threading.Lock()
 
     def update(self, change: Callable[[HeldInput], None]) -> None:
         """Apply ``change`` under the lock and feed the watchdog."""
         with self._lock:
             change(self)
-            self.last = time.monotonic()
+            self.last = self.clock()
 
     def zero(self) -> None:
         """Velocity and pose velocity inputs to zero."""
@@ -104,7 +107,7 @@ class HeldInput:
         with self._lock:
             if self.finished:
                 return None
-            idle = self.watchdog_s is not None and time.monotonic() - self.last > self.watchdog_s
+            idle = self.watchdog_s is not None and self.clock() - self.last > self.watchdog_s
             if idle and (any(self.velocity) or any(self.pose_velocity)):
                 self.zero()
                 self.watchdog_trips += 1
@@ -126,8 +129,8 @@ class StdinInput(HeldInput):
     """
 
     def __init__(self, stream: IO[str] | None = None, watchdog_s: float = 0.5,
-                 load_gait: Callable[[str], Gait] | None = None) -> None:
-        super().__init__(watchdog_s=watchdog_s)
+                 load_gait: Callable[[str], Gait] | None = None, clock: Callable[[], float] = time.monotonic) -> None:
+        super().__init__(watchdog_s=watchdog_s, clock=clock)
         self.stream = stream or sys.stdin
         self.load_gait = load_gait
         self._thread = threading.Thread(target=self._read, name="run-hw-stdin", daemon=True)

@@ -34,16 +34,17 @@ from typing import Any
 
 import numpy as np
 
+from shc_cli.control.states import RobotState, WalkState
 from shc_cli.errors import Issue, OutputError, SpecError
 from shc_cli.interop import mcap_chunks
 from shc_cli.interop.batch import BatchSerializer
-from shc_cli.runlog import ROBOT_FILE
+from shc_cli.runlog import ROBOT_FILE, joint_slots
 from shc_cli.runread import RunLog
 
 FORMATS = ("mcap", "sqlite3", "ros1")
-ROBOT_STATES = {"UNKNOWN": -1, "PACKED": 0, "READY": 1, "RUNNING": 2}
+ROBOT_STATES = {state.name: int(state) for state in RobotState}
 """OpenSHC's robot-state values (``/shc/state`` data[0])."""
-WALK_STATES = {"STARTING": 0, "MOVING": 1, "STOPPING": 2, "STOPPED": 3}
+WALK_STATES = {state.name: int(state) for state in WalkState}
 """OpenSHC's walk-state values (``/shc/state`` data[1])."""
 LEG_STATE_TYPE = "syropod_highlevel_controller/msg/LegState"
 LEG_STATE_MSG = """std_msgs/Header header
@@ -247,8 +248,7 @@ def _topics(run: RunLog, m: _Messages) -> list[Topic]:
     legs = list(robot.legs)
     names = leg_names(robot)
     chains = Chains.from_robot(robot)
-    slots = [(i, k) for i, leg in enumerate(robot.legs.values()) for k in range(len(leg.joints))]
-    rows_, cols_ = np.array([s[0] for s in slots]), np.array([s[1] for s in slots])
+    rows_, cols_ = joint_slots(robot)
     joint_ids = [joint for leg in names.values() for joint in leg.joints]
     measured = run.joints[:, rows_, cols_]
     commanded = (run.commanded if run.commanded is not None else run.joints)[:, rows_, cols_]

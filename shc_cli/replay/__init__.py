@@ -8,7 +8,9 @@ The parts are separable, so any loop can replay a run:
 * :mod:`shc_cli.replay.inputs`: the per-cycle command source for the controller;
 * :mod:`shc_cli.replay.compare`: the comparison, which consumes the controller's outputs.
 
-:func:`replay` is the plain loop over them.
+:func:`replay` runs them through the one run loop (:class:`~shc_cli.runs.loop.RunLoop`) on the kinematic backend:
+the recorded inputs are the loop's input source (state requests included, so the loop does no start-up of its
+own) and the comparison is its per-cycle observer.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from shc_cli.control.controller import Controller, RobotState
+from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
 from shc_cli.control.walk import WalkState
 from shc_cli.replay.compare import Comparer, Comparison
 from shc_cli.replay.inputs import ReplayInputs
@@ -58,9 +60,16 @@ def replay(recorded: Recorded, robot: Robot, gait: Gait, pose_sets: dict[str, Au
     controller = Controller(robot, gait, joints=initial_joints(recorded, comparer, robot), pose_sets=pose_sets)
     robot_states: list[RobotState] = []
     walk_states: list[WalkState] = []
-    for cycle in range(recorded.cycles):
-        out = controller.step(inputs.command(cycle))
+
+    def observe(cycle: int, command: Command, out: CycleOutput, reading: object) -> str | None:
         comparer.add(cycle, out)
         robot_states.append(out.robot_state)
         walk_states.append(out.walk_state)
+        return None
+
+    from shc_cli.backends.kinematic import KinematicBackend
+    from shc_cli.runs.loop import NullRecorder, RunLoop, SequenceInput
+
+    commands = SequenceInput(inputs.command(cycle) for cycle in range(recorded.cycles))
+    RunLoop(controller, KinematicBackend(), commands, NullRecorder(), start_up=None, observers=[observe]).run()
     return Replay(recorded, plan, comparer.result(), robot_states, walk_states)

@@ -1,9 +1,9 @@
 """A recorded OpenSHC run as per-cycle arrays, whatever it was read from (the recorder's CSVs or a ROS bag).
 
-:func:`open_source` decides what ``SOURCE`` is: a recording prefix ``DIR/NAME`` (``NAME_joints.csv.gz``, …, see
-:mod:`shc_cli.replay.recording`), a ROS 1 ``.bag`` file or a ROS 2 bag directory (mcap or sqlite3, see
-:mod:`shc_cli.replay.bagfile`). Both readers give a :class:`Recorded`: one row per control cycle of OpenSHC, the
-inputs it received before each cycle's output and whatever of its outputs the source holds.
+:func:`shc_cli.replay.opening.open_source` decides what ``SOURCE`` is: a recording prefix ``DIR/NAME``
+(``NAME_joints.csv.gz``, …, see :mod:`shc_cli.replay.recording`), a ROS 1 ``.bag`` file or a ROS 2 bag directory
+(mcap or sqlite3, see :mod:`shc_cli.replay.bagfile`). Both readers give a :class:`Recorded`: one row per control
+cycle of OpenSHC, the inputs it received before each cycle's output and whatever of its outputs the source holds.
 """
 
 from __future__ import annotations
@@ -12,8 +12,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-
-from shc_cli.errors import NotFoundError
 
 ABSURD = 1e3
 """Recorded numbers larger than this in magnitude are not compared (OpenSHC prints 2147483647 for a tip it has not
@@ -89,41 +87,3 @@ def usable(values: np.ndarray) -> np.ndarray:
     with np.errstate(invalid="ignore"):
         ok: np.ndarray = np.isfinite(values) & (np.abs(values) <= ABSURD)
     return ok
-
-
-def recording_prefix(source: Path) -> Path | None:
-    """``DIR/NAME`` if ``source`` is a recording prefix (or one of its CSV files), else ``None``."""
-    text = str(source)
-    for part in RECORDING_PARTS:
-        suffix = f"_{part}.csv.gz"
-        if text.endswith(suffix) and source.is_file():
-            return Path(text[: -len(suffix)])
-    if Path(f"{text}_joints.csv.gz").is_file():
-        return source
-    return None
-
-
-def open_source(source: Path) -> Recorded:
-    """Read a recording prefix, a ROS 1 bag file or a ROS 2 bag directory; one-line errors for anything else."""
-    prefix = recording_prefix(source)
-    if prefix is not None:
-        from shc_cli.replay.recording import read_recording
-
-        return read_recording(prefix)
-    if (source.is_dir() and (source / "metadata.yaml").is_file()) or (source.is_file() and _is_ros1_bag(source)):
-        from shc_cli.replay.bagfile import read_bag
-
-        return read_bag(source)
-    if source.is_dir():
-        raise NotFoundError(f"{source}: a directory without metadata.yaml is not a ROS 2 bag (give the bag's "
-                            "directory, a ROS 1 .bag file or a recording prefix DIR/NAME)")
-    if source.is_file():
-        raise NotFoundError(f"{source}: not a ROS 1 bag (no '#ROSBAG' header) nor a recording CSV (give a ROS 1 "
-                            ".bag file, a ROS 2 bag directory or a recording prefix DIR/NAME)")
-    raise NotFoundError(f"{source}: no such bag, and no {source.name}_joints.csv.gz beside it (give a ROS 1 .bag "
-                        "file, a ROS 2 bag directory or a recording prefix DIR/NAME)")
-
-
-def _is_ros1_bag(path: Path) -> bool:
-    with path.open("rb") as handle:
-        return handle.read(8) == b"#ROSBAG "

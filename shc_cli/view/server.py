@@ -534,7 +534,7 @@ def serve(target: str, host: str, port: int) -> None:
         raise SpecError([Issue(None, None, "view", f"viser is not installed ({error})",
                                "pip install 'shc[view]'")]) from None
 
-    from shc_cli.runread import read_run
+    from shc_cli.runs.opening import open_run as read_run  # directories and bags
     from shc_cli.spec.loading import load_robot
 
     data: RunScene | None = None

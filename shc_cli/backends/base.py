@@ -1,0 +1,92 @@
+"""The backend protocol: what turns the controller's joint targets into the next sensor reading.
+
+``plan``, ``simulate`` and ``run-hw`` differ only in their backend (:mod:`shc_cli.backends.kinematic`,
+:mod:`shc_cli.backends.simulated`, :mod:`shc_cli.backends.dynamixel`); the one run loop
+(:mod:`shc_cli.runs.loop`) drives any of them. One control cycle is::
+
+    out = controller.step(command, backend.sensors(wanted))
+    applied = backend.apply(out)        # joint targets as sent (after the backend's own limits)
+    backend.advance()                   # one control period: physics sub-steps | real-time wait | nothing
+    reading = backend.read()            # what the robot measured at the end of the period
+    backend.fault()                     # a reason to stop at once (servo fault), or None
+
+A backend that measures the ``log.csv`` quantities (:func:`shc_cli.runlog.log_columns`) also gives
+:meth:`MeasuringBackend.measured_row`; the kinematic backend measures nothing and its runs are logged as the
+controller's own tables (``joints.csv``, ``tips.csv``, ``body.csv``).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+
+if TYPE_CHECKING:
+    import numpy as np
+
+    from shc_cli.control.controller import Command, CycleOutput
+    from shc_cli.control.sensing import Sensors
+
+
+@runtime_checkable
+class Backend(Protocol):
+    """One robot, real or not, advanced one control period at a time.
+
+    ``kind`` names the run kind (``"plan"``, ``"simulate"``, ``"hardware"``): it becomes the summary's scenario
+    family and tells readers which log format the run has.
+    """
+
+    kind: str
+
+    def start(self) -> np.ndarray | None:
+        """Open the robot; returns the joint positions ``(L, n)`` [rad] it starts from (``None``: the controller's
+        own start, as the kinematic backend)."""
+        ...
+
+    def begin(self) -> None:
+        """Called once just before the first control cycle (torque on, real-time clock starts)."""
+        ...
+
+    def sensors(self, wanted: bool) -> Sensors | None:
+        """What the controller sees in the next cycle (``wanted``: the controller uses sensor feedback)."""
+        ...
+
+    def apply(self, out: CycleOutput) -> np.ndarray:
+        """Send this cycle's joint targets; returns them as sent ``(L, n)`` [rad]."""
+        ...
+
+    def advance(self) -> None:
+        """One control period."""
+        ...
+
+    def read(self) -> Any:
+        """The reading at the end of the period (backend-specific; ``None`` when nothing is measured)."""
+        ...
+
+    def fault(self) -> str | None:
+        """Why the run must stop at once (no further target is sent), or ``None``."""
+        ...
+
+    def close(self, faulted: bool = False) -> None:
+        """Release the robot (``faulted``: the run ended on a fault)."""
+        ...
+
+
+class MeasuringBackend(Backend, Protocol):
+    """A backend whose reading fills the measured columns of ``log.csv``."""
+
+    def measured_row(self, reading: Any) -> np.ndarray:
+        """The measured ``log.csv`` values of ``reading`` in :func:`shc_cli.runlog.log_columns` order (from the
+        measured joints to ``power_w``)."""
+        ...
+
+
+class InputSource(Protocol):
+    """Commands for the loop once the start-up is done (timeline, stdin, keyboard, gamepad, a recording).
+
+    :meth:`next` gives this cycle's command, ``None`` when the input is over.
+    """
+
+    def next(self) -> Command | None:
+        ...
+
+    def close(self) -> None:
+        ...

@@ -1,0 +1,33 @@
+"""How a run command ends: its exit code and the note on its summary line (docs/commands.md, "Exit codes").
+
+0 done (also ``run-hw`` stopped by Ctrl-C: that is how an open-ended run ends), 1 internal error, 2 bad input,
+3 ``run-hw`` ended by a servo fault, 4 ``simulate --fail-on-fall`` and the robot fell, 130 / 143 ``plan`` or
+``simulate`` stopped by SIGINT / SIGTERM (the run directory is finished, marked ``"complete": false``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import typer
+
+EXIT_FAULT = 3
+"""``run-hw``: a servo fault ended the run."""
+EXIT_FELL = 4
+"""``simulate --fail-on-fall``: the robot fell."""
+EXIT_INTERRUPTED = {"SIGINT": 130, "SIGTERM": 143}
+"""``plan``/``simulate`` stopped by a signal: 128 + the signal's number, as shells report it."""
+
+
+def interrupted_note(summary: dict[str, Any]) -> str:
+    """``", INTERRUPTED (SIGINT; partial run)"`` for a run that did not play to its end, else ``""``."""
+    if summary.get("complete", True) or summary.get("stop_reason") in ("fault", "fell"):
+        return ""
+    return f", INTERRUPTED ({summary.get('stop_reason')}; partial run)"
+
+
+def exit_if_interrupted(summary: dict[str, Any]) -> None:
+    """Exit 130/143 when a signal stopped the run."""
+    code = EXIT_INTERRUPTED.get(str(summary.get("stop_reason")))
+    if code is not None:
+        raise typer.Exit(code)

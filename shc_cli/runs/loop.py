@@ -1,0 +1,235 @@
+"""The one run loop: start-up to RUNNING, the input, the controller step, the backend, the log, the stop.
+
+:class:`RunLoop` drives any :class:`~shc_cli.backends.base.Backend` (kinematic for ``plan``, physics for
+``simulate``, Dynamixel for ``run-hw``) with any input source. Each cycle: the command (a RUNNING request
+until the start-up is done, then the input's next command, then — after a stop request on a backend with a
+controlled stop — requests towards the stop state), the controller step with the backend's sensors, the
+targets applied, one control period, the reading, the fault check, the recorder's row, the observers (who may
+stop the run: a fall). It stops when the input is over, on a fault, on an observer's reason or on a stop request
+(SIGINT/SIGTERM via :func:`shc_cli.runs.session.interrupts`, or :meth:`RunLoop.request_stop`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+from shc_cli.backends.base import Backend, InputSource
+from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
+from shc_cli.control.walk import WalkState
+from shc_cli.errors import ShcError
+
+START_UP_MARGIN_S = 2.0
+"""Extra time allowed for reaching RUNNING beyond the robot's start-up duration [s] (plan, simulate)."""
+
+Observer = Callable[[int, Command, CycleOutput, Any], "str | None"]
+"""Called after every logged cycle with (cycle, command, output, reading); a returned text stops the run with that
+reason (e.g. ``"fell"``)."""
+
+
+class Recorder(Protocol):
+    """Writes one logged cycle (the run's tables)."""
+
+    def record(self, cycle: int, command: Command, out: CycleOutput, applied: Any, reading: Any) -> None:
+        ...
+
+    def flush(self) -> None:
+        ...
+
+
+class NullRecorder:
+    """Writes nothing (a replay compares instead of logging)."""
+
+    def record(self, cycle: int, command: Command, out: CycleOutput, applied: Any, reading: Any) -> None:
+        """Nothing to write."""
+
+    def flush(self) -> None:
+        """Nothing to flush."""
+
+
+class SequenceInput:
+    """Any iterable of commands as an input source (a list, a generator over a recording)."""
+
+    def __init__(self, commands: Iterable[Command]) -> None:
+        self._commands = iter(commands)
+
+    def next(self) -> Command | None:
+        return next(self._commands, None)
+
+    def close(self) -> None:
+        """Nothing to release."""
+
+
+@dataclass(frozen=True)
+class StartUp:
+    """How the loop brings the robot to RUNNING before the input starts.
+
+    Attributes:
+        limit_cycles: cycles allowed for it.
+        as_fault: when the limit passes, stop as a fault (``run-hw``) instead of raising a one-line error.
+    """
+
+    limit_cycles: int
+    as_fault: bool = False
+
+
+@dataclass(frozen=True)
+class ControlledStop:
+    """After a stop request or the input's end, walk to a stop and shut down to ``state`` before ending (``run-hw``).
+
+    Attributes:
+        state: the state to reach.
+        timeout_s: how long it may take at most [s].
+    """
+
+    state: RobotState
+    timeout_s: float
+
+
+@dataclass
+class LoopResult:
+    """How a run ended.
+
+    Attributes:
+        cycles: logged control cycles.
+        stop_reason: ``"end"`` (the input was played to its end), ``"SIGINT"``, ``"SIGTERM"``, ``"fault"``,
+            ``"fell"`` or another observer's or caller's reason.
+        fault: the fault's text (``stop_reason == "fault"``).
+        stop_requested: a stop was requested from outside (signal or :meth:`RunLoop.request_stop`).
+    """
+
+    cycles: int
+    stop_reason: str
+    fault: str | None = None
+    stop_requested: bool = False
+
+    @property
+    def complete(self) -> bool:
+        """The run played its input to the end."""
+        return self.stop_reason == "end"
+
+
+class RunLoop:
+    """Drives a controller on a backend.
+
+    Args:
+        controller: the controller (already built from the backend's start joints).
+        backend: the backend (started).
+        source: the input once RUNNING (or from the first cycle when ``start_up`` is None).
+        recorder: writes each cycle.
+        start_up: bring the robot to RUNNING first (None: the input drives the states itself, as a replay).
+        controlled_stop: shut down before ending after a stop request (None: end at once).
+        observers: called after each recorded cycle; a returned text stops the run.
+        flush_every: flush the recorder every this many cycles.
+        on_fault: told each fault's text as it happens (e.g. to print it).
+    """
+
+    def __init__(self, controller: Controller, backend: Backend, source: InputSource, recorder: Recorder,
+                 start_up: StartUp | None, controlled_stop: ControlledStop | None = None,
+                 observers: Sequence[Observer] = (), flush_every: int = 200,
+                 on_fault: Callable[[str], None] | None = None) -> None:
+        self.controller, self.backend, self.source, self.recorder = controller, backend, source, recorder
+        self.start_up, self.controlled_stop = start_up, controlled_stop
+        self.observers = list(observers)
+        self.flush_every = flush_every
+        self.on_fault = on_fault
+        self.dt = controller.robot.time_delta
+        self.started = start_up is None
+        self.stop_reason: str | None = None
+        self.requested = False
+        self.fault_text: str | None = None
+        self._stopping_since: int | None = None
+        self._stop_limit_s = 0.0
+
+    def request_stop(self, reason: str) -> None:
+        """Stop (or begin the controlled stop) at the next cycle; the first reason is kept."""
+        self.requested = True
+        if self.stop_reason is None:
+            self.stop_reason = reason
+
+    def _fault(self, text: str) -> None:
+        self.fault_text = text
+        self.stop_reason = "fault"
+        if self.on_fault is not None:
+            self.on_fault(text)
+
+    def _command(self, cycle: int) -> Command | None:
+        """This cycle's command; ``None`` ends the run."""
+        controller = self.controller
+        if not self.started and controller.state == RobotState.RUNNING:
+            self.started = True
+        if self.started and self.stop_reason is None:
+            command = self.source.next()
+            if command is not None:
+                return command
+            self.stop_reason = "end"  # the input is over
+        if self.stop_reason is not None:
+            return self._stopping(cycle)
+        assert self.start_up is not None
+        if cycle > self.start_up.limit_cycles:
+            text = f"did not reach RUNNING within {self.start_up.limit_cycles} cycles"
+            if not self.start_up.as_fault:
+                raise ShcError(f"{controller.robot.name}: {text} of start-up")
+            self._fault(text)
+            return None
+        return Command(state_request=RobotState.RUNNING)
+
+    def _stopping(self, cycle: int) -> Command | None:
+        """After a stop request: end now, or walk to a stop and shut down first (:class:`ControlledStop`)."""
+        stop, controller = self.controlled_stop, self.controller
+        if stop is None:
+            return None
+        if self._stopping_since is None:
+            self._stopping_since = cycle
+            down = controller.state > stop.state
+            self._stop_limit_s = stop.timeout_s + (2.5 * controller.robot.start_up.time_to_start if down else 0.0)
+        walker = controller.walker
+        stopped = walker is None or walker.state == WalkState.STOPPED
+        reached = controller.state <= stop.state and not controller.transition_pending
+        if (reached and stopped) or (cycle - self._stopping_since) * self.dt > self._stop_limit_s:
+            return None
+        return Command(state_request=stop.state)  # zero velocity: stop walking, then shut down
+
+    def run(self) -> LoopResult:
+        """Run until the input is over, a fault, an observer's reason or a stop request."""
+        controller, backend, recorder = self.controller, self.backend, self.recorder
+        wanted = controller.uses_sensors
+        observers, flush_every = self.observers, self.flush_every
+        cycle = 0
+        fault = backend.fault()
+        if fault is not None:
+            self._fault(fault)
+            return self._result(cycle)
+        sensors = backend.sensors(wanted)
+        backend.begin()
+        while True:
+            command = self._command(cycle)
+            if command is None:
+                break
+            out = controller.step(command, sensors)
+            applied = backend.apply(out)
+            backend.advance()
+            reading = backend.read()
+            fault = backend.fault()
+            if fault is not None:  # the reading is not trusted: no row, no further target
+                self._fault(fault)
+                break
+            sensors = backend.sensors(wanted)
+            recorder.record(cycle, command, out, applied, reading)
+            stop = None
+            for observer in observers:
+                stop = observer(cycle, command, out, reading)
+                if stop is not None:
+                    break
+            cycle += 1
+            if stop is not None:
+                self.stop_reason = stop
+                break
+            if cycle % flush_every == 0:
+                recorder.flush()
+        recorder.flush()
+        return self._result(cycle)
+
+    def _result(self, cycles: int) -> LoopResult:
+        return LoopResult(cycles, self.stop_reason or "end", self.fault_text, self.requested)

@@ -1,0 +1,104 @@
+"""The summary of a ``plan`` run: cycles, the speed the stance feet achieve against paper eq. 16, odometry, IK.
+
+Eq. 16 is predicted independently of the walker's own velocity: the stride ``l_s`` comes from the walkspace-derived
+limit of the commanded direction (the scaled walkspace radius ``r`` of that bearing, study §3.3) and the input —
+``l_s = 2·r·|throttle|`` in throttle mode, ``l_s = min(|v_in|, v_max)·β/f`` in real mode — and ``f`` and ``β`` from
+the gait's step cycle; then ``v = l_s·f/β``. It holds for straight walking at a steady input (the linear input
+only; a yaw input is not part of it).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from typing import Any
+
+import numpy as np
+
+from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
+from shc_cli.control.walk import WalkState
+
+
+class PlanRecord:
+    """Keeps every controller output of a plan run and the eq. 16 speed of each MOVING cycle's input (with the
+    limits of the gait in use then): an observer of the run loop."""
+
+    def __init__(self, controller: Controller) -> None:
+        self.controller = controller
+        self.outputs: list[CycleOutput] = []
+        self.predicted: list[float] = []
+
+    def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: Any) -> str | None:
+        if self.outputs and out.walk_state == WalkState.MOVING:
+            self.predicted.append(eq16_speed(self.controller, command.velocity[:2]))
+        self.outputs.append(out)
+        return None
+
+
+def eq16_speed(controller: Controller, linear_input: tuple[float, float]) -> float:
+    """Paper eq. 16 body speed ``l_s·f/β`` [m/s] for a linear velocity input, stride from the walkspace limit."""
+    walker, cycle = controller.walker, controller.cycle
+    if walker is None or not any(linear_input):
+        return 0.0
+    limits = walker.limits.bearings
+    step = sorted(limits)[1] - sorted(limits)[0]
+    bearing = round(math.degrees(math.atan2(linear_input[1], linear_input[0]))) % 360
+    limit = limits[(bearing // step * step) % 360]  # OpenSHC reads the sector below the bearing
+    magnitude = math.hypot(*linear_input)
+    if walker.velocity_input_mode == "throttle":
+        stride = 2.0 * limit.scaled_radius * min(magnitude, 1.0)
+    else:
+        stride = min(magnitude, limit.linear_speed) * cycle.duty_factor / cycle.frequency
+    return stride * cycle.frequency / cycle.duty_factor
+
+
+def plan_summary(robot: Any, controller: Controller, record: PlanRecord, seconds: float) -> dict[str, Any]:
+    """Cycles, speeds (achieved by the stance feet vs paper eq. 16), odometry, IK statistics."""
+    dt = robot.time_delta
+    outputs = record.outputs
+    cycle = controller.cycle
+    walker = controller.walker
+    achieved: list[float] = []
+    predicted = record.predicted
+    for before, now in itertools.pairwise(outputs):
+        if now.walk_state != WalkState.MOVING:
+            continue
+        stance = (now.stance_progress >= 0.0) & (before.stance_progress >= 0.0)
+        if stance.any():
+            feet = (now.walker_tips[stance, :2] - before.walker_tips[stance, :2]).mean(axis=0)
+            achieved.append(float(np.linalg.norm(feet)) / dt)
+    distance = float(np.linalg.norm(walker.odometry_position)) if walker else 0.0
+    from shc_cli.analysis.metrics import window_speeds
+    from shc_cli.analysis.progress import cycle_path_length, progress_fields
+    from shc_cli.runread import ideal_path
+
+    xy, _ = ideal_path(np.array([o.velocity for o in outputs]).reshape(-1, 3), dt)
+    running = np.flatnonzero([o.robot_state == RobotState.RUNNING for o in outputs])
+    path_speed, displacement_speed = window_speeds(xy, running, dt)  # as `shc analyze` measures the plan
+    desired = np.array([o.velocity[:2] for o in outputs]).reshape(-1, 2)[running]
+    commanded = float(np.linalg.norm(desired, axis=1).mean()) if len(desired) else 0.0
+    return {
+        "robot": robot.name,
+        "gait": controller.gait.name,
+        "cycles": len(outputs),
+        "duration_s": len(outputs) * dt,
+        "time_delta_s": dt,
+        "startup_cycles": sum(1 for o in outputs if o.robot_state != RobotState.RUNNING),
+        "step_period_cycles": cycle.period,
+        "cycle_frequency_hz": cycle.frequency,
+        "step_frequency_hz": controller.parameters["step_frequency"],
+        "duty_factor": cycle.duty_factor,
+        "moving_cycles": len(predicted),
+        "achieved_mean_speed_mps": float(np.mean(achieved)) if achieved else 0.0,
+        "path_speed_mps": path_speed,
+        "displacement_speed_mps": displacement_speed,
+        "commanded_speed_mps": commanded,
+        **progress_fields(cycle_path_length(xy[running], cycle.period), commanded, len(running) * dt),
+        "eq16_speed_mps": float(np.mean(predicted)) if predicted else 0.0,
+        "odometry_distance_m": distance,
+        "odometry_yaw_rad": walker.odometry_yaw if walker else 0.0,
+        "ik_deviation_count": sum(o.ik_deviations for o in outputs),
+        "ik_clamp_count": sum(o.ik_clamped for o in outputs),
+        "wall_time_s": seconds,
+        "walkspace": {str(b): r for b, r in controller.walkspace.items()},
+    }

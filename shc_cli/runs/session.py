@@ -1,0 +1,67 @@
+"""Running a loop into a run directory and finishing it, also when interrupted.
+
+:func:`execute` is what ``plan``, ``simulate`` and ``run-hw`` share around :class:`~shc_cli.runs.loop.RunLoop`:
+SIGINT and SIGTERM become a stop request (the loop ends the run, or shuts the robot down first), every logged
+row is flushed and closed, the summary gets ``"complete"`` and ``"stop_reason"``, the plots are drawn and the
+directory gets its final name — for an interrupted run too (only ``"complete": false`` marks it). A second
+signal while finishing skips the plots; the rows are on disk before anything else happens.
+"""
+
+from __future__ import annotations
+
+import signal
+import threading
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from shc_cli.runlog import RunDirectory
+from shc_cli.runs.loop import LoopResult, RunLoop
+
+
+def execute(loop: RunLoop, run: RunDirectory, summarise: Callable[[LoopResult], dict[str, Any]],
+            plot: Callable[[Path], None] | None = None, after_loop: Callable[[LoopResult], None] | None = None
+            ) -> tuple[Path, dict[str, Any], LoopResult]:
+    """Run the loop, then finish the run directory (summary, plots, final name), interrupted or not.
+
+    Args:
+        loop: the loop (its backend started).
+        run: the run directory the loop's recorder writes.
+        summarise: the run's summary from the loop's result; ``complete`` and ``stop_reason`` are added.
+        plot: draws the plots into the given directory (skipped on a second signal).
+        after_loop: called right after the loop ends, before the summary (e.g. release the robot).
+
+    Returns:
+        the finished run directory, its summary and the loop's result.
+    """
+    state = {"finishing": False}
+    in_main = threading.current_thread() is threading.main_thread()
+
+    def handler(signum: int, frame: Any) -> None:
+        if state["finishing"]:
+            raise KeyboardInterrupt  # a second Ctrl-C while finishing: skip what is left (the plots)
+        loop.request_stop(signal.Signals(signum).name)  # on hardware a repeat while stopping changes nothing
+
+    previous = {sig: signal.signal(sig, handler) for sig in (signal.SIGINT, signal.SIGTERM)} if in_main else {}
+    try:
+        try:
+            result = loop.run()
+        finally:
+            run.close()  # every row on disk before anything else (also when the loop raised)
+        if after_loop is not None:
+            after_loop(result)  # not interruptible: a repeated signal only repeats the stop request
+        state["finishing"] = True
+        try:
+            summary = summarise(result)
+        except KeyboardInterrupt:  # a second signal in the (short) summary: the rows and a minimal summary
+            summary = {"cycles": result.cycles, "summary_skipped": True}
+        summary.update(complete=result.complete, stop_reason=result.stop_reason)
+        if plot is not None:
+            try:
+                plot(run.partial)
+            except KeyboardInterrupt:
+                summary["plots_skipped"] = True
+        return run.finish(summary), summary, result
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
