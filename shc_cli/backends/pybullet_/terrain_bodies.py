@@ -9,31 +9,13 @@ precision). ``pybullet`` is imported inside the functions that need it so the CL
 
 from __future__ import annotations
 
-import os
-import sys
 import tempfile
-from collections.abc import Iterator
-from contextlib import contextmanager
 from pathlib import Path
 
+from shc_cli.backends.pybullet_.quiet import quiet_stdout
 from shc_cli.backends.terrain import FEATURE_RGBA, FEATURE_START_X, GROUND_RGBA, Box, Terrain, TerrainSpec
 
 # -- building --------------------------------------------------------------------------------------------------
-
-
-@contextmanager
-def _quiet_stdout() -> Iterator[None]:
-    """Silence PyBullet's C-level messages, which go to file descriptor 1."""
-    sys.stdout.flush()
-    saved = os.dup(1)
-    try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 1)
-        yield
-    finally:
-        sys.stdout.flush()
-        os.dup2(saved, 1)
-        os.close(saved)
 
 
 def _boxes_urdf(boxes: list[Box], shade: tuple[float, float] | None) -> str:
@@ -73,7 +55,7 @@ def build_terrain(client_id: int, spec: TerrainSpec, friction: float, restitutio
 
     terrain = Terrain(spec, seed)
     c = client_id
-    with _quiet_stdout():
+    with quiet_stdout():
         plane = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=c)
         plane_visual = p.createVisualShape(p.GEOM_PLANE, rgbaColor=list(GROUND_RGBA), physicsClientId=c)
         bodies = [p.createMultiBody(0.0, plane, plane_visual, physicsClientId=c)]

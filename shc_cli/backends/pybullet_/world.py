@@ -9,11 +9,8 @@ ignores the URDF's limits), :meth:`World.step` runs the physics sub-steps of one
 from __future__ import annotations
 
 import os
-import sys
 import tempfile
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from importlib import metadata
 from typing import Any
 
@@ -21,6 +18,7 @@ import numpy as np
 
 from shc_cli.backends.engine import GRAVITY, Reading, spawn_height, tilt
 from shc_cli.backends.imu import Imu
+from shc_cli.backends.pybullet_.quiet import quiet_stdout
 from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
 from shc_cli.backends.pybullet_.urdf import robot_urdf
 from shc_cli.backends.servo import ServoModel
@@ -33,27 +31,6 @@ SOLVER_ITERATIONS = 30
 """Constraint solver iterations. Measured on the Bullet tripod walk at 400 Hz (docs/physics-model.md): 30 instead
 of 50 takes 21–29 % less physics time, lowers the walking body by 0.8 mm and changes speed by −1.3 % and power
 by +5 %; 20 sags 1.9 mm."""
-
-
-@contextmanager
-def quiet_stdout() -> Iterator[None]:
-    """Silence PyBullet's C-level messages: warnings go to file descriptor 1, the build-time banner to 2."""
-    import ctypes
-
-    libc = ctypes.CDLL(None)
-    sys.stdout.flush()
-    sys.stderr.flush()
-    saved = [os.dup(1), os.dup(2)]
-    with open(os.devnull, "w") as null:
-        os.dup2(null.fileno(), 1)
-        os.dup2(null.fileno(), 2)
-    try:
-        yield
-    finally:
-        libc.fflush(None)  # C stdio buffers fully when stdout is a pipe: drop its text while 1 is still /dev/null
-        for fd, copy in zip((1, 2), saved, strict=True):
-            os.dup2(copy, fd)
-            os.close(copy)
 
 
 class World:
