@@ -177,3 +177,35 @@ def test_rpy_from_matrix_is_pybullets_euler() -> None:
         rpy = rng.uniform(-1.4, 1.4, 3)
         matrix = np.reshape(pybullet.getMatrixFromQuaternion(pybullet.getQuaternionFromEuler(rpy)), (3, 3))
         assert rpy_from_matrix(matrix) == pytest.approx(rpy, abs=1e-9)
+
+
+def test_mujoco_dynamixel_servo_is_the_servo_models_torque() -> None:
+    """MuJoCo drives a ``dynamixel`` servo with :meth:`ServoModel.torque` every physics step, as PyBullet does: a
+    back-driven joint resists with more than the stall torque (up to the current limit), which a position actuator
+    clipped at ± the stall torque could not (bullet_mammalian_b fell on ramp:10 in MuJoCo for that,
+    docs/physics-model.md)."""
+    from shc_cli.backends.servo import ServoModel
+
+    robot = robot_named("bullet_mammalian_b")
+    servo = robot.servo
+    assert servo.control == "dynamixel"
+    chains = Chains.from_robot(robot)
+    joints = chains.default_joints()
+    world = open_engine("mujoco", robot, parse_terrain("flat"), robot.time_delta, 1, True, joints)
+    try:
+        assert world.xml.count('<motor ') == len(world.qvel_index)
+        goals = joints + 0.5  # every servo pushes towards +0.5 rad while the joints move the other way at 3 rad/s
+        world.command(goals)
+        world.data.qvel[world.qvel_index] = -3.0
+        q = world.data.qpos[world.qpos_index].copy()
+        v = world.data.qvel[world.qvel_index].copy()
+        flat = goals[world.slot_rows, world.slot_cols]
+        world.step()
+        applied = world.data.actuator_force.copy()
+    finally:
+        world.close()
+    expected = ServoModel(servo).torque(flat, q, v)
+    assert applied == pytest.approx(expected, rel=1e-9, abs=1e-9)
+    current_limited = servo.torque_constant * servo.current_limit
+    assert applied.min() == pytest.approx(current_limited, rel=1e-6)  # back-driven: the current limit
+    assert current_limited > 1.3 * servo.stall_torque

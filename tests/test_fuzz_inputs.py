@@ -250,7 +250,7 @@ def _stub_sweep(monkeypatch: pytest.MonkeyPatch) -> None:
     """No simulations: every point is an ``ok`` row at once (the reading and checking are what is fuzzed)."""
     from shc_cli.commands import sweep
 
-    def row(point: Any, out: str) -> dict[str, Any]:
+    def row(point: Any, out: str, *_: Any) -> dict[str, Any]:  # run_point's metrics and skip are not needed
         return {"index": point.index, "slug": point.slug, **point.values, "status": "ok", "error": ""}
 
     monkeypatch.setattr(sweep, "run_point", row)

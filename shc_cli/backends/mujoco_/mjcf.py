@@ -230,18 +230,24 @@ def _segment(body: ET.Element, leg: Leg, index: int, joint: Joint, common: dict[
 
 def _actuators(root: ET.Element, robot: Robot) -> None:
     """One actuator per joint: for ``position`` servos a velocity actuator within ± the stall torque, driven by the
-    position loop every physics step; for ``pd`` and ``dynamixel`` servos a position actuator of the servo model's
-    stiffness and damping within ± its torque limit (:meth:`~shc_cli.backends.servo.ServoModel.gains`)."""
+    position loop every physics step; for ``pd`` servos a position actuator of the servo model's stiffness and
+    damping within ± its torque limit (:meth:`~shc_cli.backends.servo.ServoModel.gains`); for ``dynamixel`` servos a
+    torque motor that the world drives every physics step with :meth:`~shc_cli.backends.servo.ServoModel.torque` (as
+    PyBullet does): the model's PWM and current limits are not one force range, so a position actuator clipped at
+    the stall torque would be weaker than the model when back-driven (up to ``torque_constant·current_limit``) and
+    stronger while moving (the torque–speed line)."""
     from shc_cli.backends.servo import ServoModel
 
     servo = robot.servo
     actuators = ET.SubElement(root, "actuator")
     limit = f"{_num(-servo.stall_torque)} {_num(servo.stall_torque)}"
-    gains = ServoModel(servo).gains() if servo.control in ("pd", "dynamixel") else None
+    gains = ServoModel(servo).gains() if servo.control == "pd" else None
     for names in leg_names(robot).values():
         for joint_name in names.joints:
             name = joint_name.removesuffix("_joint") + "_servo"
-            if gains is not None:
+            if servo.control == "dynamixel":
+                ET.SubElement(actuators, "motor", name=name, joint=joint_name, gear="1")
+            elif gains is not None:
                 ET.SubElement(actuators, "position", name=name, joint=joint_name, kp=_num(gains.stiffness),
                               kv=_num(gains.damping),
                               forcerange=f"{_num(-gains.torque_limit)} {_num(gains.torque_limit)}")

@@ -10,9 +10,12 @@ behave as PyBullet's (docs/physics-model.md):
   limited to ± the stall torque. The joints carry the gearbox's reflected rotor inertia
   (:func:`~shc_cli.backends.mujoco_.mjcf.armature`), which keeps light links stable when the torque limit
   clamps (MuJoCo integrates a clamped actuator explicitly).
-* ``pd`` and ``dynamixel`` control: a position actuator ``τ = stiffness·(q* − q) − damping·q̇`` within ± the
-  torque limit, with the gains of :meth:`~shc_cli.backends.servo.ServoModel.gains` (implicit in the damping, as
-  PyBullet's stable PD); the servo's ``armature`` as joint armature.
+* ``pd`` control: a position actuator ``τ = stiffness·(q* − q) − damping·q̇`` within ± the torque limit, with the
+  gains of :meth:`~shc_cli.backends.servo.ServoModel.gains` (implicit in the damping, as PyBullet's stable PD); the
+  servo's ``armature`` as joint armature.
+* ``dynamixel`` control: a torque motor set every physics step to
+  :meth:`~shc_cli.backends.servo.ServoModel.torque` of the state before the step (PWM limit, torque–speed line,
+  current limit), exactly PyBullet's explicit law; the servo's ``armature`` as joint armature.
 
 Torque and speed are averaged over each control period's physics steps and turned into electrical power by the
 engine-independent :func:`~shc_cli.backends.power.servo_power`, exactly as in PyBullet. ``mujoco`` is imported
@@ -32,6 +35,7 @@ from shc_cli.backends.imu import Imu
 from shc_cli.backends.mujoco_.mjcf import Options, robot_mjcf, velocity_stiffness
 from shc_cli.backends.power import servo_power
 from shc_cli.backends.pybullet_.urdf import leg_names
+from shc_cli.backends.servo import ServoModel
 from shc_cli.backends.terrain import Terrain, TerrainSpec
 from shc_cli.errors import BackendError
 from shc_cli.spec.robot import Robot
@@ -94,8 +98,10 @@ class MujocoWorld:
         mujoco.mj_forward(model, data)
         self.stand: int | None = model.equality("stand").id if stand else None
         servo = robot.servo
-        self.compliant = servo.control in ("pd", "dynamixel")
+        self.compliant = servo.control == "pd"
         """A position actuator of the servo model's stiffness and damping (no per-step servo loop in Python)."""
+        self.explicit = ServoModel(servo) if servo.control == "dynamixel" else None
+        """The servo model whose torque (:meth:`ServoModel.torque`) drives a motor actuator every physics step."""
         self._gain = servo.position_gain / timestep
         self._keep = 1.0 - servo.velocity_gain
         self._speed = servo.no_load_speed
@@ -133,8 +139,11 @@ class MujocoWorld:
         clock = time.perf_counter
         total = np.zeros(len(goals))
         physics = 0.0
+        explicit = self.explicit
         for _ in range(self.substeps):
-            if not self.compliant:  # PyBullet's velocity motor: the speed that closes position_gain of the error
+            if explicit is not None:  # the servo model's torque from the state before the step, as in PyBullet
+                ctrl[:] = explicit.torque(goals, q, v)
+            elif not self.compliant:  # PyBullet's velocity motor: the speed that closes position_gain of the error
                 np.subtract(goals, q, out=work)
                 work *= gain
                 if keep != 0.0:
@@ -144,7 +153,7 @@ class MujocoWorld:
             started = clock()
             mujoco.mj_step(model, data)
             physics += clock() - started
-            if self.compliant:
+            if self.compliant or explicit is not None:
                 total += data.actuator_force
             else:  # the implicit step applied kv·(ctrl − v_new); a clamped one (explicit) the stall torque
                 np.subtract(ctrl, v, out=work)
