@@ -8,7 +8,7 @@ directory or ``.partial`` left behind.
 
 Adding a kind is one :class:`Kind` entry in :data:`KINDS`: its seed files, the ``shc`` arguments that read the
 fuzzed file, and optionally companion files (``prepare``) and stubs for expensive work past the reading
-(``stub``). Study files join here when their command exists.
+(``stub``).
 
 Set ``SHC_FUZZ_CASES`` to run more (or fewer) cases per kind than :data:`CASES`.
 """
@@ -256,6 +256,65 @@ def _stub_sweep(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(sweep, "run_point", row)
 
 
+STUDY_TRIALS = 2
+"""Trials per study case (``--trials``: a mutated ``trials`` could ask for billions): enough for the sampler to draw
+every dimension, tell a result and write the Pareto robot files and plots."""
+
+
+def _study_seeds() -> dict[str, bytes]:
+    """A study with every kind of key: each form of dimension, a constraint per form, every sampler key."""
+    return {"study.toml": b"""name = "fuzz"
+description = "every kind of key"
+robot = "bullet"
+terrain = "flat"
+scenario = "WG"
+engine = "pybullet"
+duration = 0.3
+skip = 0.1
+seeds = [0, 1]
+trials = 3
+
+[fixed]
+"start_up.time_to_start" = 0.5
+friction = 0.9
+
+[space]
+gait = { choices = ["tripod", "bipod"] }
+"walker.step_frequency" = { low = 0.8, high = 1.6, step = 0.1 }
+"walker.swing_height" = { low = 0.05, high = 0.12, log = true }
+stride_percent = { low = 50, high = 100 }
+
+[objectives]
+cot = "minimize"
+mean_speed_mps = "maximize"
+
+[constraints]
+fell = false
+mean_speed_mps = { min = 0.01, max = 5.0 }
+joint_limit_fraction = { max = 0.05 }
+
+[sampler]
+name = "nsga2"
+seed = 7
+population = 2
+"""}
+
+
+def _stub_study_runs(monkeypatch: pytest.MonkeyPatch) -> None:
+    """No simulations: every run of a trial is an ``ok`` row at once, its metrics made from the trial's values (the
+    reading, checking, sampling, telling and writing of the results are what is fuzzed; tests/test_optimize.py runs
+    real trials)."""
+    from shc_cli.commands import sweep
+
+    def row(point: Any, out: str, metrics: tuple[str, ...] = (), skip: float = 0.0) -> dict[str, Any]:
+        numbers = [float(v) for v in point.values.values() if isinstance(v, (int, float)) and not isinstance(v, bool)]
+        base = 1.0 + abs(sum(numbers)) % 1.0
+        return {"index": point.index, "slug": point.slug, **point.values, "status": "ok", "error": "", "fell": False,
+                "max_tilt_rad": 0.0, "wall_time_s": 0.0, **{key: base * (k + 1) for k, key in enumerate(metrics)}}
+
+    monkeypatch.setattr(sweep, "run_point", row)
+
+
 def _pose_prepare(folder: Path) -> None:
     # this robot auto-poses with the set in fuzz_pose.toml (a path: a name would be looked up next to the gait)
     pose = f'\n[pose]\nauto = true\nauto_pose_type = "{folder}/fuzz_pose.toml"\n'
@@ -390,6 +449,9 @@ KINDS = [
          lambda d: ["replay", str(d / "rec.bag"), "--robot", "bullet", "--json"], binary=True),
     Kind("replay-bag-mcap", _replay_bag_seeds(ros1=False),
          lambda d: ["replay", str(d / "rec"), "--robot", "bullet", "--json"]),
+    Kind("study", _study_seeds, lambda d: ["optimize", str(d / "study.toml"), "--trials", str(STUDY_TRIALS),
+                                           "--workers", "1", "--out", str(d / "out")],
+         stub=_stub_study_runs, out="out"),
     Kind("urdf-import", _urdf_seeds, lambda d: ["import", "urdf", str(d / "quad.urdf"), "--out", str(d / "out")],
          out="out"),
 ]

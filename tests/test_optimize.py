@@ -107,6 +107,13 @@ def test_study_points_carry_seeds_options_and_robot_values(tmp_path: Path) -> No
      "is not a sampler"),
     ('engine = "ode"\n', 1, "not an engine"),
     ('seeds = [1, 1]\n', 1, "distinct integers"),
+    ('seeds = [-1]\n', 1, "distinct integers ≥ 0"),
+    ('[space]\ngait = { choices = ["tripod"] }\n[objectives]\ncot = "minimize"\n[sampler]\nseed = 4294967296\n', 6,
+     "is not an integer in [0, 2**32 - 1]"),  # found by tests/test_fuzz_inputs.py: Optuna's ValueError
+    ('[space]\n"walker.step_frequency" = { low = 0.8, high = 1.6, step = 1e-320 }\n[objectives]\ncot = "minimize"\n',
+     2, "makes more than 1e+09 values"),  # found by the fuzzer: Optuna's decimal.InvalidOperation
+    ('[space]\n"walker.step_frequency" = { low = 0.8, high = 1.6, step = 5.0 }\n[objectives]\ncot = "minimize"\n',
+     2, "exceeds the range high - low = 0.8"),  # found by the fuzzer: Optuna warned and searched [0.8, 0.8]
     ('[space]\nseed = { low = 0, high = 9 }\n', 2, "set once per study"),
     ('[space]\n"walker.step_freq" = { low = 0.5, high = 1.0 }\n[objectives]\ncot = "minimize"\n', 2,
      "has no field 'walker.step_freq'"),

@@ -56,6 +56,10 @@ ENGINES = ("pybullet", "mujoco")
 """Physics engines a study can name (``shc simulate --engine``)."""
 SAMPLERS = ("nsga2", "nsga3", "tpe", "random")
 SAMPLER_KEYS = {"name", "seed", "population"}
+MAX_SAMPLER_SEED = 2**32 - 1
+"""Largest sampler seed (Optuna seeds NumPy's ``RandomState``: 0 … 2³² − 1)."""
+MAX_STEPS = 1e9
+"""Most values a ``step`` may make of a range (Optuna counts them exactly in decimal arithmetic)."""
 NOT_SEARCHED = ("seed", "duration", "robot")
 """Simulation options a study sets once (``seeds``, ``duration``, ``robot``), never per trial."""
 RUN_KEYS = ("fell", "max_tilt_rad")
@@ -194,6 +198,12 @@ def _dimension(document: Document, key: str, spec: Any) -> Dimension:
             raise _issue(document, (*where, "step"), f"step {step:g} is not positive", "give a positive step")
         if log:
             raise _issue(document, where, "log and step cannot be combined", "drop one of them")
+        if step > high - low:
+            raise _issue(document, (*where, "step"), f"step {step:g} exceeds the range high - low = {high - low:g}",
+                         "give a smaller step")
+        if (high - low) / step > MAX_STEPS:
+            raise _issue(document, (*where, "step"), f"step {step:g} makes more than {MAX_STEPS:.0e} values",
+                         "give a coarser step, or drop it for a continuous range")
     if log and low <= 0.0:
         raise _issue(document, (*where, "low"), f"a log range needs low > 0 (got {low:g})", "raise low")
     integer = all(isinstance(spec[k], int) for k in ("low", "high") if k in spec) and (
@@ -246,9 +256,11 @@ def load_study(path: Path) -> Study:
     if "engine" in data:
         fixed["engine"] = engine
     seeds = data.get("seeds", [0])
-    if (not isinstance(seeds, list) or not seeds or not all(isinstance(s, int) and not isinstance(s, bool)
-                                                            for s in seeds) or len(set(seeds)) != len(seeds)):
-        raise _issue(document, ("seeds",), f"{seeds!r} is not a list of distinct integers", "e.g. seeds = [0, 1, 2]")
+    if (not isinstance(seeds, list) or not seeds
+            or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in seeds)
+            or len(set(seeds)) != len(seeds)):
+        raise _issue(document, ("seeds",), f"{seeds!r} is not a list of distinct integers ≥ 0",
+                     "e.g. seeds = [0, 1, 2]")
     skip = data.get("skip", 0.0)
     if isinstance(skip, bool) or not isinstance(skip, (int, float)) or not 0.0 <= skip < float(
             fixed.get("duration", OPTIONS["duration"][1])):
@@ -295,8 +307,10 @@ def load_study(path: Path) -> Study:
     if sampler not in SAMPLERS:
         raise _issue(document, ("sampler", "name"), f"'{sampler}' is not a sampler", f"use {', '.join(SAMPLERS)}")
     sampler_seed = sampler_data.get("seed")
-    if sampler_seed is not None and (not isinstance(sampler_seed, int) or isinstance(sampler_seed, bool)):
-        raise _issue(document, ("sampler", "seed"), f"{sampler_seed!r} is not an integer", "e.g. seed = 1")
+    if sampler_seed is not None and (not isinstance(sampler_seed, int) or isinstance(sampler_seed, bool)
+                                     or not 0 <= sampler_seed <= MAX_SAMPLER_SEED):
+        raise _issue(document, ("sampler", "seed"), f"{sampler_seed!r} is not an integer in [0, 2**32 - 1]",
+                     "e.g. seed = 1")
     population = sampler_data.get("population")
     if population is not None and (not isinstance(population, int) or isinstance(population, bool)
                                    or population < 2):
