@@ -134,6 +134,18 @@ def check_replaceable(directory: Path) -> None:
         raise OutputError(f"{directory}: not a run directory, so --overwrite leaves it alone (choose another --out)")
 
 
+def clear_output(out: Path, overwrite: bool, advice: str) -> None:
+    """Make room for a sweep's or a study's output folder ``out``: a non-empty one is refused (one line, with
+    ``advice``) unless ``overwrite``, and then deleted — only if shc wrote it (:func:`check_replaceable`)."""
+    import shutil
+
+    if out.exists() and any(out.iterdir()):
+        if not overwrite:
+            raise OutputError(f"{out}: already exists ({advice})")
+        check_replaceable(out)
+        shutil.rmtree(out)
+
+
 def replace_directory(source: Path, target: Path, overwrite: bool) -> None:
     """Rename ``source`` to ``target``; with ``overwrite`` an existing ``target`` is first moved aside and deleted
     only once ``source`` is in its place."""

@@ -216,3 +216,35 @@ def test_view_of_something_unreadable_is_one_line(tmp_path: Path, capsys, monkey
     for target in ("no_such_robot", str(tmp_path)):
         code, out, err = run(["view", target, "--port", str(_free_port())], capsys, monkeypatch)
         assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
+
+
+def test_view_says_an_interrupted_run_is_partial(plan_run: Path, tmp_path: Path) -> None:
+    """A run finished after Ctrl-C (``"complete": false``) opens in ``shc view`` with a note that it is partial."""
+    import json
+
+    pytest.importorskip("viser")
+    partial = tmp_path / "partial"
+    shutil.copytree(plan_run, partial)
+    summary = json.loads((partial / "summary.json").read_text(encoding="utf-8"))
+    summary.update(complete=False, stop_reason="SIGINT")
+    (partial / "summary.json").write_text(json.dumps(summary), encoding="utf-8")
+    process = subprocess.Popen([sys.executable, "-m", "shc_cli.cli", "view", str(partial), "--port", str(_free_port())],
+                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=ROOT,
+                               env={**os.environ, "PYTHONUNBUFFERED": "1"})
+    assert process.stdout is not None
+    lines: list[str] = []
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            line = process.stdout.readline()
+            if not line:
+                break
+            lines.append(line)
+            if line.startswith("shc view: http://"):
+                break
+    finally:
+        process.send_signal(2)
+        process.wait(timeout=20)
+    text = "".join(lines)
+    assert "shc view: http://" in text, text
+    assert "a partial run (stopped by SIGINT" in text, text

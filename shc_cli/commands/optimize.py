@@ -369,14 +369,11 @@ def run_optimize(file: Path, trials: int | None, workers: int | None, executor: 
         if copy.exists() and copy.read_bytes() != spec.path.read_bytes():
             raise OutputError(f"{out}: was started with a different study file ({copy}); resume it with that "
                               "file or choose another --out")
-    elif out.exists() and any(out.iterdir()):
-        if not overwrite:
-            raise OutputError(f"{out}: already exists (add --resume to continue it, --overwrite to start it again, "
-                              "or choose another --out)")
-        from shc_cli.runlog import check_replaceable
+    else:
+        from shc_cli.runlog import clear_output
 
-        check_replaceable(out)
-        shutil.rmtree(out)
+        clear_output(out, overwrite,
+                     "add --resume to continue it, --overwrite to start it again, or choose another --out")
     (out / "runs").mkdir(parents=True, exist_ok=True)
     if spec.path.resolve() != copy.resolve():
         shutil.copyfile(spec.path, copy)

@@ -28,7 +28,7 @@ from typing import Any
 
 import typer
 
-from shc_cli.errors import Issue, OutputError, ShcError, SpecError
+from shc_cli.errors import Issue, ShcError, SpecError
 from shc_cli.spec.sweep import Point, Sweep, load_sweep, variant_text
 
 METRICS = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps", "steady_speed_mps",
@@ -336,14 +336,11 @@ def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | N
     out = out or Path("runs") / sweep.name
     if resume and overwrite:
         raise SpecError([Issue(None, None, "--overwrite", "cannot be combined with --resume", "choose one")])
-    if out.exists() and any(out.iterdir()) and not resume:
-        if not overwrite:
-            raise OutputError(f"{out}: already exists (add --resume to continue it, --overwrite to run it again, or "
-                              "choose another --out)")
-        from shc_cli.runlog import check_replaceable
+    if not resume:
+        from shc_cli.runlog import clear_output
 
-        check_replaceable(out)
-        shutil.rmtree(out)
+        clear_output(out, overwrite,
+                     "add --resume to continue it, --overwrite to run it again, or choose another --out")
     (out / "runs").mkdir(parents=True, exist_ok=True)
     shutil.copyfile(sweep.path, out / "sweep.toml") if sweep.path.resolve() != (out / "sweep.toml").resolve() \
         else None

@@ -22,6 +22,7 @@ from __future__ import annotations
 import contextlib
 import io
 import math
+import sys
 import threading
 import time
 from dataclasses import dataclass, field
@@ -406,7 +407,9 @@ class RunPage:
         summary = run.summary
         gui.add_markdown(f"**{run.robot.name}** / {summary.get('gait', '')} — {run.kind} run `{run.path.name}`, "
                          f"{duration:.1f} s on {data.terrain.text}.  \nBlue: body path; orange: commanded path; red: "
-                         "CoM; purple: ZMP; green feet: on the ground.")
+                         "CoM; purple: ZMP; green feet: on the ground."
+                         + ("" if run.complete else f"  \n**Partial run**: stopped by "
+                            f"{summary.get('stop_reason', '?')} after {duration:.1f} s."))
         self.timeline = gui.add_slider("time [s]", min=float(run.t[0]), max=duration, step=run.dt,
                                        initial_value=float(run.t[0]))
         buttons = gui.add_button_group("playback", ("Play", "Pause"))
@@ -541,6 +544,9 @@ def serve(target: str, host: str, port: int) -> None:
     data: RunScene | None = None
     if is_run(target):
         data = run_scene(read_run(Path(target)))
+        note = data.run.partial_note()
+        if note:
+            print(f"note: {note}", file=sys.stderr, flush=True)
     else:
         loaded = load_robot(target)  # a bad file fails now, with its one-line error and exit 2
         if loaded.robot is None:
