@@ -156,7 +156,9 @@ class Model:
                 active: np.ndarray | None = None) -> tuple[int, int]:
         """One OpenSHC IK step of every leg (or of the ``active`` legs) towards ``targets`` (base_link) [m].
 
-        The same compiled step as :func:`shc_cli.model.ik.ik_step`, on the model's own arrays. Legs not active
+        The same compiled kernel as :func:`shc_cli.model.ik.ik_step`, called directly on the model's own arrays
+        (no input copies, no :class:`~shc_cli.model.ik.StepResult`): this is the per-cycle hot path, ≈ 8 µs
+        against ≈ 12 µs for ``ik_step`` on 6 legs, so it does not go through that wrapper. Legs not active
         keep their joints, velocities and tips. Returns (legs off target by > 5 mm, legs with a clamped joint);
         :attr:`proximity` then holds OpenSHC's ``applyIK`` result per leg.
         """

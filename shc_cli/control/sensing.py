@@ -86,7 +86,8 @@ def quaternion_matrix(q: np.ndarray) -> np.ndarray:
 
 
 def rpy_matrix(roll: float, pitch: float, yaw: float) -> np.ndarray:
-    """``Rz(yaw)·Ry(pitch)·Rx(roll)``."""
+    """``Rz(yaw)·Ry(pitch)·Rx(roll)`` for one orientation [rad]. Kept apart from the batched scipy
+    :func:`shc_cli.analysis.metrics.rotation_rpy`: the controller stays numpy-only and calls this every cycle."""
     return np.asarray(rot_z(yaw) @ rot_y(pitch) @ rot_x(roll))
 
 

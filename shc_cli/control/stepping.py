@@ -382,8 +382,10 @@ WALK_SLOTS = 7
 
 
 @njit(cache=True)
-def _clamped_norm(x, y, limit):  # type: ignore[no-untyped-def]
-    """2-D vector scaled down to norm ``limit`` if longer (OpenSHC ``clamped(vector, limit)``)."""
+def clamped_norm(x, y, limit):  # type: ignore[no-untyped-def]
+    """2-D vector ``(x, y)`` scaled down to norm ``limit`` if longer (OpenSHC ``clamped(vector, limit)``; Eigen's
+    ``sqrt(x² + y²)`` norm). The one velocity clamp: compiled for :func:`walk_update`, called from Python by
+    :meth:`WalkController.within_limits_for` so both see the same target to the bit."""
     norm = math.sqrt(x * x + y * y)
     if norm > limit:
         scale = limit / norm
@@ -410,13 +412,13 @@ def walk_update(  # type: ignore[no-untyped-def]
     new_x, new_y, new_angular = 0.0, 0.0, 0.0
     if walk_state != STOPPING:
         if throttle:
-            new_x, new_y = _clamped_norm(linear_x, linear_y, 1.0)
+            new_x, new_y = clamped_norm(linear_x, linear_y, 1.0)
             new_x, new_y = new_x * max_speed, new_y * max_speed
             new_angular = min(max(angular, -1.0), 1.0) * max_angular
             scale = 1.0 - abs(angular)
         else:
             new_angular = min(max(angular, -max_angular), max_angular)
-            new_x, new_y = _clamped_norm(linear_x, linear_y, max_speed)
+            new_x, new_y = clamped_norm(linear_x, linear_y, max_speed)
             scale = 1.0 - abs(new_angular / max_angular) if max_angular != 0.0 else 0.0
         new_x, new_y = new_x * scale, new_y * scale
     has_command = linear_x != 0.0 or linear_y != 0.0 or angular != 0.0

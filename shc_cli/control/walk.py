@@ -7,8 +7,6 @@ walking leg's tip (compiled in :mod:`shc_cli.control.stepping`) and integrates i
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from shc_cli.control import stepping
@@ -18,14 +16,6 @@ from shc_cli.control.states import WalkState as WalkState  # re-exported
 from shc_cli.control.stepping import LegArrays
 
 Vector = np.ndarray
-
-
-
-
-def clamped_norm(vector: Vector, limit: float) -> Vector:
-    """2-D ``vector`` scaled down to norm ``limit`` if it is longer."""
-    norm = math.hypot(vector[0], vector[1])
-    return vector * (limit / norm) if norm > limit else vector
 
 
 class WalkController:
@@ -184,10 +174,11 @@ class WalkController:
         component-wise test, kept as it is: ``v_x ≤ target_x``, ``v_y ≤ target_y``, ``|ω| ≤ |target_ω|``)."""
         max_speed, max_angular, _, _ = self.limits_for(linear_input, angular_input)
         if self.velocity_input_mode == "throttle":
-            target = clamped_norm(linear_input, 1.0) * max_speed * (1.0 - abs(angular_input))
+            target = np.array(stepping.clamped_norm(float(linear_input[0]), float(linear_input[1]), 1.0))
+            target = target * max_speed * (1.0 - abs(angular_input))
             target_angular = min(max(angular_input, -1.0), 1.0) * max_angular
         else:
-            target = clamped_norm(linear_input, max_speed)
+            target = np.array(stepping.clamped_norm(float(linear_input[0]), float(linear_input[1]), max_speed))
             target_angular = min(max(angular_input, -max_angular), max_angular)
         return bool(self.desired_linear[0] <= target[0] and self.desired_linear[1] <= target[1]
                     and abs(self.desired_angular) <= abs(target_angular))

@@ -76,6 +76,11 @@ def ik_step(
         clamp_positions: clamp to the joint limits.
         clamp_velocities: clamp ``|q̇|`` to ``max_vel`` (OpenSHC skips this in its "simulation" calls).
         avoid_limits: add OpenSHC's null-space limit avoidance (off only to polish planning solutions).
+
+    The general, allocating entry (any arrays in, a fresh :class:`StepResult` out), used by :func:`solve` and
+    the start-up sequence's planning. The controller's per-cycle loop calls the same kernel through
+    :meth:`shc_cli.control.controller.Model.step_ik` instead, which writes into its own arrays and skips the result
+    object: ≈ 8 µs against ≈ 12 µs per 6-leg step here, a cost paid every control cycle, so neither wraps the other.
     """
     count, joints = chains.d.shape
     q_new = np.empty((count, joints))

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from shc_cli.analysis.metrics import rotation_rpy
 from shc_cli.model.chains import Chains, FloatArray
 from shc_cli.spec.robot import Robot
 
@@ -73,24 +74,14 @@ def shapes(robot: Robot) -> Shapes:
 
 
 def rpy_quaternion(rpy: FloatArray) -> FloatArray:
-    """Quaternions ``(w, x, y, z)`` of roll, pitch, yaw (``Rz·Ry·Rx``), ``(..., 3)`` → ``(..., 4)``."""
+    """Quaternions ``(w, x, y, z)`` of roll, pitch, yaw (``Rz·Ry·Rx``), ``(..., 3)`` → ``(..., 4)``. (Matrices come
+    from :func:`shc_cli.analysis.metrics.rotation_rpy`, the one roll/pitch/yaw → matrix conversion off the hot path.)"""
     half = np.asarray(rpy, dtype=float) / 2.0
     cr, sr = np.cos(half[..., 0]), np.sin(half[..., 0])
     cp, sp = np.cos(half[..., 1]), np.sin(half[..., 1])
     cy, sy = np.cos(half[..., 2]), np.sin(half[..., 2])
     return np.stack([cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy,
                      cr * cp * sy - sr * sp * cy], axis=-1)
-
-
-def rpy_matrix(rpy: FloatArray) -> FloatArray:
-    """Rotation matrices ``Rz(yaw)·Ry(pitch)·Rx(roll)``, ``(..., 3)`` → ``(..., 3, 3)``."""
-    r, p, y = (np.asarray(rpy, dtype=float)[..., i] for i in range(3))
-    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    return np.stack([
-        np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], axis=-1),
-        np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], axis=-1),
-        np.stack([-sp, cp * sr, cp * cr], axis=-1),
-    ], axis=-2)
 
 
 def z_to(direction: FloatArray) -> FloatArray:
@@ -135,7 +126,7 @@ class Poses:
 def poses(shape: Shapes, joints: FloatArray, position: FloatArray, rpy: FloatArray) -> Poses:
     """World poses of every shape for joints ``(N, L, n)``, body positions ``(N, 3)`` and orientations ``(N, 3)``."""
     frames = shape.chains.frames_in_base(np.asarray(joints, dtype=float))[..., :3, 3]  # (N, L, n + 1, 3)
-    rotation = rpy_matrix(rpy)
+    rotation = rotation_rpy(np.asarray(rpy, dtype=float))
     world = np.einsum("nij,nlkj->nlki", rotation, frames) + np.asarray(position)[:, None, None, :]
     return Poses(world, np.asarray(position, dtype=float), rpy_quaternion(rpy), rotation)
 

@@ -270,6 +270,7 @@ class RobotPage:
 
     def _pose_changed(self) -> None:
         """The body moves, the feet stay: each leg's joints by IK to its foot in the new body frame."""
+        from shc_cli.analysis.metrics import rotation_rpy
         from shc_cli.model.ik import solve
 
         state = self.state
@@ -277,7 +278,7 @@ class RobotPage:
             return
         state.pose = np.array([float(c.value) for c in self.pose_inputs])
         x, y, z, roll, pitch, yaw = state.pose
-        rotation = scene.rpy_matrix(np.array([roll, pitch, yaw]))
+        rotation = rotation_rpy(np.array([roll, pitch, yaw]))
         position = np.array([x, y, state.clearance + z])
         targets = (state.feet - position) @ rotation  # world → base_link: Rᵀ(p − position)
         q, _ = solve(self.shape.chains, state.joints, targets, tolerance=1e-5, max_steps=200)
