@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from shc_cli.spec.loading import load_gait, load_robot
@@ -23,3 +24,13 @@ def bullet() -> Robot:
 @pytest.fixture(scope="session")
 def tripod():  # type: ignore[no-untyped-def]
     return load_gait("tripod").gait
+
+
+@pytest.fixture
+def field_csv(tmp_path: Path) -> Path:
+    """A 12 × 8 field (8 lines along y, 12 columns along x), 0..0.2 m, with a 0.3 m spike at (+x end, +y edge)."""
+    grid = np.random.default_rng(7).uniform(0.0, 0.2, size=(8, 12))
+    grid[0, -1] = 0.3
+    path = tmp_path / "field.csv"
+    np.savetxt(path, grid, delimiter=",", fmt="%.6f")
+    return path

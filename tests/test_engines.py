@@ -88,15 +88,6 @@ def test_mjcf_is_deterministic() -> None:
     assert robot_mjcf(robot, terrain, options) == robot_mjcf(robot, Terrain(parse_terrain("blocks"), seed=3), options)
 
 
-@pytest.fixture
-def field_csv(tmp_path: Path) -> Path:
-    grid = np.random.default_rng(7).uniform(0.0, 0.2, size=(8, 12))
-    grid[0, -1] = 0.3
-    path = tmp_path / "field.csv"
-    np.savetxt(path, grid, delimiter=",", fmt="%.6f")
-    return path
-
-
 @pytest.mark.parametrize("text", ["flat", "ramp:10", "ramp:30", "blocks", "stairs:0.05,0.3", "heightfield"])
 def test_mujoco_rays_hit_height_at(text: str, field_csv: Path) -> None:
     """MuJoCo's terrain geoms are where :meth:`Terrain.height_at` says (1 mm), away from vertical faces; its height

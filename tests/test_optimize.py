@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import os
 import signal
 import subprocess
@@ -16,6 +15,8 @@ from shc_cli.spec.study import load_study
 
 from .conftest import ROOT
 from .test_cli import run
+from .test_sweep import _rows
+from .test_sweep import _write as write_file
 
 pytest.importorskip("optuna", reason="shc optimize needs optuna (pip install 'shc[optimize]')")
 
@@ -51,14 +52,7 @@ population = 2
 
 
 def _write(tmp_path: Path, text: str, name: str = "study.toml") -> Path:
-    path = tmp_path / name
-    path.write_text(text, encoding="utf-8")
-    return path
-
-
-def _rows(path: Path) -> list[dict[str, str]]:
-    with path.open(newline="") as handle:
-        return list(csv.DictReader(handle))
+    return write_file(tmp_path, text, name)
 
 
 # -- the file ----------------------------------------------------------------------------------------------------

@@ -41,16 +41,6 @@ def client() -> Iterator[int]:
     pybullet.disconnect(physicsClientId=c)
 
 
-@pytest.fixture
-def field_csv(tmp_path: Path) -> Path:
-    """A 12 × 8 field (8 lines along y, 12 columns along x), 0..0.2 m, with a 0.3 m spike at (+x end, +y edge)."""
-    grid = np.random.default_rng(7).uniform(0.0, 0.2, size=(8, 12))
-    grid[0, -1] = 0.3
-    path = tmp_path / "field.csv"
-    np.savetxt(path, grid, delimiter=",", fmt="%.6f")
-    return path
-
-
 def ray_height(c: int, x: float, y: float) -> float:
     hit = pybullet.rayTest([x, y, 20.0], [x, y, -1.0], physicsClientId=c)[0]
     assert hit[0] >= 0, f"ray at ({x}, {y}) hit nothing"
