@@ -94,3 +94,63 @@ def test_pybullet_applies_the_model_torque_and_the_rotor_inertia() -> None:
         assert Chains.from_robot(robot).joints == 5
     finally:
         world.close()
+
+
+def test_the_i_and_d_gains_convert_as_the_e_manual_says() -> None:
+    """K_I = I/65536 PWM units per tick summed every firmware period, K_D = D/16 per tick of change per period:
+    for a constant error e over t seconds the I term is I/65536 · e_ticks · t/T_fw PWM units; for a speed ω the D
+    term is −D/16 · ω_ticks · T_fw."""
+    ticks_per_rad = 4096 / (2 * math.pi)
+    volts_per_pwm = 12.0 / 885
+    model = ServoModel(Servo(**{**MX106, "position_p_gain": 0.0}, position_i_gain=100.0, firmware_period=0.002))
+    error = np.array([0.001])  # small: nothing saturates
+    for _ in range(50):  # 50 steps of 1 ms: 0.05 s = 25 firmware periods
+        torque = model.torque(error, np.zeros(1), np.zeros(1), 0.001)
+    volts = volts_per_pwm * 100 / 65536 * (0.001 * ticks_per_rad) * 25
+    assert torque[0] == pytest.approx(1.62 / 2.31 * volts, rel=1e-9)
+    d_only = ServoModel(Servo(**{**MX106, "position_p_gain": 0.0}, position_d_gain=160.0, firmware_period=0.001))
+    volts = -volts_per_pwm * 160 / 16 * (0.5 * ticks_per_rad) * 0.001
+    back_emf = -12.0 / 4.71 * 0.5
+    assert d_only.torque(np.zeros(1), np.zeros(1), np.array([0.5]))[0] == pytest.approx(
+        1.62 / 2.31 * (volts + back_emf), rel=1e-9)
+    assert d_only.gains().damping == pytest.approx(1.62 / 2.31 * (12.0 / 4.71 + volts_per_pwm * 10 * ticks_per_rad
+                                                                   * 0.001), rel=1e-9)
+    factory = ServoModel(Servo(**MX106))  # I = D = 0 from the factory: the P servo, no state kept
+    assert factory.torque(error, np.zeros(1), np.zeros(1), 0.001)[0] == pytest.approx(
+        factory.gains().stiffness * 0.001)
+
+
+def test_the_integral_stops_growing_at_the_pwm_limit() -> None:
+    """Anti-windup: a long error saturates the I term at the PWM limit, and it unwinds as soon as the error turns."""
+    model = ServoModel(Servo(**{**MX106, "position_p_gain": 0.0}, position_i_gain=1000.0))
+    for _ in range(10_000):
+        model.torque(np.array([0.5]), np.zeros(1), np.zeros(1), 0.01)
+    stall = 1.62 * 12.0 / 2.31
+    assert model.torque(np.array([0.5]), np.zeros(1), np.zeros(1), 0.01)[0] == pytest.approx(stall)
+    for _ in range(20):  # a reversed error drives it down at once: no 100 s of stored windup to work off
+        last = model.torque(np.array([-0.5]), np.zeros(1), np.zeros(1), 0.01)[0]
+    assert last < stall * 0.9
+
+
+@pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
+def test_integral_action_removes_the_sag_a_p_servo_leaves(engine: str) -> None:
+    """A leg held in the air under gravity: with P only the loaded joints sit a load/stiffness error off their goals;
+    with an I gain the same servo settles on them (both engines run the same torque law)."""
+    from shc_cli.backends.engines import open_engine
+    from shc_cli.backends.terrain import TerrainSpec
+
+    base = load_robot(ROOT / "robots" / "bullet_insectoid_b.toml").robot
+    joints = np.tile([0.0, 0.0, 1.088, -0.765, -1.212], (6, 1))
+    errors = {}
+    for i_gain in (0.0, 2000.0):
+        robot = base.model_copy(update={"servo": base.servo.model_copy(update={"position_i_gain": i_gain})})
+        world = open_engine(engine, robot, TerrainSpec(kind="flat"), robot.time_delta, 4, True, joints)
+        try:
+            for _ in range(300):  # 3 s
+                world.command(joints)
+                world.step()
+            errors[i_gain] = float(np.abs(joints - world.read().joints).max())
+        finally:
+            world.close()
+    assert errors[0.0] > 0.005  # the P servo's sag: gravity torque / 41 N·m/rad
+    assert errors[2000.0] < 0.2 * errors[0.0]

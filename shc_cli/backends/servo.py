@@ -3,8 +3,12 @@
 The model of one servo of the robot's ``[servo]`` table (every joint the same model), in output-shaft units:
 
 * **Firmware position control** (ROBOTIS e-Manual, MX-106(2.0) / X series position mode): the position error in
-  ticks times ``K_P = Position P Gain / 128`` is a PWM command in control-table units (885 = 100 % of the supply
-  voltage), limited to ``pwm_limit``. The motor voltage is that share of ``supply_voltage``.
+  ticks times ``K_P = Position P Gain / 128``, plus ``K_I = Position I Gain / 65536`` times the error summed every
+  firmware period, plus ``K_D = Position D Gain / 16`` times the error's change per firmware period, is a PWM
+  command in control-table units (885 = 100 % of the supply voltage), limited to ``pwm_limit``. The motor voltage is
+  that share of ``supply_voltage``. The sum is the integral over time ÷ ``firmware_period`` and the change is the
+  derivative × ``firmware_period`` (the D term acts on the measured speed, so goal steps give no kick); the sum
+  stops growing where its own term alone reaches the PWM limit (anti-windup). I and D are 0 from the factory.
 * **DC motor behind a gearbox**: torque ``τ = k_t·(V − k_e·ω)/R`` with ``k_t`` = ``torque_constant`` (stall torque
   ÷ stall current), ``R`` = ``winding_resistance`` and ``k_e`` = supply voltage ÷ ``no_load_speed`` (the
   torque–speed line through stall torque and no-load speed). Together: a proportional servo of stiffness
@@ -38,6 +42,10 @@ PWM_FULL_SCALE = 885.0
 """e-Manual PWM units at 100 % duty (MX(2.0), X series)."""
 P_GAIN_DIVISOR = 128.0
 """e-Manual: K_P = Position P Gain (control table) / 128."""
+I_GAIN_DIVISOR = 65536.0
+"""e-Manual: K_I = Position I Gain (control table) / 65536."""
+D_GAIN_DIVISOR = 16.0
+"""e-Manual: K_D = Position D Gain (control table) / 16."""
 
 
 @dataclass(frozen=True)
@@ -88,6 +96,12 @@ class ServoModel:
         """Motor voltage per rad of position error [V/rad] before the PWM limit."""
         self.max_voltage = s.supply_voltage * s.pwm_limit / PWM_FULL_SCALE
         """Largest motor voltage [V]."""
+        pwm_volts_per_rad = s.supply_voltage / PWM_FULL_SCALE * s.ticks_per_revolution / (2.0 * math.pi)
+        self.volts_per_rad_s = pwm_volts_per_rad * s.position_i_gain / I_GAIN_DIVISOR / s.firmware_period
+        """Motor voltage per rad·s of integrated position error [V/(rad·s)] (the I term)."""
+        self.volts_per_rad_per_s = pwm_volts_per_rad * s.position_d_gain / D_GAIN_DIVISOR * s.firmware_period
+        """Motor voltage per rad/s of joint speed [V·s/rad] (the D term, on the measured speed)."""
+        self._integral: np.ndarray | None = None
         self.torque_limit = min(s.stall_torque, s.torque_constant * self.max_voltage / s.winding_resistance,
                                 s.torque_constant * s.current_limit)
         """Largest output torque [N·m]: stall torque, PWM limit and current limit."""
@@ -99,21 +113,36 @@ class ServoModel:
             return Gains(s.stiffness, s.damping, s.stall_torque, s.no_load_speed, s.armature, s.coulomb_friction)
         per_volt = s.torque_constant / s.winding_resistance
         return Gains(stiffness=per_volt * self.volts_per_rad,
-                     damping=per_volt * self.back_emf + s.viscous_friction,
+                     damping=per_volt * (self.back_emf + self.volts_per_rad_per_s) + s.viscous_friction,
                      torque_limit=self.torque_limit, max_speed=s.no_load_speed, armature=s.armature,
                      coulomb_friction=s.coulomb_friction)
 
-    def torque(self, goal: np.ndarray, position: np.ndarray, speed: np.ndarray) -> np.ndarray:
+    def torque(self, goal: np.ndarray, position: np.ndarray, speed: np.ndarray, step: float = 0.0) -> np.ndarray:
         """Output torque of the firmware's position control [N·m] (explicit form, one physics step).
 
-        The PWM voltage from the position error, limited; the motor's torque–speed line; the current limit;
-        gearbox viscous friction. (Coulomb friction is left to the engine or to :meth:`electrical`.)
+        The PWM voltage from the position error (P, I and D terms), limited; the motor's torque–speed line; the
+        current limit; gearbox viscous friction. (Coulomb friction is left to the engine or to :meth:`electrical`.)
+
+        Args:
+            goal, position, speed: goal and measured angle [rad], measured speed [rad/s] of each servo.
+            step: the physics step this torque holds for [s]: the I term integrates the error over it (0: no
+                integration, e.g. for a one-off evaluation).
         """
         s = self.servo
         if s.control == "pd":
             return np.asarray(np.clip(s.stiffness * (goal - position) - s.damping * speed, -s.stall_torque,
                                       s.stall_torque), dtype=float)
-        voltage = np.clip(self.volts_per_rad * (goal - position), -self.max_voltage, self.max_voltage)
+        error = goal - position
+        voltage = self.volts_per_rad * error
+        if self.volts_per_rad_s > 0.0:
+            if self._integral is None:
+                self._integral = np.zeros_like(error, dtype=float)
+            bound = self.max_voltage / self.volts_per_rad_s
+            self._integral = np.clip(self._integral + error * step, -bound, bound)
+            voltage = voltage + self.volts_per_rad_s * self._integral
+        if self.volts_per_rad_per_s > 0.0:
+            voltage = voltage - self.volts_per_rad_per_s * speed
+        voltage = np.clip(voltage, -self.max_voltage, self.max_voltage)
         current = np.clip((voltage - self.back_emf * speed) / s.winding_resistance, -s.current_limit, s.current_limit)
         return np.asarray(s.torque_constant * current - s.viscous_friction * speed, dtype=float)
 

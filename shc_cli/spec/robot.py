@@ -302,6 +302,15 @@ class Servo(Strict):
     position_p_gain: NonNegative = Field(
         850.0, description="'dynamixel': Position P Gain in control-table units (e-Manual: K_P = value/128 PWM "
         "units per position tick)")
+    position_i_gain: NonNegative = Field(
+        0.0, description="'dynamixel': Position I Gain in control-table units (e-Manual: K_I = value/65536 PWM units "
+        "per position tick, summed every firmware period; factory value 0)")
+    position_d_gain: NonNegative = Field(
+        0.0, description="'dynamixel': Position D Gain in control-table units (e-Manual: K_D = value/16 PWM units per "
+        "position tick of change per firmware period; factory value 0)")
+    firmware_period: Positive = Field(
+        0.001, description="'dynamixel': period of the firmware's position loop, which scales the I and D terms [s] "
+        "(estimated: the e-Manual does not give it)")
     pwm_limit: Annotated[float, Field(gt=0, le=885)] = Field(
         885.0, description="'dynamixel': PWM Limit in control-table units (885 = 100 % of the supply voltage)")
     current_limit: Positive = Field(6.9, description="'dynamixel': Current Limit [A] (MX-106(2.0): 2047 × 3.36 mA)")

@@ -140,9 +140,10 @@ class MujocoWorld:
         total = np.zeros(len(goals))
         physics = 0.0
         explicit = self.explicit
+        step = float(model.opt.timestep)
         for _ in range(self.substeps):
             if explicit is not None:  # the servo model's torque from the state before the step, as in PyBullet
-                ctrl[:] = explicit.torque(goals, q, v)
+                ctrl[:] = explicit.torque(goals, q, v, step)
             elif not self.compliant:  # PyBullet's velocity motor: the speed that closes position_gain of the error
                 np.subtract(goals, q, out=work)
                 work *= gain

@@ -192,7 +192,7 @@ class World:
             elif self.explicit:
                 q = np.fromiter([s[0] for s in state], float, count)
                 qd = np.fromiter([s[1] for s in state], float, count)
-                torque = self.servo_model.torque(self._goals, q, qd)
+                torque = self.servo_model.torque(self._goals, q, qd, self.control_period / self.substeps)
                 applied.append(torque)
                 p.setJointMotorControlArray(body, joints, p.TORQUE_CONTROL, forces=torque.tolist(), physicsClientId=c)
             started = clock()
