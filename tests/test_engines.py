@@ -201,3 +201,20 @@ def test_mujoco_dynamixel_servo_is_the_servo_models_torque() -> None:
     current_limited = servo.torque_constant * servo.current_limit
     assert applied.min() == pytest.approx(current_limited, rel=1e-6)  # back-driven: the current limit
     assert current_limited > 1.3 * servo.stall_torque
+
+
+def test_an_unstable_mujoco_run_reports_it_and_writes_no_log_file(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """ATHENA's explicit servo law at a 50 ms physics step blows up in MuJoCo: the warning reaches the summary and the
+    terminal, and MuJoCo's own MUJOCO_LOG.TXT is not left in the working directory."""
+    from .test_cli import run
+
+    monkeypatch.chdir(tmp_path)
+    code, out, err = run(["simulate", "athena_paper", "--engine", "mujoco", "--terrain", "ramp:10", "--duration", "3",
+                          "--physics-rate", "20", "--no-plots", "--out", str(tmp_path / "run")], capsys, monkeypatch)
+    assert code == 0
+    import json
+
+    warnings = json.loads((tmp_path / "run" / "summary.json").read_text())["engine_warnings"]
+    assert any("unstable" in w for w in warnings)
+    assert "note: mujoco: " in err and "unstable" in err
+    assert not (tmp_path / "MUJOCO_LOG.TXT").exists()

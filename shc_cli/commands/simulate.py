@@ -146,6 +146,8 @@ def run_simulate(options: SimulateOptions, after: Callable[[Path], None] | None 
                f"{summary['mean_power_w']:.1f} W, "
                f"CoT {summary['cot'] if summary['cot'] is None else round(summary['cot'], 3)}"
                f"{', FELL' if summary['fell'] else progress_note(summary)}{interrupted_note(summary)} → {path}")
+    for warning in summary.get("engine_warnings", []):
+        typer.echo(f"note: {summary['engine']}: {warning} (try a higher --physics-rate)", err=True)
     if after is not None:
         after(path)
     exit_if_interrupted(summary)
@@ -224,6 +226,7 @@ def simulate_to(options: SimulateOptions | None = None, **changes: Any) -> tuple
                     progress.stop()
                 return {**record.summary(scenario, controller.gait.name, controller), "seed": o.seed,
                         "terrain": str(world.terrain.spec), "engine": world.name, "engine_version": world.version,
+                        "engine_warnings": list(getattr(world, "warnings", [])),
                         "versions": {"shc": __version__, world.name: world.version, "numpy": np.__version__}}
 
             def plot(folder: Path) -> None:

@@ -66,6 +66,7 @@ class MujocoWorld:
                  initial_joints: np.ndarray, friction: float = 0.9, restitution: float = 0.0, seed: int = 0,
                  imu_noise: float = 0.0, stand: bool = False) -> None:
         mujoco = import_mujoco()
+        WARNINGS.clear()
         self.mujoco = mujoco
         self.name = "mujoco"
         self.version = str(mujoco.__version__)
@@ -118,6 +119,11 @@ class MujocoWorld:
         self._work = np.zeros(len(joints))
         self._ray_hit = np.zeros(1, dtype=np.int32)
         self.command(initial_joints)
+
+    @property
+    def warnings(self) -> list[str]:
+        """MuJoCo's warnings since this world opened (distinct texts), e.g. an unstable simulation."""
+        return list(WARNINGS)
 
     def release_stand(self) -> None:
         """Deactivate the stand's weld: the robot now carries itself."""
@@ -232,7 +238,20 @@ def import_mujoco() -> Any:
             os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
     import mujoco
 
+    if mujoco.get_mju_user_warning() is None:  # else MuJoCo appends its warnings to MUJOCO_LOG.TXT in the cwd
+        mujoco.set_mju_user_warning(_warned)
     return mujoco
+
+
+WARNINGS: list[str] = []
+"""MuJoCo's warnings (e.g. "Nan, Inf or huge value in QACC … The simulation is unstable") since the newest world
+opened; :attr:`World.warnings` reads them."""
+
+
+def _warned(text: str) -> None:
+    """MuJoCo's warning handler: keep each distinct warning once (at most 20), instead of MuJoCo's log file."""
+    if text not in WARNINGS and len(WARNINGS) < 20:
+        WARNINGS.append(text)
 
 
 def _view(values: np.ndarray, index: np.ndarray) -> np.ndarray:
