@@ -79,7 +79,8 @@ class Electrical:
 
 
 class ServoModel:
-    """One servo model (see the module docstring); vectorised over joints.
+    """One servo model (see the module docstring); vectorised over joints. It keeps the I term's sum, one per
+    servo, so each simulated robot has its own instance.
 
     Args:
         servo: the robot's ``[servo]`` table.
