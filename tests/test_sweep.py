@@ -230,3 +230,26 @@ def test_an_existing_output_needs_resume(tmp_path: Path, capsys, monkeypatch) ->
     code, _, err = run(["sweep", str(ROOT / "sweeps" / "ci_smoke.toml"), "--out", str(tmp_path / "out")], capsys,
                        monkeypatch)
     assert code == 2 and "--resume" in err
+
+
+def test_grids_with_different_keys_and_step_frequencies_make_one_table(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """Two [[grid]] tables naming different keys (a step-frequency grid and a scenario grid) run, and the CoT plot
+    groups the rows by the keys each has (it raised KeyError on the key the other grid lacks)."""
+    path = _write(tmp_path, """
+name = "mixed"
+duration = 0.5
+[[grid]]
+"walker.step_frequency" = [0.8, 1.2]
+[[grid]]
+scenario = ["SA"]
+[fixed]
+robot = "bullet"
+gait = "tripod"
+""")
+    out = tmp_path / "out"
+    code, stdout, err = run(["sweep", str(path), "--out", str(out), "--workers", "2"], capsys, monkeypatch)
+    assert code == 0, err
+    rows = _rows(out / "results.csv")
+    assert [r["status"] for r in rows] == ["ok", "ok", "ok"]
+    assert [r["scenario"] for r in rows] == ["", "", "SA"]
+    assert (out / "cot.png").exists()

@@ -372,7 +372,7 @@ def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | N
     if len({r.get("step_frequency_hz") for r in done}) > 1:
         group_keys = [k for k in sweep.grid if k not in ("robot", "gait") and not k.endswith("step_frequency")]
         for row in done:
-            row["group"] = ", ".join(f"{k} {row[k]}" for k in group_keys)
+            row["group"] = ", ".join(f"{k} {row[k]}" for k in group_keys if k in row)  # grids may differ in keys
         plot_cot(done, out / "cot.png")
     failed = len(rows) - len(done)
     fell = sum(1 for r in done if str(r.get("fell")) == "True")
