@@ -209,7 +209,7 @@ def test_an_unstable_mujoco_run_reports_it_and_writes_no_log_file(tmp_path: Path
     from .test_cli import run
 
     monkeypatch.chdir(tmp_path)
-    code, out, err = run(["simulate", "athena_paper", "--engine", "mujoco", "--terrain", "ramp:10", "--duration", "3",
+    code, _, err = run(["simulate", "athena_paper", "--engine", "mujoco", "--terrain", "ramp:10", "--duration", "3",
                           "--physics-rate", "20", "--no-plots", "--out", str(tmp_path / "run")], capsys, monkeypatch)
     assert code == 0
     import json

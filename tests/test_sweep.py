@@ -249,6 +249,7 @@ gait = "tripod"
     out = tmp_path / "out"
     code, stdout, err = run(["sweep", str(path), "--out", str(out), "--workers", "2"], capsys, monkeypatch)
     assert code == 0, err
+    assert "3 runs" in stdout and "3 ok" in stdout
     rows = _rows(out / "results.csv")
     assert [r["status"] for r in rows] == ["ok", "ok", "ok"]
     assert [r["scenario"] for r in rows] == ["", "", "SA"]
