@@ -15,7 +15,6 @@ and every cell before and after.
 from __future__ import annotations
 
 import csv
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -90,8 +89,8 @@ def fit(cells: list[Cell]) -> dict[str, float]:
     return dict(zip(FITTED, map(float, result.x), strict=True))
 
 
-def main(sweep: Path) -> None:
-    cells = load_cells(sweep)
+def main(arguments: list[str]) -> None:
+    cells = load_cells(Path(arguments[0]))
     before = {name: getattr(cells[0].servo, name) for name in FITTED}
     after = fit(cells)
     print("fitted: " + ", ".join(f"{k} {before[k]:.3g} -> {v:.3g}" for k, v in after.items()))
@@ -102,4 +101,6 @@ def main(sweep: Path) -> None:
 
 
 if __name__ == "__main__":
-    main(Path(sys.argv[1]))
+    from script import run
+
+    run(main, "TABLE4_SWEEP_DIR (the --out of shc sweep sweeps/openshc_table4.toml)", 1, 1)

@@ -11,7 +11,6 @@ docs/experiments/img/paper_fig14.png, paper_fig15.png and paper_fig16.png (CoT a
 from __future__ import annotations
 
 import csv
-import sys
 from collections import defaultdict
 from pathlib import Path
 
@@ -139,9 +138,9 @@ def figure(lines: dict[tuple[str, str, float], Line], keys: list[tuple[str, str,
     plt.close(fig)
 
 
-def main() -> None:
-    power = table4(Path(sys.argv[1]))
-    lines = cot_lines(Path(sys.argv[2])) if len(sys.argv) > 2 else {}
+def main(arguments: list[str]) -> None:
+    power = table4(Path(arguments[0]))
+    lines = cot_lines(Path(arguments[1])) if len(arguments) > 1 else {}
     print("\n".join(report(power, lines)))
     if lines:
         ma, ia = "bullet_mammalian_a", "bullet_insectoid_a"
@@ -154,4 +153,6 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    from script import run
+
+    run(main, "TABLE4_RESULTS_CSV [COT_RESULTS_CSV]", 1, 2)

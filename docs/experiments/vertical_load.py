@@ -11,7 +11,6 @@ The simulated stance power minus this is what friction at the feet carried (or c
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -49,4 +48,6 @@ def main(runs: list[str]) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    from script import run
+
+    run(main, "SG_RUN_DIR [SG_RUN_DIR ...] (shc simulate ROBOT --scenario SG run directories)", 1)
