@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pytest
 from ruamel.yaml import YAML
 
@@ -105,14 +104,12 @@ def test_no_robot_spawns_with_its_feet_in_the_floor(path: Path) -> None:
     """On the stand the body starts at its standing height with the legs at their ``unpacked`` angles: no foot centre
     may be more than 1 mm (contact slop) below the standing plane, else the engine pushes the feet out of the floor
     through the stand during start-up (bullet_insectoid_a did, 100 N per foot, after its roll axis moved down)."""
+    from shc_cli.control.packing import joint_configurations
     from shc_cli.model.chains import Chains
 
     robot = load_robot(path).robot
     assert robot is not None
     chains = Chains.from_robot(robot)
-    unpacked = np.zeros((len(robot.legs), chains.joints))
-    for i, leg in enumerate(robot.legs.values()):
-        for k, joint in enumerate(leg.joints.values()):
-            unpacked[i, k] = joint.unpacked
+    _, unpacked = joint_configurations(robot, chains.joints)
     heights = robot.walker.body_clearance + chains.tips(unpacked)[:, 2]
     assert heights.min() >= -0.001, f"{path.stem}: a foot starts {-heights.min():.4f} m below the floor"

@@ -104,6 +104,10 @@ class Engine(Protocol):
     def stand(self) -> object | None:
         """The support holding the body, ``None`` once released or if there is none."""
 
+    @property
+    def warnings(self) -> list[str]:
+        """The engine's own warnings since it opened (distinct texts), e.g. an unstable simulation."""
+
     def command(self, targets: np.ndarray) -> None:
         """Position targets of every servo ``(L, n)`` [rad] for the next control period."""
 

@@ -91,13 +91,12 @@ class ServoModel:
         s = servo
         self.back_emf = s.supply_voltage / s.no_load_speed
         """``k_e`` [V·s/rad] at the output shaft: the torque–speed line's slope ``k_t·k_e/R``."""
-        volts_per_rad = (s.supply_voltage * (s.position_p_gain / P_GAIN_DIVISOR) / PWM_FULL_SCALE
-                         * s.ticks_per_revolution / (2.0 * math.pi))
-        self.volts_per_rad = volts_per_rad
+        # volts per (PWM unit per tick), in radians: each gain K (PWM units per tick) times this is V per rad
+        pwm_volts_per_rad = s.supply_voltage / PWM_FULL_SCALE * s.ticks_per_revolution / (2.0 * math.pi)
+        self.volts_per_rad = pwm_volts_per_rad * s.position_p_gain / P_GAIN_DIVISOR
         """Motor voltage per rad of position error [V/rad] before the PWM limit."""
         self.max_voltage = s.supply_voltage * s.pwm_limit / PWM_FULL_SCALE
         """Largest motor voltage [V]."""
-        pwm_volts_per_rad = s.supply_voltage / PWM_FULL_SCALE * s.ticks_per_revolution / (2.0 * math.pi)
         self.volts_per_rad_s = pwm_volts_per_rad * s.position_i_gain / I_GAIN_DIVISOR / s.firmware_period
         """Motor voltage per rad·s of integrated position error [V/(rad·s)] (the I term)."""
         self.volts_per_rad_per_s = pwm_volts_per_rad * s.position_d_gain / D_GAIN_DIVISOR * s.firmware_period

@@ -226,7 +226,7 @@ def simulate_to(options: SimulateOptions | None = None, **changes: Any) -> tuple
                     progress.stop()
                 return {**record.summary(scenario, controller.gait.name, controller), "seed": o.seed,
                         "terrain": str(world.terrain.spec), "engine": world.name, "engine_version": world.version,
-                        "engine_warnings": list(getattr(world, "warnings", [])),
+                        "engine_warnings": world.warnings,
                         "versions": {"shc": __version__, world.name: world.version, "numpy": np.__version__}}
 
             def plot(folder: Path) -> None:

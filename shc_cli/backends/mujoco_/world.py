@@ -80,6 +80,8 @@ class MujocoWorld:
         self.fixed_base = fixed_base
         height = spawn_height(robot, self.terrain, initial_joints, fixed_base, stand)
         timestep = control_period / substeps
+        self.timestep = timestep
+        """Physics step [s]."""
         self.xml = robot_mjcf(robot, self.terrain, Options(timestep, height, fixed_base, stand, friction, restitution))
         self.model = model = mujoco.MjModel.from_xml_string(self.xml)
         self.data = data = mujoco.MjData(model)
@@ -145,8 +147,7 @@ class MujocoWorld:
         clock = time.perf_counter
         total = np.zeros(len(goals))
         physics = 0.0
-        explicit = self.explicit
-        step = float(model.opt.timestep)
+        explicit, step = self.explicit, self.timestep
         for _ in range(self.substeps):
             if explicit is not None:  # the servo model's torque from the state before the step, as in PyBullet
                 ctrl[:] = explicit.torque(goals, q, v, step)

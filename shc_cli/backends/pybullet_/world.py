@@ -149,6 +149,11 @@ class World:
             self.stand = p.createConstraint(self.body, -1, -1, -1, p.JOINT_FIXED, [0, 0, 0], [0, 0, 0], base[0],
                                             physicsClientId=c)
 
+    @property
+    def warnings(self) -> list[str]:
+        """PyBullet's warnings: none are collected (it prints its C warnings, silenced by ``quiet_stdout``)."""
+        return []
+
     def release_stand(self) -> None:
         """Take the stand away: the robot now carries itself."""
         if self.stand is not None:
@@ -180,6 +185,7 @@ class World:
         """
         p, c, body, joints, count = self.p, self.client, self.body, self.flat_joints, len(self.flat_joints)
         clock = time.perf_counter
+        step = self.control_period / self.substeps
         samples = []
         pd = self._stable_pd() if self.compliant else None
         applied = []
@@ -192,7 +198,7 @@ class World:
             elif self.explicit:
                 q = np.fromiter([s[0] for s in state], float, count)
                 qd = np.fromiter([s[1] for s in state], float, count)
-                torque = self.servo_model.torque(self._goals, q, qd, self.control_period / self.substeps)
+                torque = self.servo_model.torque(self._goals, q, qd, step)
                 applied.append(torque)
                 p.setJointMotorControlArray(body, joints, p.TORQUE_CONTROL, forces=torque.tolist(), physicsClientId=c)
             started = clock()
