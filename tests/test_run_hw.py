@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import gc
 import json
 import os
 import signal
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -21,10 +24,21 @@ from shc_cli.spec.loading import load_robot
 SHC = [sys.executable, "-m", "shc_cli.cli"]
 
 
-def _bus(skip: int | None = None) -> BusEmulator:
+@contextmanager
+def _bus(skip: int | None = None) -> Iterator[BusEmulator]:
+    """Bullet's 30 servos on an emulated bus, served by a thread of this (pytest) process while ``run-hw`` runs in
+    its own. The cyclic garbage collector is off meanwhile: late in the suite a full collection of this process's
+    heap can stall the emulator thread past the SDK's packet timeout, and run-hw reports "no reply" (a test artefact:
+    real servos answer on their own)."""
     robot = load_robot("bullet").robot
     assert robot is not None
-    return BusEmulator({s.id: "MX-106" for s in robot.hardware.servos.values() if s.id != skip})
+    gc.collect()
+    gc.disable()
+    try:
+        with BusEmulator({s.id: "MX-106" for s in robot.hardware.servos.values() if s.id != skip}) as bus:
+            yield bus
+    finally:
+        gc.enable()
 
 
 def _run_hw(bus: BusEmulator, out: Path, *args: str) -> subprocess.CompletedProcess[str]:
