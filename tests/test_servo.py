@@ -154,3 +154,72 @@ def test_integral_action_removes_the_sag_a_p_servo_leaves(engine: str) -> None:
             world.close()
     assert errors[0.0] > 0.005  # the P servo's sag: gravity torque / 41 N·m/rad
     assert errors[2000.0] < 0.2 * errors[0.0]
+
+
+@pytest.mark.parametrize(("figure", "stable"), [(0.6, True), (0.95, True), (1.05, False), (1.5, False)])
+def test_the_explicit_stability_figure_marks_where_bullets_integrator_diverges(figure: float, stable: bool) -> None:
+    """A joint of inertia I under τ = −K·x − c·ẋ, integrated as Bullet does (velocity first, then position with the
+    new velocity), for gains scaled to a given figure: below 1 the motion decays, above 1 it grows."""
+    from shc_cli.backends.pybullet_.world import explicit_stability
+
+    step, inertia = 0.0025, 2e-3
+    base = explicit_stability(step, 41.0, 1.8, 1.0 / inertia)
+    stiffness, damping = 41.0 * figure / base, 1.8 * figure / base
+    assert explicit_stability(step, stiffness, damping, 1.0 / inertia) == pytest.approx(figure)
+    x, v = 0.1, 0.0
+    for _ in range(2000):
+        v += step * (-stiffness * x - damping * v) / inertia
+        x += step * v
+    assert (abs(x) < 0.1) == stable
+
+
+def test_the_suggested_rate_is_the_lowest_stable_multiple_of_the_control_rate() -> None:
+    from shc_cli.backends.pybullet_.world import EXPLICIT_STABILITY_LIMIT, explicit_stability, stable_rate
+
+    period, stiffness, damping, inverse = 0.01, 41.2, 1.79, 1.0 / 0.0015
+    rate = stable_rate(period, stiffness, damping, inverse)
+    assert rate * period == pytest.approx(round(rate * period))
+    assert explicit_stability(1.0 / rate, stiffness, damping, inverse) <= EXPLICIT_STABILITY_LIMIT
+    assert explicit_stability(1.0 / (rate - 1.0 / period), stiffness, damping, inverse) > EXPLICIT_STABILITY_LIMIT
+
+
+def test_a_light_robot_with_a_stiff_servo_law_is_warned_and_the_suggested_rate_walks(
+        tmp_path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The quadruped (links of 30–90 g) with the MX-106 firmware law and no rotor inertia: PyBullet's explicit
+    servo torque diverges at 400 Hz (the robot is thrown off the floor). The run says so before the user wonders
+    why, in the summary and on the terminal, with the rate that fixes it; at that rate it walks, with no note."""
+    import json
+
+    from .test_cli import run
+
+    robot = tmp_path / "quad_dxl.toml"
+    robot.write_text('extends = "quadruped"\nname = "quad_dxl"\n[servo]\ncontrol = "dynamixel"\n')
+    code, _, err = run(["simulate", str(robot), "--duration", "1", "--no-plots", "--out", str(tmp_path / "a")],
+                       capsys, monkeypatch)
+    summary = json.loads((tmp_path / "a" / "summary.json").read_text())
+    assert code == 0 and summary["fell"]
+    [warning] = summary["engine_warnings"]
+    assert "too stiff for 400 Hz physics" in warning
+    [note] = [line for line in err.splitlines() if line.startswith("note: pybullet: ")]
+    rate = note.split("--physics-rate ")[1].split()[0]
+    assert int(rate) > 400
+    code, _, err = run(["simulate", str(robot), "--duration", "1", "--no-plots", "--physics-rate", rate,
+                        "--out", str(tmp_path / "b")], capsys, monkeypatch)
+    summary = json.loads((tmp_path / "b" / "summary.json").read_text())
+    assert code == 0 and not summary["fell"] and summary["engine_warnings"] == []
+    assert "note: pybullet" not in err
+
+
+@pytest.mark.parametrize("name", ["bullet_insectoid_a", "bullet_insectoid_b", "bullet_mammalian_a",
+                                  "bullet_mammalian_b"])
+def test_the_paper_robots_are_within_the_explicit_stability_limit(name: str) -> None:
+    from shc_cli.backends.pybullet_.world import World
+    from shc_cli.backends.terrain import TerrainSpec
+
+    robot = load_robot(name).robot
+    joints = np.array([[joint.unpacked for joint in leg.joints.values()] for leg in robot.legs.values()])
+    world = World(robot, TerrainSpec(kind="flat"), robot.time_delta, 4, False, joints)
+    try:
+        assert world.warnings == []
+    finally:
+        world.close()

@@ -147,7 +147,8 @@ def run_simulate(options: SimulateOptions, after: Callable[[Path], None] | None 
                f"CoT {summary['cot'] if summary['cot'] is None else round(summary['cot'], 3)}"
                f"{', FELL' if summary['fell'] else progress_note(summary)}{interrupted_note(summary)} → {path}")
     for warning in summary.get("engine_warnings", []):
-        typer.echo(f"note: {summary['engine']}: {warning} (try a higher --physics-rate)", err=True)
+        hint = "" if "--physics-rate" in warning else " (try a higher --physics-rate)"
+        typer.echo(f"note: {summary['engine']}: {warning}{hint}", err=True)
     if after is not None:
         after(path)
     exit_if_interrupted(summary)

@@ -8,6 +8,7 @@ ignores the URDF's limits), :meth:`World.step` runs the physics sub-steps of one
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 import time
@@ -31,6 +32,36 @@ SOLVER_ITERATIONS = 30
 """Constraint solver iterations. Measured on the Bullet tripod walk at 400 Hz (docs/physics-model.md): 30 instead
 of 50 takes 21–29 % less physics time, lowers the walking body by 0.8 mm and changes speed by −1.3 % and power
 by +5 %; 20 sags 1.9 mm."""
+EXPLICIT_STABILITY_LIMIT = 0.8
+"""Largest :func:`explicit_stability` figure run without a warning (1 is the theoretical edge; measured on
+bullet_mammalian_b with smaller armatures: 0.69 walks as calibrated, 0.96 walks with its power doubled by
+chatter, 1.29 and above fall)."""
+
+
+def explicit_stability(step: float, stiffness: float, damping: float, inverse_inertia: float) -> float:
+    """How close an explicitly applied spring–damper servo law is to making the integrator unstable (≥ 1: it is).
+
+    Bullet integrates semi-implicitly (velocity first, then position with the new velocity); a joint of inertia I
+    under ``τ = −K·x − c·ẋ`` evaluated at the step's start is stable only while ``2·h·c/I + h²·K/I < 4``.
+    With many coupled joints the lightest mode counts: ``1/I`` is the largest eigenvalue of the joint block of
+    the inverse mass matrix.
+
+    Args:
+        step: physics step h [s].
+        stiffness: K [N·m/rad].
+        damping: c [N·m·s/rad].
+        inverse_inertia: 1/I [1/(kg·m²)].
+    """
+    return (2.0 * step * damping + step * step * stiffness) * inverse_inertia / 4.0
+
+
+def stable_rate(control_period: float, stiffness: float, damping: float, inverse_inertia: float) -> float:
+    """The lowest physics rate [Hz], a whole multiple of the control rate, at which :func:`explicit_stability`
+    stays within :data:`EXPLICIT_STABILITY_LIMIT`."""
+    a, b = stiffness * inverse_inertia, 2.0 * damping * inverse_inertia
+    c = -4.0 * EXPLICIT_STABILITY_LIMIT
+    step = -c / b if a == 0.0 else (-b + math.sqrt(b * b - 4.0 * a * c)) / (2.0 * a)
+    return math.ceil(control_period / step - 1e-9) / control_period
 
 
 class World:
@@ -138,12 +169,15 @@ class World:
         self.compliant = servo.control == "pd"
         self.explicit = servo.control == "dynamixel"
         """The servo model's torque (:meth:`ServoModel.torque`) applied with TORQUE_CONTROL every physics step."""
+        self._warnings: list[str] = []
         self._goals = np.zeros(count)
         for row, indices in enumerate(self.joint_index):
             for k, index in enumerate(indices):
                 p.resetJointState(self.body, index, float(joints[row, k]), 0.0, physicsClientId=c)
         self._positions = joints[self.slot_rows, self.slot_cols].astype(float)
         self.command(joints)
+        if self.explicit:
+            self._check_explicit_stability()
         if stand:
             base = p.getBasePositionAndOrientation(self.body, physicsClientId=c)
             self.stand = p.createConstraint(self.body, -1, -1, -1, p.JOINT_FIXED, [0, 0, 0], [0, 0, 0], base[0],
@@ -151,8 +185,31 @@ class World:
 
     @property
     def warnings(self) -> list[str]:
-        """PyBullet's warnings: none are collected (it prints its C warnings, silenced by ``quiet_stdout``)."""
-        return []
+        """Warnings about this world: an explicit servo law beyond the integrator's stability (checked at spawn);
+        PyBullet's own C warnings are not collected (it prints them, silenced by ``quiet_stdout``)."""
+        return list(self._warnings)
+
+    def _check_explicit_stability(self) -> None:
+        """Warn when the ``dynamixel`` servo law, applied as a torque at each physics step's start, is too stiff
+        or too damped for the lightest joint mode of the spawn posture (:func:`explicit_stability`)."""
+        p, c = self.p, self.client
+        movable = [j for j in range(p.getNumJoints(self.body, physicsClientId=c))
+                   if p.getJointInfo(self.body, j, physicsClientId=c)[2] != p.JOINT_FIXED]
+        positions = [p.getJointState(self.body, j, physicsClientId=c)[0] for j in movable]
+        mass = np.array(p.calculateMassMatrix(self.body, positions, physicsClientId=c))
+        base = mass.shape[0] - len(movable)  # 6 base coordinates first for a free base, none for a fixed one
+        rows = [base + movable.index(j) for j in self.flat_joints]
+        inverse = float(np.linalg.eigvalsh(np.linalg.inv(mass)[np.ix_(rows, rows)]).max())
+        step = self.control_period / self.substeps
+        gains = self.gains
+        figure = explicit_stability(step, gains.stiffness, gains.damping, inverse)
+        if figure > EXPLICIT_STABILITY_LIMIT:
+            rate = stable_rate(self.control_period, gains.stiffness, gains.damping, inverse)
+            self._warnings.append(
+                f"the 'dynamixel' servo law, applied explicitly, is too stiff for {1.0 / step:g} Hz physics (stability "
+                f"figure {figure:.2f}, over {EXPLICIT_STABILITY_LIMIT}: damping {gains.damping:.3g} N·m·s/rad and "
+                f"stiffness {gains.stiffness:.3g} N·m/rad on a joint mode of {1.0 / inverse:.2g} kg·m²); use "
+                f"--physics-rate {rate:g} or more, a larger [servo] armature, or --engine mujoco")
 
     def release_stand(self) -> None:
         """Take the stand away: the robot now carries itself."""
