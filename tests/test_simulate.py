@@ -229,3 +229,19 @@ def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(engine: s
         errors.append(np.abs(reading.joints - stance)[:, 1])  # femurs
     assert heights[1] < heights[2] < heights[0] - 0.002  # [m]: softer sits lower
     np.testing.assert_allclose(errors[1] / errors[2], 2.0, rtol=0.25)
+
+
+def test_a_robot_that_falls_in_its_first_running_cycle_has_no_speed_and_no_cot(
+        tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """ATHENA with an MX-106-like explicit servo law and no rotor inertia is thrown off the floor during start-up
+    (tests/test_servo.py) and the fall check ends the run in its first RUNNING cycle: one cycle's displacement is no
+    walking speed (it was 7 m/s and a CoT of 0.07, which a sweep's CoT plot would take for the best run)."""
+    robot = tmp_path / "athena_dxl.toml"
+    robot.write_text('extends = "athena"\nname = "athena_dxl"\n[servo]\ncontrol = "dynamixel"\nstall_torque = 1.5\n')
+    code, _, _ = run(["simulate", str(robot), "--duration", "1", "--no-plots", "--out", str(tmp_path / "run")],
+                     capsys, monkeypatch)
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert code == 0 and summary["fell"]
+    assert summary["analysed_time_s"] == pytest.approx(0.01)
+    assert summary["displacement_speed_mps"] == 0.0 and summary["path_speed_mps"] == 0.0
+    assert summary["cot"] is None

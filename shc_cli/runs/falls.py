@@ -79,7 +79,8 @@ class PhysicsRecord:
         end = series["position"][-1] if series["position"] else np.zeros(3)
         start = self.window_start if self.window_start is not None else end
         distance = float(np.linalg.norm((end - start)[:2]))
-        speed = distance / window if window > 0 else 0.0
+        speed = distance / window if running.sum() >= 2 else 0.0  # as path speed: one cycle is no walk (a robot
+        # thrown off the floor at start-up, caught by the fall check in its first RUNNING cycle, once had 7 m/s)
         from shc_cli.analysis.metrics import window_speeds
         from shc_cli.analysis.progress import cycle_path_length, progress_fields
 
