@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -47,26 +46,19 @@ def test_version(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     assert (code, out.strip()) == (0, f"shc {__version__}")
 
 
-def test_help_starts_fast() -> None:
+def test_help_imports_nothing_heavy() -> None:
     """``shc --help`` must not import numpy, numba, pydantic, matplotlib, nor the viewer or renderer (viser, mujoco,
-    imageio-ffmpeg, Pillow) (budget 0.3 s)."""
-    code = ("import sys, time; t = time.perf_counter(); sys.argv = ['shc', '--help']\n"
+    imageio-ffmpeg, Pillow): that is what keeps it ≈ 0.1 s (measured by benchmarks/bench_startup.py, not here —
+    a timed test fails on a loaded machine)."""
+    code = ("import sys; sys.argv = ['shc', '--help']\n"
             "from shc_cli.cli import main\n"
             "try:\n    main()\nexcept SystemExit:\n    pass\n"
             "heavy = [m for m in ('numpy', 'numba', 'pydantic', 'matplotlib', 'scipy', 'viser', 'mujoco', "
             "'imageio_ffmpeg', 'PIL', 'playwright', 'shc_cli.view') if m in sys.modules]\n"
-            "print(heavy, time.perf_counter() - t, file=sys.stderr)")
-    best = min(_timed(code) for _ in range(3))
-    assert best[0] == "[]"
-    assert best[1] < 0.3
-
-
-def _timed(code: str) -> tuple[str, float]:
-    started = time.perf_counter()
+            "print(heavy, file=sys.stderr)")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-    total = time.perf_counter() - started
-    heavy = result.stderr.strip().rsplit(" ", 1)[0]
-    return heavy, total
+    assert result.stderr.strip() == "[]"
+    assert "Usage" in result.stdout
 
 
 def test_validate_all_shipped_files(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
