@@ -254,3 +254,23 @@ gait = "tripod"
     assert [r["status"] for r in rows] == ["ok", "ok", "ok"]
     assert [r["scenario"] for r in rows] == ["", "", "SA"]
     assert (out / "cot.png").exists()
+
+
+def test_engine_warnings_reach_the_results_table_and_the_terminal(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """A run whose engine warned (here PyBullet's explicit-stability check on a light robot with a stiff servo law)
+    says so in its results row and in one note after the sweep; a run without warnings has an empty cell."""
+    _write(tmp_path, 'extends = "quadruped"\nname = "quad_dxl"\n[servo]\ncontrol = "dynamixel"\n', "quad_dxl.toml")
+    path = _write(tmp_path, f"""
+name = "warned"
+duration = 0.5
+[[grid]]
+robot = ["quadruped", "{tmp_path / 'quad_dxl.toml'}"]
+""")
+    out = tmp_path / "out"
+    code, stdout, err = run(["sweep", str(path), "--out", str(out), "--workers", "1"], capsys, monkeypatch)
+    assert code == 0, err
+    rows = _rows(out / "results.csv")
+    assert rows[0]["engine_warnings"] == ""
+    assert "too stiff for 400 Hz physics" in rows[1]["engine_warnings"]
+    [note] = [line for line in stdout.splitlines() if line.startswith("note: 1 run had engine warnings")]
+    assert rows[1]["slug"] in note

@@ -38,6 +38,8 @@ METRICS = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "p
 """Analysis keys copied into the results table."""
 RUN_KEYS = ("engine", "fell", "sim_time_s", "wall_time_s", "physics_time_s")
 """Summary keys copied into the results table (the timings differ from run to run; compare the others)."""
+WARNINGS = "engine_warnings"
+"""Results column with the run's engine warnings (``summary.json`` ``engine_warnings``, joined by "; ")."""
 
 
 def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: float = 0.0) -> dict[str, Any]:
@@ -65,6 +67,7 @@ def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: 
         log = open_run(directory)
         result = analyze_run(log, Window(skip_s=skip))
         row.update({key: log.summary.get(key) for key in RUN_KEYS})
+        row[WARNINGS] = "; ".join(log.summary.get(WARNINGS) or [])
         row.update({key: result.get(key) for key in metrics})
     except Exception as error:  # a failing run is a row, not the end of the sweep
         if _interrupted(error):
@@ -202,7 +205,7 @@ def _key_lines(sweep: Sweep) -> dict[str, int | None]:
 
 
 def result_columns(sweep: Sweep) -> list[str]:
-    return ["index", "slug", *sweep.grid, "status", "error", *RUN_KEYS, *METRICS]
+    return ["index", "slug", *sweep.grid, "status", "error", *RUN_KEYS, WARNINGS, *METRICS]
 
 
 def _format(value: Any) -> str:
@@ -379,6 +382,10 @@ def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | N
     typer.echo(f"{sweep.name}: {len(rows)} runs in {time.perf_counter() - started:.1f} s with {count} "
                f"{executor} worker{'s' if count != 1 else ''}: {len(done)} ok ({fell} fell), {failed} failed "
                f"→ {out / 'results.csv'}")
+    warned = [r for r in done if r.get(WARNINGS)]
+    if warned:
+        typer.echo(f"note: {len(warned)} run{'s' if len(warned) != 1 else ''} had engine warnings (results.csv "
+                   f"column {WARNINGS}), e.g. {warned[0]['slug']}: {warned[0][WARNINGS]}")
     if done and all(r.get("steady_speed_mps") in (None, "") for r in done):
         typer.echo("note: steady_speed_mps is empty: no run held its velocity for a whole gait cycle after the "
                    "acceleration ramp (make `duration` longer)")
