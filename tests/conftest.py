@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +13,8 @@ from shc_cli.spec.robot import Robot
 
 ROOT = Path(__file__).resolve().parents[1]
 GOLDEN = ROOT / "golden"
+EXPERIMENTS = ROOT / "docs" / "experiments"
+sys.path.insert(0, str(EXPERIMENTS))  # the experiment scripts (a folder, not a package) import as modules in tests
 
 
 @pytest.fixture(scope="session")

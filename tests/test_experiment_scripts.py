@@ -7,15 +7,12 @@ import sys
 
 import numpy as np
 import pytest
+import vertical_load  # docs/experiments (on the path through conftest)
 
 from shc_cli.model.chains import Chains
 from shc_cli.spec.loading import load_robot
 
-from .conftest import ROOT
-
-EXPERIMENTS = ROOT / "docs" / "experiments"
-sys.path.insert(0, str(EXPERIMENTS))
-import vertical_load  # noqa: E402  (a script directory, not a package)
+from .conftest import EXPERIMENTS, ROOT
 
 
 @pytest.mark.parametrize("name", ["bullet_mammalian_a", "bullet_mammalian_b", "bullet_insectoid_b"])

@@ -5,14 +5,15 @@ OpenSHC's IK adds the null-space gradient of its joint-limit cost ``Φ_p = Σ (w
 of ``Φ_p`` on its tip — a posture fixed by the joint limits and the tip alone, whatever path the leg came by. That is
 why a simulated robot's standing joint angles (and with them its stance-ground power,
 docs/experiments/openshc-cot.md) are a property of its joint limits and stance. The minimum here is found by
-SciPy's SLSQP on the study's formula, independently of the controller's code; the recording is the real binary.
+SciPy's SLSQP on the study's formula (docs/experiments/vertical_load.py), independently of the controller's
+code; the recording is the real binary.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.optimize import minimize
+import vertical_load  # docs/experiments (on the path through conftest): its SLSQP search
 
 from shc_cli.model.chains import Chains
 from shc_cli.model.ik import ik_step
@@ -26,13 +27,7 @@ from .conftest import GOLDEN
 def _limit_cost_minimum(chains: Chains, leg: int, tip: np.ndarray, start: np.ndarray) -> np.ndarray:
     """Joint angles [rad] minimising the limit cost of leg ``leg`` among those that put its tip at ``tip`` [m]."""
     one = chains.take(np.array([leg]))
-    lower, upper = one.lower[0], one.upper[0]
-    centre, span = (lower + upper) / 2, np.where(upper > lower, upper - lower, 1.0)
-    result = minimize(lambda q: float(np.sum(((q - centre) / span) ** 2)), start, method="SLSQP",
-                      bounds=list(zip(lower, upper, strict=True)), options={"ftol": 1e-12, "maxiter": 500},
-                      constraints=[{"type": "eq", "fun": lambda q: one.tips(q[None])[0] - tip}])
-    assert result.success, result.message
-    return np.asarray(result.x)
+    return vertical_load.best_posture(one, tip, vertical_load.limit_cost(one.lower[0], one.upper[0]), start[None])
 
 
 def _distance_to_minimum(chains: Chains, q: np.ndarray) -> np.ndarray:

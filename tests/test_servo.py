@@ -188,24 +188,17 @@ def test_a_light_robot_with_a_stiff_servo_law_is_warned_and_the_suggested_rate_w
     """The quadruped (links of 30–90 g) with the MX-106 firmware law and no rotor inertia: PyBullet's explicit
     servo torque diverges at 400 Hz (the robot is thrown off the floor). The run says so before the user wonders
     why, in the summary and on the terminal, with the rate that fixes it; at that rate it walks, with no note."""
-    import json
+    from .test_simulate import simulate_variant
 
-    from .test_cli import run
-
-    robot = tmp_path / "quad_dxl.toml"
-    robot.write_text('extends = "quadruped"\nname = "quad_dxl"\n[servo]\ncontrol = "dynamixel"\n')
-    code, _, err = run(["simulate", str(robot), "--duration", "1", "--no-plots", "--out", str(tmp_path / "a")],
-                       capsys, monkeypatch)
-    summary = json.loads((tmp_path / "a" / "summary.json").read_text())
+    text = 'extends = "quadruped"\nname = "quad_dxl"\n[servo]\ncontrol = "dynamixel"\n'
+    code, err, summary = simulate_variant(tmp_path, text, [], "a", capsys, monkeypatch)
     assert code == 0 and summary["fell"]
     [warning] = summary["engine_warnings"]
     assert "too stiff for 400 Hz physics" in warning
     [note] = [line for line in err.splitlines() if line.startswith("note: pybullet: ")]
     rate = note.split("--physics-rate ")[1].split()[0]
     assert int(rate) > 400
-    code, _, err = run(["simulate", str(robot), "--duration", "1", "--no-plots", "--physics-rate", rate,
-                        "--out", str(tmp_path / "b")], capsys, monkeypatch)
-    summary = json.loads((tmp_path / "b" / "summary.json").read_text())
+    code, err, summary = simulate_variant(tmp_path, text, ["--physics-rate", rate], "b", capsys, monkeypatch)
     assert code == 0 and not summary["fell"] and summary["engine_warnings"] == []
     assert "note: pybullet" not in err
 

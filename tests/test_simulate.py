@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -231,16 +232,25 @@ def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(engine: s
     np.testing.assert_allclose(errors[1] / errors[2], 2.0, rtol=0.25)
 
 
+def simulate_variant(tmp_path: Path, robot_text: str, args: list[str], out: str, capsys,  # type: ignore[no-untyped-def]
+                     monkeypatch) -> tuple[int, str, dict[str, Any]]:
+    """``shc simulate`` a robot file written from ``robot_text`` (into ``tmp_path``) for 1 s without plots, with
+    ``args`` besides; the exit code, stderr and the run's summary (run directory ``tmp_path / out``)."""
+    robot = tmp_path / "variant.toml"
+    robot.write_text(robot_text)
+    code, _, err = run(["simulate", str(robot), "--duration", "1", "--no-plots", *args, "--out", str(tmp_path / out)],
+                       capsys, monkeypatch)
+    return code, err, json.loads((tmp_path / out / "summary.json").read_text())
+
+
 def test_a_robot_that_falls_in_its_first_running_cycle_has_no_speed_and_no_cot(
         tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """ATHENA with an MX-106-like explicit servo law and no rotor inertia is thrown off the floor during start-up
     (tests/test_servo.py) and the fall check ends the run in its first RUNNING cycle: one cycle's displacement is no
     walking speed (it was 7 m/s and a CoT of 0.07, which a sweep's CoT plot would take for the best run)."""
-    robot = tmp_path / "athena_dxl.toml"
-    robot.write_text('extends = "athena"\nname = "athena_dxl"\n[servo]\ncontrol = "dynamixel"\nstall_torque = 1.5\n')
-    code, _, _ = run(["simulate", str(robot), "--duration", "1", "--no-plots", "--out", str(tmp_path / "run")],
-                     capsys, monkeypatch)
-    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    code, _, summary = simulate_variant(
+        tmp_path, 'extends = "athena"\nname = "athena_dxl"\n[servo]\ncontrol = "dynamixel"\nstall_torque = 1.5\n', [],
+        "run", capsys, monkeypatch)
     assert code == 0 and summary["fell"]
     assert summary["analysed_time_s"] == pytest.approx(0.01)
     assert summary["displacement_speed_mps"] == 0.0 and summary["path_speed_mps"] == 0.0

@@ -46,8 +46,10 @@ def _leg_power(servo: ServoModel, chain: Chains, q: np.ndarray, *, force: np.nda
     return float(servo.electrical(torque, np.zeros(torque.size)).power.sum())
 
 
-def _best(chain: Chains, tip: np.ndarray, cost: Callable[[np.ndarray], float], starts: np.ndarray) -> np.ndarray:
-    """Joints within the limits that put the tip at ``tip`` and minimise ``cost`` (best of several starts)."""
+def best_posture(chain: Chains, tip: np.ndarray, cost: Callable[[np.ndarray], float],
+                 starts: np.ndarray) -> np.ndarray:
+    """Joints [rad] of the one-leg ``chain`` within its limits that put the tip at ``tip`` [m] and minimise
+    ``cost`` (SLSQP from each of ``starts``, the best success)."""
     bounds = list(zip(chain.lower[0], chain.upper[0], strict=True))
     reach = {"type": "eq", "fun": lambda q: chain.tips(q[None])[0] - tip}
     found = [minimize(cost, start, method="SLSQP", bounds=bounds, constraints=[reach], options={"ftol": 1e-10})
@@ -71,7 +73,7 @@ class VerticalLoad:
     """Largest joint distance [rad] between the run's angles and the limit-cost minimum at the same feet."""
 
 
-def _limit_cost(lower: np.ndarray, upper: np.ndarray) -> Callable[[np.ndarray], float]:
+def limit_cost(lower: np.ndarray, upper: np.ndarray) -> Callable[[np.ndarray], float]:
     """OpenSHC's joint-limit cost without its weight: Σ ((q − centre)/range)² (study §2.1, step 4)."""
     centre, span = (lower + upper) / 2, np.where(upper > lower, upper - lower, 1.0)
     return lambda q: float(np.sum(((q - centre) / span) ** 2))
@@ -99,11 +101,11 @@ def vertical_load(run: Path, window_s: float = 2.0) -> VerticalLoad:
         chain = chains.take(np.array([leg]))
         torque[leg] = _leg_torque(chain, angles[leg], force)
         lower, upper = chain.lower[0], chain.upper[0]
-        settled = _best(chain, tips[leg], _limit_cost(lower, upper), angles[leg][None])
+        settled = best_posture(chain, tips[leg], limit_cost(lower, upper), angles[leg][None])
         drift = max(drift, float(np.abs(settled - angles[leg]).max()))
         stood += _leg_power(servo, chain, angles[leg], force=force)
         starts = np.vstack([angles[leg], rng.uniform(lower, upper, (STARTS - 1, lower.size))])
-        cheapest = _best(chain, tips[leg], partial(_leg_power, servo, chain, force=force), starts)
+        cheapest = best_posture(chain, tips[leg], partial(_leg_power, servo, chain, force=force), starts)
         least += _leg_power(servo, chain, cheapest, force=force)
     return VerticalLoad(robot.name, stood, least, np.abs(torque).mean(axis=0), drift)
 

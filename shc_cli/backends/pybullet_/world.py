@@ -95,6 +95,8 @@ class World:
         self.robot = robot
         self.control_period = control_period
         self.substeps = substeps
+        self.timestep = control_period / substeps
+        """Physics step [s]."""
         self.physics_time = 0.0
         """Wall time spent inside ``stepSimulation`` [s]."""
         self.imu = Imu(control_period, imu_noise, seed)
@@ -104,7 +106,7 @@ class World:
             raise BackendError("PyBullet: cannot open a GUI here (no display?); run without --gui")
         p, c = pybullet, self.client
         p.setGravity(0.0, 0.0, -GRAVITY, physicsClientId=c)
-        p.setTimeStep(control_period / substeps, physicsClientId=c)
+        p.setTimeStep(self.timestep, physicsClientId=c)
         p.setPhysicsEngineParameter(numSolverIterations=SOLVER_ITERATIONS, deterministicOverlappingPairs=1,
                                     physicsClientId=c)
         self.terrain = build_terrain(c, terrain, friction, restitution, seed)
@@ -200,7 +202,7 @@ class World:
         base = mass.shape[0] - len(movable)  # 6 base coordinates first for a free base, none for a fixed one
         rows = [base + movable.index(j) for j in self.flat_joints]
         inverse = float(np.linalg.eigvalsh(np.linalg.inv(mass)[np.ix_(rows, rows)]).max())
-        step = self.control_period / self.substeps
+        step = self.timestep
         gains = self.gains
         figure = explicit_stability(step, gains.stiffness, gains.damping, inverse)
         if figure > EXPLICIT_STABILITY_LIMIT:
@@ -242,7 +244,7 @@ class World:
         """
         p, c, body, joints, count = self.p, self.client, self.body, self.flat_joints, len(self.flat_joints)
         clock = time.perf_counter
-        step = self.control_period / self.substeps
+        step = self.timestep
         samples = []
         pd = self._stable_pd() if self.compliant else None
         applied = []
