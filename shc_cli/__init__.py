@@ -19,7 +19,7 @@ _EXPORTS = {
     "load_robot": "shc_cli.api", "open_run": "shc_cli.api", "plan": "shc_cli.api", "simulate": "shc_cli.api",
     "sweep": "shc_cli.api",
     "SimulateOptions": "shc_cli.commands.simulate", "Feedback": "shc_cli.commands.simulate",
-    "RunLog": "shc_cli.runread",
+    "RunLog": "shc_cli.loop.runread",
     "Controller": "shc_cli.control.controller", "Command": "shc_cli.control.controller",
     "RobotState": "shc_cli.control.controller",
     "ShcError": "shc_cli.errors", "SpecError": "shc_cli.errors",
@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from shc_cli.commands.simulate import Feedback, SimulateOptions
     from shc_cli.control.controller import Command, Controller, RobotState
     from shc_cli.errors import ShcError, SpecError
-    from shc_cli.runread import RunLog
+    from shc_cli.loop.runread import RunLog
 
 
 def __getattr__(name: str) -> Any:

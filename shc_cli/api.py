@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from shc_cli.runread import RunLog
+    from shc_cli.loop.runread import RunLog
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
 
@@ -36,10 +36,10 @@ class Run:
 
     @property
     def log(self) -> RunLog:
-        """The log as arrays (:class:`~shc_cli.runread.RunLog`: ``t``, ``position``, ``joints``, ``power``, …),
+        """The log as arrays (:class:`~shc_cli.loop.runread.RunLog`: ``t``, ``position``, ``joints``, ``power``, …),
         read on first use."""
         if self._log is None:
-            from shc_cli.runs.opening import open_run as read
+            from shc_cli.loop.opening import open_run as read
 
             self._log = read(self.path)
         return self._log
@@ -126,7 +126,7 @@ def analyze(run: Run | Path | str, *, skip: float = 0.0, steady: bool = False) -
 
 def open_run(path: Path | str) -> RunLog:
     """Any run (a directory or a bag from ``shc export bag``) as arrays."""
-    from shc_cli.runs.opening import open_run as read
+    from shc_cli.loop.opening import open_run as read
 
     return read(path)
 

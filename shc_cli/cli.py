@@ -206,7 +206,7 @@ def _write_bag(run: Path, fmt: str | None) -> None:
     if fmt is None:
         return
     from shc_cli.interop.bag import export_bag
-    from shc_cli.runs.opening import open_run
+    from shc_cli.loop.opening import open_run
 
     path = export_bag(open_run(run), run / ("run.bag" if fmt == "ros1" else "bag"), fmt)
     typer.echo(f"wrote {path}")
@@ -385,7 +385,7 @@ def export_bag(
 ) -> None:
     """Write a run as a ROS bag: joint states, tf, URDF, IMU, odometry, foot forces, OpenSHC LegState."""
     from shc_cli.interop.bag import export_bag as write_bag
-    from shc_cli.runs.opening import open_run
+    from shc_cli.loop.opening import open_run
 
     target = out or run.with_name(run.name + (".bag" if format == "ros1" else "_bag"))
     log = open_run(run)

@@ -21,7 +21,7 @@ from shc_cli.analysis.metrics import (
     support_polygon,
     window_mask,
 )
-from shc_cli.runread import RunLog, read_run
+from shc_cli.loop.runread import RunLog, read_run
 
 from .test_cli import run
 

@@ -9,7 +9,7 @@ import pytest
 from evdev import AbsInfo, ecodes
 
 from shc_cli.control.controller import RobotState
-from shc_cli.hardware.inputs import KEYS, GamepadMapping, HeldInput, StdinInput
+from shc_cli.loop.input_sources import KEYS, GamepadMapping, HeldInput, StdinInput
 from shc_cli.spec.loading import load_gait
 
 
@@ -159,7 +159,7 @@ def test_gamepad_is_found_read_and_its_loss_stops_the_robot(monkeypatch: pytest.
                                                             capsys: pytest.CaptureFixture[str]) -> None:
     import evdev
 
-    from shc_cli.hardware.inputs import GamepadInput, InputError
+    from shc_cli.loop.input_sources import GamepadInput, InputError
 
     monkeypatch.setattr(evdev, "list_devices", lambda: ["/dev/input/event3", "/dev/input/event7"])
     monkeypatch.setattr(evdev, "InputDevice", lambda path: (_Keyboard if path.endswith("3") else _FakeGamepad)(path))

@@ -87,5 +87,5 @@ def test_the_cycle_finder_finds_a_cycle() -> None:
 
 def test_no_import_cycles_in_shc_cli() -> None:
     graph = import_graph()
-    assert {"shc_cli.runread", "shc_cli.interop.bagrun"} <= graph["shc_cli.runs.opening"]
+    assert {"shc_cli.loop.runread", "shc_cli.interop.bagrun"} <= graph["shc_cli.loop.opening"]
     assert cycles(graph) == []

@@ -18,7 +18,7 @@ import pytest
 
 from shc_cli.hardware import protocol2 as p2
 from shc_cli.hardware.emulator import BusEmulator
-from shc_cli.runread import read_run
+from shc_cli.loop.runread import read_run
 from shc_cli.spec.loading import load_robot
 
 SHC = [sys.executable, "-m", "shc_cli.cli"]

@@ -136,7 +136,7 @@ def test_the_integral_stops_growing_at_the_pwm_limit() -> None:
 def test_integral_action_removes_the_sag_a_p_servo_leaves(engine: str) -> None:
     """A leg held in the air under gravity: with P only the loaded joints sit a load/stiffness error off their goals;
     with an I gain the same servo settles on them (both engines run the same torque law)."""
-    from shc_cli.backends.engines import open_engine
+    from shc_cli.backends.engine_registry import open_engine
     from shc_cli.backends.terrain import TerrainSpec
 
     base = load_robot(ROOT / "robots" / "bullet_insectoid_b.toml").robot

@@ -199,7 +199,7 @@ def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(engine: s
     position motor, and its femurs' steady errors halve when the stiffness doubles (a proportional servo)."""
     import numpy as np
 
-    from shc_cli.backends.engines import open_engine
+    from shc_cli.backends.engine_registry import open_engine
     from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.startup import plan_direct_startup
     from shc_cli.model.chains import Chains

@@ -114,7 +114,7 @@ def _synthetic_run(robot: Robot, rows: int = 400) -> object:
     """A run that walks a circle: forward 0.2 m/s while turning 0.5 rad/s, legs in the default joints."""
     from pathlib import Path
 
-    from shc_cli.runread import RunLog
+    from shc_cli.loop.runread import RunLog
 
     dt = robot.time_delta
     t = np.arange(rows) * dt

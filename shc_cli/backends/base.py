@@ -2,7 +2,7 @@
 
 ``plan``, ``simulate`` and ``run-hw`` differ only in their backend (:mod:`shc_cli.backends.kinematic`,
 :mod:`shc_cli.backends.simulated`, :mod:`shc_cli.backends.dynamixel`); the one run loop
-(:mod:`shc_cli.runs.loop`) drives any of them. One control cycle is::
+(:mod:`shc_cli.loop.run_loop`) drives any of them. One control cycle is::
 
     out = controller.step(command, backend.sensors(wanted))
     applied = backend.apply(out)        # joint targets as sent (after the backend's own limits)
@@ -10,7 +10,7 @@
     reading = backend.read()            # what the robot measured at the end of the period
     backend.fault()                     # a reason to stop at once (servo fault), or None
 
-A backend that measures the ``log.csv`` quantities (:func:`shc_cli.runlog.log_columns`) also gives
+A backend that measures the ``log.csv`` quantities (:func:`shc_cli.loop.runlog.log_columns`) also gives
 :meth:`MeasuringBackend.measured_row`; the kinematic backend measures nothing and its runs are logged as the
 controller's own tables (``joints.csv``, ``tips.csv``, ``body.csv``).
 """
@@ -74,7 +74,7 @@ class MeasuringBackend(Backend, Protocol):
     """A backend whose reading fills the measured columns of ``log.csv``."""
 
     def measured_row(self, reading: Any) -> np.ndarray:
-        """The measured ``log.csv`` values of ``reading`` in :func:`shc_cli.runlog.log_columns` order (from the
+        """The measured ``log.csv`` values of ``reading`` in :func:`shc_cli.loop.runlog.log_columns` order (from the
         measured joints to ``power_w``)."""
         ...
 

@@ -16,12 +16,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from shc_cli.control.sensing import Sensors
-from shc_cli.runlog import MEASURED_BODY_COLUMNS, joint_slots
+from shc_cli.loop.runlog import MEASURED_BODY_COLUMNS, joint_slots
 
 if TYPE_CHECKING:
     from shc_cli.control.controller import CycleOutput
     from shc_cli.hardware.bus import BusState, ServoBus
-    from shc_cli.runlog import RunDirectory
+    from shc_cli.loop.runlog import RunDirectory
     from shc_cli.spec.robot import Robot
 
 UNMEASURED = ["<LEG>_<joint>_power", "<LEG>_force", "<LEG>_contact", *MEASURED_BODY_COLUMNS]

@@ -3,14 +3,14 @@
 An :class:`Engine` holds one robot on one terrain in one scenario (on the ground, held in the air, or started on a
 stand) and is advanced one control period at a time: :meth:`Engine.command` takes the controller's joint targets for
 the servos, :meth:`Engine.step` runs the physics steps of one control period and :meth:`Engine.read` returns what
-the robot's sensors see (:class:`Reading`). :func:`shc_cli.backends.engines.open_engine` opens one by name. What
+the robot's sensors see (:class:`Reading`). :func:`shc_cli.backends.engine_registry.open_engine` opens one by name. What
 does not depend on the engine lives beside this module and is used by both: the terrain geometry
 (:mod:`shc_cli.backends.terrain`), the IMU model and its noise (:mod:`shc_cli.backends.imu`), the servos' electrical
 power (:mod:`shc_cli.backends.power`) and the spawn height (:func:`spawn_height`). Fall detection, logging and the
 run directory belong to the loop, which sees only this interface.
 
 Nothing here imports an engine: ``pybullet`` and ``mujoco`` are imported by
-:func:`shc_cli.backends.engines.open_engine` when asked for.
+:func:`shc_cli.backends.engine_registry.open_engine` when asked for.
 """
 
 from __future__ import annotations

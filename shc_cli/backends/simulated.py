@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from shc_cli.control.sensing import Sensors
-from shc_cli.runlog import joint_slots
+from shc_cli.loop.runlog import joint_slots
 
 if TYPE_CHECKING:
     from shc_cli.control.controller import CycleOutput
@@ -56,7 +56,7 @@ class WorldOptions:
 
 def open_world(robot: Robot, options: WorldOptions) -> Any:
     """The physics world of a run, its robot spawned in the start pose (the one place an engine is built)."""
-    from shc_cli.backends.engines import open_engine
+    from shc_cli.backends.engine_registry import open_engine
     from shc_cli.control.sequence import joint_configurations
     from shc_cli.model.chains import Chains
 

@@ -55,8 +55,8 @@ def table(results: list[dict[str, Any]]) -> str:
 
 def run_analyze(runs: list[Path], as_json: bool, out: Path | None, skip: float, steady: bool) -> None:
     from shc_cli.analysis.metrics import analyze_run
+    from shc_cli.loop.opening import open_run
     from shc_cli.outputs import ensure_dir, write_text
-    from shc_cli.runs.opening import open_run
 
     logs = [open_run(path) for path in runs]
     window = Window(skip_s=skip, steady=steady)

@@ -370,7 +370,7 @@ def run_optimize(file: Path, trials: int | None, workers: int | None, executor: 
             raise OutputError(f"{out}: was started with a different study file ({copy}); resume it with that "
                               "file or choose another --out")
     else:
-        from shc_cli.runlog import clear_output
+        from shc_cli.loop.runlog import clear_output
 
         clear_output(out, overwrite,
                      "add --resume to continue it, --overwrite to start it again, or choose another --out")

@@ -10,7 +10,7 @@ from typing import Any
 
 import typer
 
-from shc_cli.runs.inputs import parse_velocity, pose_sets_for, walk_cycles
+from shc_cli.loop.run_inputs import parse_velocity, pose_sets_for, walk_cycles
 
 __all__ = ["parse_velocity", "plan_to", "pose_sets_for", "run_plan", "walk_cycles"]
 
@@ -23,12 +23,12 @@ def plan_to(robot_name: str, gait_name: str | None, velocity: str, duration: flo
     run finishes)."""
     from shc_cli.backends.kinematic import KinematicBackend
     from shc_cli.control.controller import Controller
-    from shc_cli.hardware.inputs import TimelineInput
-    from shc_cli.runlog import RunWriter
-    from shc_cli.runs.inputs import load_inputs
-    from shc_cli.runs.loop import START_UP_MARGIN_S, RunLoop, StartUp
-    from shc_cli.runs.planning import PlanRecord, plan_summary
-    from shc_cli.runs.session import execute
+    from shc_cli.loop.input_sources import TimelineInput
+    from shc_cli.loop.plan_summary import PlanRecord, plan_summary
+    from shc_cli.loop.run_inputs import load_inputs
+    from shc_cli.loop.run_loop import START_UP_MARGIN_S, RunLoop, StartUp
+    from shc_cli.loop.runlog import RunWriter
+    from shc_cli.loop.session import execute
 
     inputs = load_inputs(robot_name, gait_name, velocity, duration, commands, default_s=10.0, check_fit=True)
     robot = inputs.robot

@@ -10,7 +10,7 @@ import typer
 
 def run_render(run_path: Path, out: Path, fps: float, size: str, camera: str, speed: float) -> Path:
     """Read the run, render it, print one line; returns the video's path."""
-    from shc_cli.runs.opening import open_run as read_run  # directories and bags
+    from shc_cli.loop.opening import open_run as read_run  # directories and bags
     from shc_cli.view.render import RenderOptions, check_options, parse_size, render_run
 
     width, height = parse_size(size)

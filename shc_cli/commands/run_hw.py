@@ -17,7 +17,7 @@ except the current-limit, torque-enable and goal writes.
 The run directory has the ``simulate`` log format (quantities a real robot does not measure — body pose, IMU,
 foot forces — are 0 and listed in the summary's ``unmeasured``) plus ``cycle_time_ms`` in ``timing.csv``; the
 summary adds cycle-time statistics, overruns and faults. The loop is the one run loop
-(:mod:`shc_cli.runs.loop`) on the Dynamixel backend (:mod:`shc_cli.backends.dynamixel`). A fault exits 3.
+(:mod:`shc_cli.loop.run_loop`) on the Dynamixel backend (:mod:`shc_cli.backends.dynamixel`). A fault exits 3.
 """
 
 from __future__ import annotations
@@ -29,8 +29,8 @@ from typing import TYPE_CHECKING, Any
 import typer
 
 from shc_cli.errors import Issue, SpecError
-from shc_cli.hardware.inputs import STATES
-from shc_cli.runs.inputs import parse_velocity, pose_sets_for, walk_cycles
+from shc_cli.loop.input_sources import STATES
+from shc_cli.loop.run_inputs import parse_velocity, pose_sets_for, walk_cycles
 
 if TYPE_CHECKING:
     from shc_cli.backends.base import InputSource
@@ -56,10 +56,10 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
     from shc_cli.commands.outcome import EXIT_FAULT
     from shc_cli.control.controller import Controller
     from shc_cli.hardware.bus import HardwareError, ServoBus
-    from shc_cli.runlog import LogRecorder, RunDirectory
-    from shc_cli.runs.inputs import load_inputs
-    from shc_cli.runs.loop import ControlledStop, RunLoop, StartUp
-    from shc_cli.runs.session import execute
+    from shc_cli.loop.run_inputs import load_inputs
+    from shc_cli.loop.run_loop import ControlledStop, RunLoop, StartUp
+    from shc_cli.loop.runlog import LogRecorder, RunDirectory
+    from shc_cli.loop.session import execute
 
     for option, value in (("--on-fault", on_fault), ("--on-stop", on_stop)):
         if value not in ("hold", "torque-off"):
@@ -153,7 +153,7 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
 def _source(kind: str, argument: str, robot: Robot, gait: Gait, commands: list[Command],
             watchdog: float) -> InputSource:
     """The input source (keyboard and gamepad cycle through the bundled gaits that fit the robot's legs)."""
-    from shc_cli.hardware.inputs import GamepadInput, KeyboardInput, StdinInput, TimelineInput
+    from shc_cli.loop.input_sources import GamepadInput, KeyboardInput, StdinInput, TimelineInput
     from shc_cli.spec.loading import bundled, load_gait
 
     def gait_of(name: str) -> Any:

@@ -15,7 +15,7 @@ import typer
 
 from shc_cli.backends.simulated import SCENARIOS
 from shc_cli.errors import Issue, SpecError
-from shc_cli.runs.falls import FALL_HEIGHT_SHARE, FALL_TILT
+from shc_cli.loop.physics_summary import FALL_HEIGHT_SHARE, FALL_TILT
 from shc_cli.spec.robot import Robot
 
 __all__ = ["FALL_HEIGHT_SHARE", "FALL_TILT", "SCENARIOS", "Feedback", "SimulateOptions", "parse_posture",
@@ -176,12 +176,12 @@ def simulate_to(options: SimulateOptions | None = None, **changes: Any) -> tuple
     from shc_cli.backends.simulated import SimulatedBackend, WorldOptions, open_world
     from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.controller import Controller
-    from shc_cli.hardware.inputs import TimelineInput
-    from shc_cli.runlog import LogRecorder, RunDirectory
-    from shc_cli.runs.falls import PhysicsRecord
-    from shc_cli.runs.inputs import load_inputs
-    from shc_cli.runs.loop import START_UP_MARGIN_S, Observer, RunLoop, StartUp
-    from shc_cli.runs.session import execute
+    from shc_cli.loop.input_sources import TimelineInput
+    from shc_cli.loop.physics_summary import PhysicsRecord
+    from shc_cli.loop.run_inputs import load_inputs
+    from shc_cli.loop.run_loop import START_UP_MARGIN_S, Observer, RunLoop, StartUp
+    from shc_cli.loop.runlog import LogRecorder, RunDirectory
+    from shc_cli.loop.session import execute
 
     o = replace(options or SimulateOptions(), **changes)
     check_display(o.gui)

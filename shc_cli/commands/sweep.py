@@ -60,7 +60,7 @@ def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: 
                 shutil.rmtree(partial)  # a crashed earlier attempt
             _simulate(point, Path(out), directory)
         from shc_cli.analysis.metrics import Window, analyze_run
-        from shc_cli.runs.opening import open_run
+        from shc_cli.loop.opening import open_run
 
         if _stopped_by_signal(directory):  # Ctrl-C during this run: it is kept (partial), the sweep stops
             raise KeyboardInterrupt
@@ -340,7 +340,7 @@ def run_sweep(file: Path, workers: int | None, executor: str, scheduler: str | N
     if resume and overwrite:
         raise SpecError([Issue(None, None, "--overwrite", "cannot be combined with --resume", "choose one")])
     if not resume:
-        from shc_cli.runlog import clear_output
+        from shc_cli.loop.runlog import clear_output
 
         clear_output(out, overwrite,
                      "add --resume to continue it, --overwrite to run it again, or choose another --out")

@@ -5,10 +5,10 @@ The parts are separable, so any loop can replay a run:
 * :mod:`shc_cli.replay.source` (with :mod:`~shc_cli.replay.recording` and :mod:`~shc_cli.replay.bagfile`): a
   recording or a bag → per-cycle arrays (:class:`~shc_cli.replay.source.Recorded`);
 * :mod:`shc_cli.replay.states`: the state requests, inferred from the data (robust to stalls);
-* :mod:`shc_cli.replay.inputs`: the per-cycle command source for the controller;
+* :mod:`shc_cli.replay.recorded_inputs`: the per-cycle command source for the controller;
 * :mod:`shc_cli.replay.compare`: the comparison, which consumes the controller's outputs.
 
-:func:`replay` runs them through the one run loop (:class:`~shc_cli.runs.loop.RunLoop`) on the kinematic backend:
+:func:`replay` runs them through the one run loop (:class:`~shc_cli.loop.run_loop.RunLoop`) on the kinematic backend:
 the recorded inputs are the loop's input source (state requests included, so the loop does no start-up of its
 own) and the comparison is its per-cycle observer.
 """
@@ -22,7 +22,7 @@ import numpy as np
 from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
 from shc_cli.control.walk import WalkState
 from shc_cli.replay.compare import Comparer, Comparison
-from shc_cli.replay.inputs import ReplayInputs
+from shc_cli.replay.recorded_inputs import ReplayInputs
 from shc_cli.replay.source import Recorded, usable
 from shc_cli.replay.states import StatePlan, infer_states
 from shc_cli.spec.autopose import AutoPoseSet
@@ -68,7 +68,7 @@ def replay(recorded: Recorded, robot: Robot, gait: Gait, pose_sets: dict[str, Au
         return None
 
     from shc_cli.backends.kinematic import KinematicBackend
-    from shc_cli.runs.loop import NullRecorder, RunLoop, SequenceInput
+    from shc_cli.loop.run_loop import NullRecorder, RunLoop, SequenceInput
 
     commands = SequenceInput(inputs.command(cycle) for cycle in range(recorded.cycles))
     RunLoop(controller, KinematicBackend(), commands, NullRecorder(), start_up=None, observers=[observe]).run()

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from shc_cli.errors import ShcError
-from shc_cli.runread import RunLog
+from shc_cli.loop.runread import RunLog
 from shc_cli.view import meshes, scene
 
 FRAME_RATE = 20.0
@@ -538,7 +538,7 @@ def serve(target: str, host: str, port: int) -> None:
         raise SpecError([Issue(None, None, "view", f"viser is not installed ({error})",
                                "pip install 'shc[view]'")]) from None
 
-    from shc_cli.runs.opening import open_run as read_run  # directories and bags
+    from shc_cli.loop.opening import open_run as read_run  # directories and bags
     from shc_cli.spec.loading import load_robot
 
     data: RunScene | None = None

@@ -28,7 +28,7 @@ FALL_HEIGHT_SHARE = 0.3
 
 
 class PhysicsRecord:
-    """Series, fall detection and summary of a physics run (an observer of :class:`~shc_cli.runs.loop.RunLoop`).
+    """Series, fall detection and summary of a physics run (an observer of :class:`~shc_cli.loop.run_loop.RunLoop`).
 
     Args:
         robot: the robot.

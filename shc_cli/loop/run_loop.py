@@ -6,7 +6,7 @@ until the start-up is done, then the input's next command, then — after a stop
 controlled stop — requests towards the stop state), the controller step with the backend's sensors, the
 targets applied, one control period, the reading, the fault check, the recorder's row, the observers (who may
 stop the run: a fall). It stops when the input is over, on a fault, on an observer's reason or on a stop request
-(SIGINT/SIGTERM via :func:`shc_cli.runs.session.interrupts`, or :meth:`RunLoop.request_stop`).
+(SIGINT/SIGTERM via :func:`shc_cli.loop.session.interrupts`, or :meth:`RunLoop.request_stop`).
 """
 
 from __future__ import annotations

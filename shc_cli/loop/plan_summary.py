@@ -70,7 +70,7 @@ def plan_summary(robot: Any, controller: Controller, record: PlanRecord, seconds
     distance = float(np.linalg.norm(walker.odometry_position)) if walker else 0.0
     from shc_cli.analysis.metrics import window_speeds
     from shc_cli.analysis.progress import cycle_path_length, progress_fields
-    from shc_cli.runread import ideal_path
+    from shc_cli.loop.runread import ideal_path
 
     xy, _ = ideal_path(np.array([o.velocity for o in outputs]).reshape(-1, 3), dt)
     running = np.flatnonzero([o.robot_state == RobotState.RUNNING for o in outputs])

@@ -1,6 +1,6 @@
 """Running a loop into a run directory and finishing it, also when interrupted.
 
-:func:`execute` is what ``plan``, ``simulate`` and ``run-hw`` share around :class:`~shc_cli.runs.loop.RunLoop`:
+:func:`execute` is what ``plan``, ``simulate`` and ``run-hw`` share around :class:`~shc_cli.loop.run_loop.RunLoop`:
 SIGINT and SIGTERM become a stop request (the loop ends the run, or shuts the robot down first), every logged
 row is flushed and closed, the summary gets ``"complete"`` and ``"stop_reason"``, the plots are drawn and the
 directory gets its final name — for an interrupted run too (only ``"complete": false`` marks it). A second
@@ -15,8 +15,8 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from shc_cli.runlog import RunDirectory
-from shc_cli.runs.loop import LoopResult, RunLoop
+from shc_cli.loop.run_loop import LoopResult, RunLoop
+from shc_cli.loop.runlog import RunDirectory
 
 
 def execute(loop: RunLoop, run: RunDirectory, summarise: Callable[[LoopResult], dict[str, Any]],
