@@ -10,8 +10,8 @@ the per-cycle costs outside physics (controller step, sensor read, sub-step samp
 
 ``--floor``: wall time ÷ physics time of the walking loop built up layer by layer — physics alone; + the
 joint-state read after every physics step (the power model's torque samples); + the servo commands; + the
-controller; + the sensor read; and the whole run loop (``simulate_to``) with its log — so the cost of each layer
-is a ratio measured in the same process.
+controller; + the sensor read; and the whole run loop (``domain.simulate.simulate``) with its log — so the cost
+of each layer is a ratio measured in the same process.
 """
 
 from __future__ import annotations
@@ -26,8 +26,9 @@ import numpy as np
 from shc_cli.backends.pybullet_ import world as world_module
 from shc_cli.backends.simulated import WorldOptions, open_world
 from shc_cli.backends.terrain import parse_terrain
-from shc_cli.commands.simulate import simulate_to
 from shc_cli.control.controller import Command, Controller, RobotState
+from shc_cli.domain.config import SimulationConfig
+from shc_cli.domain.simulate import simulate
 from shc_cli.spec.checks import load_checked
 
 LAYERS = ("physics", "+ joint-state samples", "+ servo commands", "+ controller", "+ sensor read")
@@ -112,7 +113,8 @@ def floor(cycles: int) -> None:
         print(f"{name:24s} wall/physics {(clock() - began) / physics:.3f}", flush=True)
     world.close()
     with tempfile.TemporaryDirectory() as directory:
-        _, summary = simulate_to(duration=cycles * sim.robot.time_delta, out=Path(directory) / "run", plots=False)
+        summary = simulate(SimulationConfig(duration=cycles * sim.robot.time_delta, out=Path(directory) / "run",
+                                            plots=False)).summary
     wall, physics = summary["running_wall_time_s"], summary["running_physics_time_s"]
     print(f"{'whole loop + log.csv':24s} wall/physics {wall / physics:.3f} (walking part of the run loop)")
 

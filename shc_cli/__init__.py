@@ -18,7 +18,7 @@ _EXPORTS = {
     "Run": "shc_cli.api", "SweepResult": "shc_cli.api", "analyze": "shc_cli.api", "load_gait": "shc_cli.api",
     "load_robot": "shc_cli.api", "open_run": "shc_cli.api", "plan": "shc_cli.api", "simulate": "shc_cli.api",
     "sweep": "shc_cli.api",
-    "SimulateOptions": "shc_cli.commands.simulate", "Feedback": "shc_cli.commands.simulate",
+    "SimulationConfig": "shc_cli.domain.config",
     "RunLog": "shc_cli.loop.runread",
     "Controller": "shc_cli.control.controller", "Command": "shc_cli.control.controller",
     "RobotState": "shc_cli.control.controller",
@@ -26,14 +26,14 @@ _EXPORTS = {
 }
 """Public name → the module that defines it."""
 
-__all__ = ["Command", "Controller", "Feedback", "RobotState", "Run", "RunLog", "ShcError", "SimulateOptions",
-           "SpecError", "SweepResult", "__version__", "analyze", "load_gait", "load_robot", "open_run", "plan",
+__all__ = ["Command", "Controller", "RobotState", "Run", "RunLog", "ShcError", "SimulationConfig", "SpecError",
+           "SweepResult", "__version__", "analyze", "load_gait", "load_robot", "open_run", "plan",
            "simulate", "sweep"]
 
 if TYPE_CHECKING:
     from shc_cli.api import Run, SweepResult, analyze, load_gait, load_robot, open_run, plan, simulate, sweep
-    from shc_cli.commands.simulate import Feedback, SimulateOptions
     from shc_cli.control.controller import Command, Controller, RobotState
+    from shc_cli.domain.config import SimulationConfig
     from shc_cli.errors import ShcError, SpecError
     from shc_cli.loop.runread import RunLog
 

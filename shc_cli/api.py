@@ -13,12 +13,16 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from typing import Unpack
+
+    from shc_cli.domain.config import SimulationConfig, SimulationOptions
     from shc_cli.loop.runread import RunLog
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
 
 Velocity = str | tuple[float, float, float]
-"""A velocity input ``"VX,VY,WZ"`` or ``(vx, vy, wz)`` in the robot's input mode (throttle −1..1 or m/s, rad/s)."""
+"""A velocity input ``"VX,VY,WZ"`` or ``(vx, vy, wz)`` in the robot's input mode (throttle −1..1 or m/s, rad/s)
+(as :data:`shc_cli.domain.config.Velocity`)."""
 
 
 @dataclass
@@ -93,24 +97,20 @@ def plan(robot: str | Path = "bullet", *, gait: str | None = None, velocity: Vel
     return Run(path, summary)
 
 
-def simulate(robot: str | Path = "bullet", **options: Any) -> Run:
+def simulate(robot: str | Path | None = None, *, config: SimulationConfig | None = None,
+             **options: Unpack[SimulationOptions]) -> Run:
     """``shc simulate``: the controller on the robot in physics; keywords are ``shc simulate``'s options
-    (:class:`~shc_cli.commands.simulate.SimulateOptions`: ``gait``, ``velocity``, ``duration``, ``terrain``,
-    ``scenario``, ``seed``, ``out``, ``plots``, …; ``posture``, ``imu_posing``, ``inclination`` and
-    ``admittance`` as on the command line)."""
-    from shc_cli.commands.simulate import Feedback, SimulateOptions, simulate_to
+    (:class:`~shc_cli.domain.config.SimulationConfig`: ``gait``, ``velocity``, ``duration``, ``terrain``,
+    ``scenario``, ``seed``, ``out``, ``plots``, ``posture``, ``imu_posing``, ``inclination``, ``admittance``, …),
+    over ``config`` when given (``robot`` over its robot)."""
+    from shc_cli.domain.config import SimulationConfig
+    from shc_cli.domain.simulate import simulate as run
 
-    switches = {key: options.pop(key) for key in ("posture", "imu_posing", "inclination", "admittance")
-                if key in options}
-    if switches:
-        options["feedback"] = Feedback(**switches)
-    if "velocity" in options:
-        options["velocity"] = _velocity(options["velocity"])
-    for key in ("out", "commands"):
-        if key in options:
-            options[key] = _path(options[key])
-    path, summary = simulate_to(SimulateOptions(robot=str(robot)), **options)
-    return Run(path, summary)
+    changes: dict[str, object] = dict(options)
+    if robot is not None:
+        changes["robot"] = str(robot)
+    result = run((config or SimulationConfig()).replace(**changes))
+    return Run(result.path, result.summary)
 
 
 def analyze(run: Run | Path | str, *, skip: float = 0.0, steady: bool = False) -> dict[str, Any]:

@@ -160,14 +160,17 @@ def simulate(
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller on the robot in physics (PyBullet or MuJoCo): terrains, servos, sensors, power, CoT."""
-    from shc_cli.commands.simulate import Feedback, SimulateOptions, run_simulate
+    from shc_cli.commands.simulate import run_simulate
+    from shc_cli.domain.config import SimulationConfig
 
     _bag_check(bag)
     _video_check(video)
-    options = SimulateOptions(robot, gait, velocity, duration, commands, out, plots, terrain, scenario, physics_rate,
-                              friction, restitution, seed, imu_noise, start, gui, stand,
-                              Feedback(posture, imu_posing, inclination, admittance), fail_on_fall,
-                              overwrite=overwrite, engine=engine)
+    options = SimulationConfig(robot=robot, gait=gait, velocity=velocity, duration=duration, commands=commands,
+                               out=out, plots=plots, terrain=terrain, scenario=scenario, physics_rate=physics_rate,
+                               friction=friction, restitution=restitution, seed=seed, imu_noise=imu_noise,
+                               start=start, gui=gui, stand=stand, posture=posture, imu_posing=imu_posing,
+                               inclination=inclination, admittance=admittance, fail_on_fall=fail_on_fall,
+                               overwrite=overwrite, engine=engine)
     run_simulate(options, after=lambda run: _finish_outputs(run, bag, video))
 
 

@@ -29,10 +29,11 @@ from .test_cli import run
 @pytest.fixture(scope="module")
 def walked(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A 3 s Bullet tripod walk in physics (after its start-up)."""
-    from shc_cli.commands.simulate import SimulateOptions, run_simulate
+    from shc_cli.commands.simulate import run_simulate
+    from shc_cli.domain.config import SimulationConfig
 
     out = tmp_path_factory.mktemp("analyze") / "walk"
-    return run_simulate(SimulateOptions("bullet", "tripod", duration=3.0, out=out, plots=False))
+    return run_simulate(SimulationConfig(robot="bullet", gait="tripod", duration=3.0, out=out, plots=False))
 
 
 @pytest.fixture(scope="module")

@@ -18,11 +18,10 @@ from .test_cli import run
 
 @pytest.fixture(scope="module")
 def walked(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from shc_cli.commands.simulate import simulate_to
+    from shc_cli import simulate
 
     out = tmp_path_factory.mktemp("bag") / "walk"
-    path, _ = simulate_to(robot="bullet", gait="tripod", duration=1.0, out=out, plots=False)
-    return path
+    return simulate("bullet", gait="tripod", duration=1.0, out=out, plots=False).path
 
 
 @pytest.fixture(scope="module")

@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shc_cli.backends.engine import ENGINES, rpy_from_matrix
-from shc_cli.backends.engine_registry import open_engine
+from shc_cli.backends.engine import rpy_from_matrix
+from shc_cli.backends.engine_registry import ENGINES, open_engine
 from shc_cli.backends.pybullet_ import urdf
 from shc_cli.backends.terrain import FEATURE_END_X, HALF_WIDTH, LANDING_END_X, Terrain, parse_terrain
 from shc_cli.errors import BackendError

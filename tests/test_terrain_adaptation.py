@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from shc_cli.commands.simulate import Feedback, simulate_to
+from shc_cli.domain.config import SimulationConfig
+from shc_cli.domain.simulate import simulate
 
 ENGINES = ["pybullet", "mujoco"]
 
@@ -19,10 +20,10 @@ def _log(path: Path) -> list[dict[str, str]]:
         return list(csv.DictReader(handle))
 
 
-def _walk(tmp: Path, name: str, robot: str, seconds: float, feedback: Feedback,
+def _walk(tmp: Path, name: str, robot: str, seconds: float, switches: dict[str, object],
           engine: str = "pybullet") -> list[dict[str, str]]:
-    path, summary = simulate_to(robot=robot, duration=seconds, out=tmp / name, plots=False, terrain="ramp:10",
-                                feedback=feedback, engine=engine)
+    path, summary = simulate(SimulationConfig.from_options(switches, robot=robot, duration=seconds, out=tmp / name,
+                                                           plots=False, terrain="ramp:10", engine=engine)).pair
     assert summary["fell"] is False
     return _log(path)
 
@@ -34,7 +35,7 @@ def test_imu_posing_levels_the_body_on_a_ramp(engine: str, tmp_path: Path) -> No
     tilt out, the small integral gain adds little within seconds (measured −0.176 vs −0.083 rad over 20 s)."""
     pitch = {}
     for name, on in (("off", False), ("imu", True)):
-        rows = _walk(tmp_path, name, "bullet", 8.0, Feedback(imu_posing=on), engine)
+        rows = _walk(tmp_path, name, "bullet", 8.0, {"imu_posing": on}, engine)
         on_slope = [float(r["pitch"]) for r in rows if float(r["x"]) > 1.05]  # all feet on the slope
         assert len(on_slope) > 100
         pitch[name] = statistics.median(on_slope)
@@ -49,7 +50,7 @@ def test_athena_posture_control_steadies_the_height_on_the_ramp(engine: str, tmp
     so there posture control also raises the median; our servos do not sag — docs/terrain-adaptation.md.)"""
     heights, reference = {}, {}
     for name, gains in (("simple", "kz=0,ka=0,kb=0"), ("posture", "kz=0.8,ka=0.6,kb=0")):
-        rows = _walk(tmp_path, name, "athena", 30.0, Feedback(posture=gains), engine)
+        rows = _walk(tmp_path, name, "athena", 30.0, {"posture": gains}, engine)
         running = [r for r in rows if r["robot_state"] == "RUNNING"]
         reference[name] = float(running[0]["height"])
         heights[name] = [float(r["height"]) for r in running if float(r["x"]) > 0.45]  # at and on the slope
@@ -85,8 +86,8 @@ def test_admittance_keeps_more_feet_on_the_ground_over_a_step(engine: str, tmp_p
     legs = ["AR", "BR", "CR", "CL", "BL", "AL"]
     counts = {}
     for name, on in (("off", False), ("on", True)):
-        path, summary = simulate_to(robot=str(robot), duration=8.0, out=tmp_path / name, plots=False,
-                                    terrain="stairs:0.06,1.0", feedback=Feedback(admittance=on), engine=engine)
+        path, summary = simulate(SimulationConfig(robot=str(robot), duration=8.0, out=tmp_path / name, plots=False,
+                                                  terrain="stairs:0.06,1.0", admittance=on, engine=engine)).pair
         assert summary["fell"] is False
         rows = [r for r in _log(path) if r["robot_state"] == "RUNNING" and 0.2 < float(r["x"]) < 1.4]
         assert len(rows) > 300
@@ -138,8 +139,8 @@ def test_rough_terrain_mode_keeps_more_feet_down_on_blocks(engine: str, tmp_path
     legs = ["AR", "BR", "CR", "CL", "BL", "AL"]
     few = {}
     for name, robot_name in (("normal", "bullet"), ("rough", str(robot))):
-        path, summary = simulate_to(robot=robot_name, gait="tripod", duration=8.0, out=tmp_path / name, plots=False,
-                                    terrain="blocks:0.01,0.05", engine=engine)
+        path, summary = simulate(SimulationConfig(robot=robot_name, gait="tripod", duration=8.0, out=tmp_path / name,
+                                                  plots=False, terrain="blocks:0.01,0.05", engine=engine)).pair
         assert summary["fell"] is False
         rows = [r for r in _log(path) if r["robot_state"] == "RUNNING" and float(r["x"]) > 0.8]
         assert len(rows) > 150

@@ -25,9 +25,6 @@ if TYPE_CHECKING:
     from shc_cli.backends.terrain import Terrain
     from shc_cli.spec.robot import Robot
 
-ENGINES = ("pybullet", "mujoco")
-"""The physics engines ``--engine`` takes; the first is the default."""
-DEFAULT_ENGINE = ENGINES[0]
 GRAVITY = 9.81
 """Standard gravity [m/s²]."""
 SPAWN_GAP = 0.01
@@ -77,7 +74,7 @@ class Engine(Protocol):
     """One robot on one terrain in a physics engine, advanced one control period at a time.
 
     Attributes:
-        name: the engine's name (one of :data:`ENGINES`).
+        name: the engine's name (one of :data:`shc_cli.backends.engine_registry.ENGINES`).
         version: the engine's version, e.g. ``"3.2.7"``.
         robot: the simulated robot.
         terrain: the built terrain (its analytic ground height).

@@ -19,10 +19,6 @@ if TYPE_CHECKING:
     from shc_cli.control.controller import CycleOutput
     from shc_cli.spec.robot import Robot
 
-SCENARIOS = {"SA": (True, False), "WA": (True, True), "SG": (False, False), "WG": (False, True)}
-"""Paper §VII-A scenarios: (body held in the air, walking)."""
-
-
 @dataclass(frozen=True)
 class WorldOptions:
     """How the simulated world is built (``shc simulate`` options).

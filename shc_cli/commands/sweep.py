@@ -106,19 +106,21 @@ def _one_line(error: BaseException) -> str:
 
 
 def _simulate(point: Point, out: Path, directory: Path) -> None:
-    from shc_cli.commands.simulate import SimulateOptions, simulate_to
+    from shc_cli.domain.config import SimulationConfig
+    from shc_cli.domain.simulate import simulate
 
     options = point.options
     robot = _robot_for(point, out)
     velocity = options["velocity"]
     if options["stride_percent"] is not None:
         velocity = f"{float(options['stride_percent']) / 100.0:g},0,0"
-    simulate_to(SimulateOptions(robot, options["gait"] or None, velocity, float(options["duration"]), out=directory,
-                                plots=False, terrain=options["terrain"], scenario=options["scenario"],
-                                physics_rate=float(options["physics_rate"]), friction=float(options["friction"]),
-                                restitution=float(options["restitution"]), seed=int(options["seed"]),
-                                imu_noise=float(options["imu_noise"]), start=options["start"], stand=options["stand"],
-                                engine=options["engine"]))
+    simulate(SimulationConfig(robot=robot, gait=options["gait"] or None, velocity=velocity,
+                              duration=float(options["duration"]), out=directory, plots=False,
+                              terrain=options["terrain"], scenario=options["scenario"],
+                              physics_rate=float(options["physics_rate"]), friction=float(options["friction"]),
+                              restitution=float(options["restitution"]), seed=int(options["seed"]),
+                              imu_noise=float(options["imu_noise"]), start=options["start"], stand=options["stand"],
+                              engine=options["engine"]))
 
 
 def _robot_for(point: Point, out: Path) -> str:
@@ -316,9 +318,11 @@ def with_engine(sweep: Sweep, engine: str | None) -> Sweep:
     """The sweep with ``engine`` (``--engine``) for every run, unless the file chooses the engine itself."""
     if engine is None:
         return sweep
-    if engine not in ("pybullet", "mujoco"):
+    from shc_cli.backends.engine_registry import ENGINES
+
+    if engine not in ENGINES:
         raise SpecError([Issue(None, None, "--engine", f"'{engine}' is not a physics engine",
-                               "use pybullet or mujoco")])
+                               f"use {' or '.join(ENGINES)}")])
     if "engine" in sweep.fixed or "engine" in sweep.grid:
         return sweep
     return dataclasses.replace(sweep, points=[dataclasses.replace(point, options={**point.options, "engine": engine})

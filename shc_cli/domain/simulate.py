@@ -1,0 +1,108 @@
+"""One simulation: the controller driving the robot in physics (PyBullet or MuJoCo) through the one run loop,
+logged and summarised in a run directory. Never prints; the command prints the summary line."""
+
+from __future__ import annotations
+
+from datetime import datetime
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from shc_cli.domain.config import SimulationConfig
+from shc_cli.domain.result import RunResult
+
+if TYPE_CHECKING:
+    from shc_cli.control.controller import Command, CycleOutput
+    from shc_cli.progress import ProgressBar
+
+
+def check_display(gui: bool) -> None:
+    """``--gui`` needs a display: on Linux without ``DISPLAY`` (or ``WAYLAND_DISPLAY``) a one-line error."""
+    import os
+    import sys
+
+    from shc_cli.errors import Issue, SpecError
+
+    display = os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")
+    if gui and sys.platform.startswith("linux") and not display:
+        raise SpecError([Issue(None, None, "--gui", "no display (DISPLAY is not set)",
+                               "drop --gui, or set DISPLAY / run under a virtual display: xvfb-run shc simulate ...")])
+
+
+def simulate(config: SimulationConfig | None = None) -> RunResult:
+    """Load, simulate through the one loop, log; returns the run directory and its summary.
+
+    Raises:
+        ShcError: bad input (one line), before anything is written.
+    """
+    from shc_cli import __version__
+    from shc_cli.backends.simulated import SimulatedBackend, open_world
+    from shc_cli.control.controller import Controller
+    from shc_cli.loop.input_sources import TimelineInput
+    from shc_cli.loop.physics_summary import PhysicsRecord
+    from shc_cli.loop.run_inputs import load_inputs
+    from shc_cli.loop.run_loop import START_UP_MARGIN_S, Observer, RunLoop, StartUp
+    from shc_cli.loop.runlog import LogRecorder, RunDirectory
+    from shc_cli.loop.session import execute
+
+    o = config or SimulationConfig()
+    check_display(o.gui)
+    inputs = load_inputs(o.robot, o.gait, o.velocity, o.duration, o.commands, default_s=20.0, walking=o.walking,
+                         robot_change=o.apply_switches)
+    robot = inputs.robot
+    options = o.world_options(robot)
+    directory = o.out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-simulate"
+    with RunDirectory(directory, o.overwrite) as run:  # refuses an existing --out before the physics opens
+        world = open_world(robot, options)
+        with SimulatedBackend(robot, world) as backend:
+            controller = Controller(robot, inputs.gait, joints=backend.start(), pose_sets=inputs.pose_sets)
+            run.write_robot(robot)
+            record = PhysicsRecord(robot, backend, o.airborne)
+            progress = _progress(inputs.cycles)
+            observers: list[Observer] = [record] if progress is None else [record, progress]
+            loop = RunLoop(controller, backend, TimelineInput(inputs.timeline.commands(inputs.cycles)),
+                           LogRecorder(run, robot, backend),
+                           StartUp(round((robot.start_up.time_to_start + START_UP_MARGIN_S) / robot.time_delta)),
+                           observers=observers, flush_every=200)
+
+            def summarise(_: Any) -> dict[str, Any]:
+                import numpy as np
+
+                if progress is not None:
+                    progress.stop()
+                return {**record.summary(o.scenario, controller.gait.name, controller), "seed": o.seed,
+                        "terrain": str(world.terrain.spec), "engine": world.name, "engine_version": world.version,
+                        "engine_warnings": world.warnings,
+                        "versions": {"shc": __version__, world.name: world.version, "numpy": np.__version__}}
+
+            def plot(folder: Path) -> None:
+                from shc_cli.plots import plot_simulation
+
+                plot_simulation(robot, record.series, folder, gait=controller.gait.name)
+
+            path, summary, _ = execute(loop, run, summarise, plot if o.plots else None)
+    return RunResult(path, summary)
+
+
+class _Progress:
+    """The progress bar over the walking cycles (an observer of the loop)."""
+
+    def __init__(self, bar: ProgressBar) -> None:
+        self.bar, self.walked = bar, 0
+
+    def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: object) -> str | None:
+        if command.state_request is None or out.robot_state.name == "RUNNING":
+            self.walked += 1
+            if self.walked % 50 == 0:
+                self.bar.update(self.walked)
+        return None
+
+    def stop(self) -> None:
+        self.bar.stop()
+
+
+def _progress(total: int) -> _Progress | None:
+    """A progress bar on a terminal; None in pipes and CI (quiet)."""
+    from shc_cli.progress import progress_bar
+
+    bar = progress_bar("simulating", total)
+    return None if bar is None else _Progress(bar)
