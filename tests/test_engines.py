@@ -14,9 +14,9 @@ import pytest
 
 from shc_cli.backends.engine import rpy_from_matrix
 from shc_cli.backends.engine_registry import ENGINES, open_engine
-from shc_cli.backends.pybullet_ import urdf
 from shc_cli.backends.terrain import FEATURE_END_X, HALF_WIDTH, LANDING_END_X, Terrain, parse_terrain
 from shc_cli.errors import BackendError
+from shc_cli.model import body as model
 from shc_cli.model.chains import Chains
 from shc_cli.spec.loading import load_robot, resolve
 
@@ -44,7 +44,7 @@ def foot_frames(world, robot) -> np.ndarray:  # type: ignore[no-untyped-def]
             out[leg, :3, 3] = state[4]
             out[leg, :3, :3] = np.reshape(p.getMatrixFromQuaternion(state[5]), (3, 3))
     else:
-        for leg, name in enumerate(urdf.foot_names(robot)):
+        for leg, name in enumerate(model.foot_names(robot)):
             body = world.model.body(name).id
             out[leg, :3, 3] = world.data.xpos[body]
             out[leg, :3, :3] = world.data.xmat[body].reshape(3, 3)
@@ -76,7 +76,7 @@ def test_mjcf_masses_are_the_urdf_masses(name: str) -> None:
     robot = robot_named(name)
     chains = Chains.from_robot(robot)
     world = open_engine("mujoco", robot, parse_terrain("flat"), robot.time_delta, 4, False, chains.default_joints())
-    assert float(world.model.body_mass.sum()) == pytest.approx(urdf.urdf_mass(robot), abs=1e-9)
+    assert float(world.model.body_mass.sum()) == pytest.approx(model.body_mass(robot), abs=1e-9)
 
 
 def test_mjcf_is_deterministic() -> None:
@@ -151,12 +151,12 @@ def test_standing_readings_agree_between_engines(engine: str) -> None:
         reading = world.read()
     finally:
         world.close()
-    weight = urdf.urdf_mass(robot) * 9.81
+    weight = model.body_mass(robot) * 9.81
     assert float(reading.foot_forces.sum()) == pytest.approx(weight, rel=0.03)
     assert reading.foot_contact.all()
     assert reading.linear_acceleration == pytest.approx([0.0, 0.0, 9.81], abs=0.2)
     assert np.abs(reading.rpy[:2]).max() < 0.02
-    height = -float(chains.tips(stance)[:, 2].mean()) + urdf.foot_radius(robot.legs["AR"])
+    height = -float(chains.tips(stance)[:, 2].mean()) + model.foot_radius(robot.legs["AR"])
     assert reading.body_height == pytest.approx(height, abs=0.006)
     assert reading.position[2] == pytest.approx(reading.body_height, abs=1e-9)
 

@@ -12,6 +12,7 @@ import pytest
 
 from shc_cli.backends.pybullet_ import urdf
 from shc_cli.backends.pybullet_.world import quiet_stdout
+from shc_cli.model import body as model
 from shc_cli.model.chains import Chains
 from shc_cli.spec.loading import bundled, load_robot
 from shc_cli.spec.robot import Robot
@@ -64,14 +65,14 @@ def test_feet_follow_the_dh_chains(name: str, tmp_path: Path) -> None:
     rng = np.random.default_rng(7)
     with loaded(robot, tmp_path) as (client, body):
         joints, links = indices(client, body)
-        feet = [links[f] for f in urdf.foot_names(robot)]
+        feet = [links[f] for f in model.foot_names(robot)]
         position, orientation = p.getBasePositionAndOrientation(body, physicsClientId=client)
         inertial = p.getDynamicsInfo(body, -1, physicsClientId=client)[3]
         assert np.allclose(np.subtract(position, inertial), 0.0, atol=1e-12)  # base_link frame at the origin
         assert np.allclose(orientation, (0.0, 0.0, 0.0, 1.0))
         for _ in range(20):
             q = random_joints(chains, rng)
-            for leg, names in enumerate(urdf.leg_names(robot).values()):
+            for leg, names in enumerate(model.leg_names(robot).values()):
                 for k, joint in enumerate(names.joints):
                     p.resetJointState(body, joints[joint], float(q[leg, k]), physicsClientId=client)
             tips = chains.tip_transforms(q)
@@ -92,44 +93,52 @@ def test_masses(name: str, tmp_path: Path) -> None:
         count = p.getNumJoints(body, physicsClientId=client)
         masses = {(p.getJointInfo(body, j, physicsClientId=client)[12].decode() if j >= 0 else "base_link"):
                   p.getDynamicsInfo(body, j, physicsClientId=client)[0] for j in range(-1, count)}
-    assert sum(masses.values()) == pytest.approx(urdf.urdf_mass(robot), abs=1e-9)
+    assert sum(masses.values()) == pytest.approx(model.body_mass(robot), abs=1e-9)
     assert masses["base_link"] == pytest.approx(robot.body.mass)
     if all(j.mass is not None for leg in robot.legs.values() for j in leg.joints.values()):
-        expected = robot.total_mass() + urdf.FOOT_MASS * len(robot.legs)
+        expected = robot.total_mass() + model.FOOT_MASS * len(robot.legs)
         assert sum(masses.values()) == pytest.approx(expected, abs=1e-9)
     for leg_id, leg in robot.legs.items():
-        names = urdf.leg_names(robot)[leg_id]
+        names = model.leg_names(robot)[leg_id]
         assert masses[names.base] == 0.0
-        assert masses[names.foot] == urdf.FOOT_MASS
+        assert masses[names.foot] == model.FOOT_MASS
         for joint, link in zip(leg.joints.values(), names.links, strict=True):  # a rotor link takes its mass
             rotor = masses.get(link.removesuffix("_link") + "_rotor", 0.0)
             assert rotor == (urdf.ROTOR_MASS if robot.servo.armature > 0.0 else 0.0)
-            assert masses[link] + rotor == pytest.approx(urdf.link_mass(joint))
+            assert masses[link] + rotor == pytest.approx(model.link_mass(joint))
 
 
 def test_bullet_mass_is_the_openshc_urdf_mass() -> None:
     """Bullet: 7.2 kg body (6 kg box + 6 base motors) + 6 x 1.028 kg legs = 13.37 kg (study §13.2)."""
     robot = robot_named("bullet")
     assert robot.total_mass() == pytest.approx(13.36821)
-    assert urdf.urdf_mass(robot) == pytest.approx(13.36821 + 6 * urdf.FOOT_MASS)
+    assert model.body_mass(robot) == pytest.approx(13.36821 + 6 * model.FOOT_MASS)
+
+
+def test_body_mass_counts_default_links_and_feet() -> None:
+    """openshc_default gives no link masses: the engines simulate 1 kg body + 18 links x 0.1 kg + 6 feet x 0.001 kg
+    = 2.806 kg, while ``total_mass()`` (the file's masses) is 1 kg."""
+    robot = robot_named("openshc_default")
+    assert robot.total_mass() == pytest.approx(1.0)
+    assert model.body_mass(robot) == pytest.approx(1.0 + 18 * 0.1 + 6 * 0.001, abs=1e-12)
 
 
 def test_inertias_in_bullet(tmp_path: Path) -> None:
     """PyBullet reads the inertias of the file: the body box, a capsule about its midpoint, the foot sphere."""
     robot = robot_named("bullet")
     leg = robot.legs["AR"]
-    names = urdf.leg_names(robot)["AR"]
+    names = model.leg_names(robot)["AR"]
     with loaded(robot, tmp_path, fixed=False) as (client, body):
         _, links = indices(client, body)
         base = p.getDynamicsInfo(body, -1, physicsClientId=client)
         femur = p.getDynamicsInfo(body, links[names.links[2]], physicsClientId=client)
         foot = p.getDynamicsInfo(body, links[names.foot], physicsClientId=client)
-    assert np.allclose(base[2], urdf.box_inertia(7.2, (0.6, 0.14, 0.101)), rtol=1e-9)
+    assert np.allclose(base[2], model.box_inertia(7.2, (0.6, 0.14, 0.101)), rtol=1e-9)
     assert np.allclose(base[3], robot.body.com)
-    radius = urdf.link_radius(leg, 2)
-    assert np.allclose(femur[2], urdf.capsule_inertia(0.4, radius, 0.114 - 2 * radius), rtol=1e-9)
+    radius = model.link_radius(leg, 2)
+    assert np.allclose(femur[2], model.capsule_inertia(0.4, radius, 0.114 - 2 * radius), rtol=1e-9)
     assert np.allclose(femur[3], (0.057, 0.0, 0.0))  # the segment's midpoint
-    assert np.allclose(foot[2], [urdf.sphere_inertia(urdf.FOOT_MASS, 0.0125)] * 3, rtol=1e-9)
+    assert np.allclose(foot[2], [model.sphere_inertia(model.FOOT_MASS, 0.0125)] * 3, rtol=1e-9)
 
 
 def test_capsule_inertia_formula() -> None:
@@ -144,9 +153,9 @@ def test_capsule_inertia_formula() -> None:
     x, y, z = x[inside], y[inside], z[inside]
     point = mass / x.size
     sampled = (point * np.sum(y**2 + z**2), point * np.sum(x**2 + z**2), point * np.sum(x**2 + y**2))
-    assert np.allclose(urdf.capsule_inertia(mass, radius, length), sampled, rtol=2e-3)
-    assert np.allclose(urdf.capsule_inertia(mass, radius, 0.0), [urdf.sphere_inertia(mass, radius)] * 3)
-    long = urdf.capsule_inertia(mass, 1e-6, 1.0)
+    assert np.allclose(model.capsule_inertia(mass, radius, length), sampled, rtol=2e-3)
+    assert np.allclose(model.capsule_inertia(mass, radius, 0.0), [model.sphere_inertia(mass, radius)] * 3)
+    long = model.capsule_inertia(mass, 1e-6, 1.0)
     assert long[0] == pytest.approx(mass / 12.0, rel=1e-5)
 
 
@@ -160,7 +169,7 @@ def test_names_and_xml(name: str, tmp_path: Path) -> None:
     assert root.tag == "robot"
     revolute = [j.get("name") for j in root.iter("joint") if j.get("type") == "revolute"]
     expected = [f"{leg_id}_{joint}_joint" for leg_id, leg in robot.legs.items() for joint in leg.joints]
-    assert revolute == expected == urdf.joint_names(robot)
+    assert revolute == expected == model.joint_names(robot)
     assert [link.get("name") for link in root.iter("link")] == urdf.link_names(robot)
     assert all(link.find("inertial") is not None for link in root.iter("link"))
     with loaded(robot, tmp_path) as (client, body):
@@ -175,22 +184,7 @@ def test_names_and_xml(name: str, tmp_path: Path) -> None:
                 lower, upper, effort, velocity = info[f"{leg_id}_{joint_id}_joint"][8:12]
                 assert (lower, upper) == (joint.min, joint.max)
                 assert (effort, velocity) == (servo.stall_torque, servo.no_load_speed)
-        assert set(urdf.foot_names(robot)) <= set(links)
-
-
-def test_limits_without_a_servo_section(bullet: Robot) -> None:
-    """A robot model without ``servo`` (older spec): effort DEFAULT_EFFORT, velocity the joint's max_vel."""
-
-    class NoServo:
-        def __getattr__(self, key: str) -> object:
-            if key == "servo":
-                raise AttributeError(key)
-            return getattr(bullet, key)
-
-    root = ET.fromstring(urdf.robot_urdf(NoServo()))  # type: ignore[arg-type]
-    limits = [j.find("limit") for j in root.iter("joint") if j.get("type") == "revolute"]
-    assert {float(lim.get("effort", "nan")) for lim in limits if lim is not None} == {urdf.DEFAULT_EFFORT}
-    assert {float(lim.get("velocity", "nan")) for lim in limits if lim is not None} == {5.0}
+        assert set(model.foot_names(robot)) <= set(links)
 
 
 def test_foot_sphere_is_centred_on_the_tip() -> None:
@@ -204,11 +198,11 @@ def test_foot_sphere_is_centred_on_the_tip() -> None:
             sphere = foot.find("collision/geometry/sphere")
             origin = foot.find("collision/origin")
             assert sphere is not None and origin is not None
-            radius = leg.foot_radius or urdf.DEFAULT_FOOT_RADIUS
+            radius = leg.foot_radius or model.DEFAULT_FOOT_RADIUS
             assert float(sphere.get("radius", "nan")) == radius
             assert origin.get("xyz") == "0 0 0"
             # the last link's capsule is no wider than the foot, so the foot is lowest near the tip
-            assert urdf.link_radius(leg, len(leg.joints) - 1) <= radius
+            assert model.link_radius(leg, len(leg.joints) - 1) <= radius
 
 
 def test_degenerate_link_is_a_cube(bullet: Robot, tmp_path: Path) -> None:
@@ -224,7 +218,7 @@ def test_degenerate_link_is_a_cube(bullet: Robot, tmp_path: Path) -> None:
     q = random_joints(chains, np.random.default_rng(1))
     with loaded(robot, tmp_path) as (client, body):
         joints_by_name, links = indices(client, body)
-        for k, name in enumerate(urdf.joint_names(robot)):
+        for k, name in enumerate(model.joint_names(robot)):
             p.resetJointState(body, joints_by_name[name], float(q[0, k]), physicsClientId=client)
         state = p.getLinkState(body, links["AR_foot"], computeForwardKinematics=True, physicsClientId=client)
     assert np.allclose(state[4], chains.tips(q)[0], atol=1e-6)
@@ -237,7 +231,7 @@ def test_holds_a_pose_under_gravity(bullet: Robot, tmp_path: Path) -> None:
         p.setGravity(0.0, 0.0, -9.81, physicsClientId=client)
         p.setTimeStep(1.0 / 240.0, physicsClientId=client)
         joints, _ = indices(client, body)
-        order = [joints[n] for n in urdf.joint_names(bullet)]
+        order = [joints[n] for n in model.joint_names(bullet)]
         for index, value in zip(order, target.ravel(), strict=True):
             p.resetJointState(body, index, float(value), physicsClientId=client)
             p.setJointMotorControl2(body, index, p.POSITION_CONTROL, targetPosition=float(value),

@@ -150,7 +150,7 @@ def feet_and_com(run: RunLog, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     """World positions of the feet ``(M, L, 3)`` and of the whole robot's centre of mass ``(M, 3)`` [m] at the
     given cycles, from the logged joints and body pose (link masses at segment midpoints, as in the generated
     URDF; feet at the DH tips)."""
-    from shc_cli.backends.pybullet_.urdf import FOOT_MASS, link_mass
+    from shc_cli.model.body import FOOT_MASS, link_mass
     from shc_cli.model.chains import Chains
 
     robot = run.robot

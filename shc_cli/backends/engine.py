@@ -128,7 +128,7 @@ def spawn_height(robot: Robot, terrain: Terrain, joints: np.ndarray, fixed_base:
     ``body_clearance`` below the body, on the walk plane); else the lowest foot :data:`SPAWN_GAP` above the
     ground at the origin.
     """
-    from shc_cli.backends.pybullet_.urdf import foot_radius
+    from shc_cli.model.body import foot_radius
     from shc_cli.model.chains import Chains
 
     tips = Chains.from_robot(robot).tips(joints)

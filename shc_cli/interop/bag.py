@@ -238,7 +238,8 @@ Topic = tuple[str, str, Callable[[int, int, np.ndarray], Any], int, np.ndarray, 
 def _topics(run: RunLog, m: _Messages) -> list[Topic]:
     """Every topic: (name, type, builder, numbers per message, numbers ``(N, width)``, written once)."""
     from shc_cli.analysis.metrics import rotation_rpy
-    from shc_cli.backends.pybullet_.urdf import leg_names, robot_urdf
+    from shc_cli.backends.pybullet_.urdf import robot_urdf
+    from shc_cli.model.body import leg_names
     from shc_cli.model.chains import Chains
 
     T = m.T

@@ -1,8 +1,8 @@
 """What `shc view` and `shc render` draw, as numbers: the generated model's shapes and where they are.
 
-The shapes are those of the URDF `simulate` loads (``backends/pybullet_/urdf.py``): the body a box of
+The shapes are those of the simulated body (:mod:`shc_cli.model.body`): the body a box of
 ``body.size`` centred on ``body.com``, each link a capsule from its joint's origin to the next joint's (radius
-:func:`~shc_cli.backends.pybullet_.urdf.link_radius`), each foot a sphere of ``foot_radius`` centred on the DH
+:func:`~shc_cli.model.body.link_radius`), each foot a sphere of ``foot_radius`` centred on the DH
 tip. Poses come from the logged joints and body pose through :meth:`Chains.frames_in_base` (numpy only), so
 the viewer and the renderer draw exactly the kinematic model, for many frames at once. Lengths in metres,
 angles in radians, quaternions ``(w, x, y, z)``.
@@ -59,7 +59,7 @@ class Shapes:
 
 def shapes(robot: Robot) -> Shapes:
     """The shapes of ``robot``'s generated model."""
-    from shc_cli.backends.pybullet_.urdf import foot_radius, link_radius
+    from shc_cli.model.body import foot_radius, link_radius
 
     chains = Chains.from_robot(robot)
     radius = np.zeros((chains.size, chains.joints))

@@ -1,8 +1,8 @@
 """MJCF text for MuJoCo, built in code from the robot file and the terrain: the same model PyBullet loads.
 
-The robot is the tree of ``shc_cli.backends.pybullet_.urdf`` (docs/physics-model.md), written as MJCF from the
-same functions — DH transforms, capsule radii, masses, inertias, foot spheres — so both engines simulate the
-same bodies (``tests/test_engines.py`` checks both engines' foot frames against the DH tips):
+The robot is the simulated body of :mod:`shc_cli.model.body` (docs/physics-model.md) — DH transforms, capsule
+radii, masses, inertias, foot spheres — written as MJCF, as the URDF writer writes it for PyBullet, so both engines
+simulate the same bodies (``tests/test_engines.py`` checks both engines' foot frames against the DH tips):
 
 * ``base_link``: the body box, mass and inertia at ``body.com``; a free joint ``root`` unless held in the air.
 * per leg and joint ``LEG_J_link`` with the hinge ``LEG_J_joint`` (axis z of its frame, range ``min``/``max``);
@@ -33,21 +33,9 @@ from typing import Any
 
 import numpy as np
 
-from shc_cli.backends.pybullet_.urdf import (
-    CUBE_SIDE,
-    DEGENERATE_LENGTH,
-    FOOT_MASS,
-    box_inertia,
-    capsule_inertia,
-    foot_radius,
-    joint_offset,
-    leg_names,
-    link_mass,
-    link_radius,
-    sphere_inertia,
-)
 from shc_cli.backends.terrain import FEATURE_RGBA, FEATURE_START_X, GROUND_RGBA, Terrain
-from shc_cli.spec.robot import DH, Joint, Leg, Robot
+from shc_cli.model.body import COLOURS, CUBE_SIDE, BodyModel, Segment, body_model, joint_names, joint_offset
+from shc_cli.spec.robot import DH, Robot
 
 TOUCH_SHARE = 1.5
 """Radius of a foot's touch-sensor site as a share of the foot radius: contact points lie inside the sphere (half
@@ -138,14 +126,15 @@ def robot_mjcf(robot: Robot, terrain: Terrain, options: Options) -> str:
     asset = ET.SubElement(root, "asset")
     world = ET.SubElement(root, "worldbody")
     _terrain(asset, world, terrain)
-    _robot(world, robot, options)
+    model = body_model(robot)
+    _robot(world, model, armature(robot), options)
     if options.stand and not options.fixed_base:
         equality = ET.SubElement(root, "equality")
         ET.SubElement(equality, "weld", name="stand", body1="base_link", solref=f"{_num(STAND_TIME_CONSTANT)} 1")
     _actuators(root, robot)
     sensors = ET.SubElement(root, "sensor")
-    for names in leg_names(robot).values():
-        ET.SubElement(sensors, "touch", name=names.foot.replace("_foot", "_touch"), site=f"{names.foot}_site")
+    for leg in model.legs:
+        ET.SubElement(sensors, "touch", name=leg.foot.name.replace("_foot", "_touch"), site=f"{leg.foot.name}_site")
     if len(asset) == 0:
         root.remove(asset)
     ET.indent(root)
@@ -174,58 +163,54 @@ def _terrain(asset: ET.Element, world: ET.Element, terrain: Terrain) -> None:
                       **common)
 
 
-def _robot(world: ET.Element, robot: Robot, options: Options) -> None:
+def _rgba(part: str) -> str:
+    """The colour of ``part`` (:data:`~shc_cli.model.body.COLOURS`) as MJCF text."""
+    return " ".join(f"{c:g}" for c in COLOURS[part])
+
+
+def _robot(world: ET.Element, model: BodyModel, armature: float, options: Options) -> None:
     common: dict[str, Any] = {"contype": "2", "conaffinity": "1", "group": str(ROBOT_GROUP)}
-    body_spec = robot.body
+    torso = model.torso
     base = ET.SubElement(world, "body", name="base_link", pos=_vec((0.0, 0.0, options.base_height)))
     if not options.fixed_base:
         ET.SubElement(base, "freejoint", name="root")
-    moments = body_spec.inertia if body_spec.inertia is not None else box_inertia(body_spec.mass, body_spec.size)
-    ET.SubElement(base, "inertial", pos=_vec(body_spec.com), mass=_num(body_spec.mass), diaginertia=_vec(moments))
-    ET.SubElement(base, "geom", name="body", type="box", pos=_vec(body_spec.com),
-                  size=_vec(tuple(s / 2.0 for s in body_spec.size)), rgba="0.35 0.38 0.42 1", **common)
+    ET.SubElement(base, "inertial", pos=_vec(torso.com), mass=_num(torso.mass), diaginertia=_vec(torso.moments))
+    ET.SubElement(base, "geom", name="body", type="box", pos=_vec(torso.com),
+                  size=_vec(tuple(s / 2.0 for s in torso.size)), rgba=_rgba("body"), **common)
     ET.SubElement(base, "site", name="imu", pos="0 0 0", size="0.01")
-    for (leg_id, leg), names in zip(robot.legs.items(), leg_names(robot).values(), strict=True):
+    for leg in model.legs:
         parent = base
         pos, quat = joint_offset(leg.base), dh_quat(leg.base)
-        for index, (joint, joint_name, link_name) in enumerate(zip(leg.joints.values(), names.joints, names.links,
-                                                                   strict=True)):
-            body = ET.SubElement(parent, "body", name=link_name, pos=_vec(pos), quat=_vec(quat))
-            ET.SubElement(body, "joint", name=joint_name, type="hinge", axis="0 0 1",
-                          range=f"{_num(joint.min)} {_num(joint.max)}", armature=_num(armature(robot)))
-            _segment(body, leg, index, joint, common)
-            parent, pos, quat = body, joint_offset(joint), dh_quat(joint)
-        radius = foot_radius(leg)
-        foot = ET.SubElement(parent, "body", name=names.foot, pos=_vec(pos), quat=_vec(quat))
-        ET.SubElement(foot, "inertial", pos="0 0 0", mass=_num(FOOT_MASS),
-                      diaginertia=_vec((sphere_inertia(FOOT_MASS, radius),) * 3))
-        ET.SubElement(foot, "geom", name=f"{leg_id}_foot_geom", type="sphere", size=_num(radius),
-                      rgba="0.12 0.12 0.12 1", **common)
-        ET.SubElement(foot, "site", name=f"{names.foot}_site", type="sphere", size=_num(TOUCH_SHARE * radius))
+        for segment in leg.segments:
+            body = ET.SubElement(parent, "body", name=segment.link, pos=_vec(pos), quat=_vec(quat))
+            ET.SubElement(body, "joint", name=segment.joint, type="hinge", axis="0 0 1",
+                          range=f"{_num(segment.dh.min)} {_num(segment.dh.max)}", armature=_num(armature))
+            _segment(body, segment, common)
+            parent, pos, quat = body, segment.end, dh_quat(segment.dh)
+        foot = ET.SubElement(parent, "body", name=leg.foot.name, pos=_vec(pos), quat=_vec(quat))
+        ET.SubElement(foot, "inertial", pos="0 0 0", mass=_num(leg.foot.mass), diaginertia=_vec((leg.foot.moment,) * 3))
+        ET.SubElement(foot, "geom", name=f"{leg.id}_foot_geom", type="sphere", size=_num(leg.foot.radius),
+                      rgba=_rgba("foot"), **common)
+        ET.SubElement(foot, "site", name=f"{leg.foot.name}_site", type="sphere",
+                      size=_num(TOUCH_SHARE * leg.foot.radius))
 
 
-def _segment(body: ET.Element, leg: Leg, index: int, joint: Joint, common: dict[str, Any]) -> None:
-    """Mass, inertia and capsule of the link a joint moves (as the URDF's ``_segment_link``)."""
-    mass = link_mass(joint)
-    end = joint_offset(joint)
-    length = math.dist((0.0, 0.0, 0.0), end)
-    middle = tuple(e / 2.0 for e in end)
-    if length < DEGENERATE_LENGTH:
-        side = CUBE_SIDE
-        ET.SubElement(body, "inertial", pos=_vec(middle), mass=_num(mass),
-                      diaginertia=_vec(box_inertia(mass, (side, side, side))))
-        ET.SubElement(body, "geom", type="box", pos=_vec(middle), size=_vec((side / 2.0,) * 3),
-                      rgba="0.85 0.55 0.15 1", **common)
+def _segment(body: ET.Element, segment: Segment, common: dict[str, Any]) -> None:
+    """Mass, inertia and shape of the link a joint moves."""
+    middle = segment.middle
+    if segment.shape == "box":
+        ET.SubElement(body, "inertial", pos=_vec(middle), mass=_num(segment.mass), diaginertia=_vec(segment.moments()))
+        ET.SubElement(body, "geom", type="box", pos=_vec(middle), size=_vec((CUBE_SIDE / 2.0,) * 3), rgba=_rgba("link"),
+                      **common)
         return
-    pitch, yaw = math.atan2(math.hypot(end[0], end[1]), end[2]), math.atan2(end[1], end[0])
-    radius = link_radius(leg, index)
-    straight = length - 2.0 * radius
-    ET.SubElement(body, "inertial", pos=_vec(middle), quat=_vec(_qmul(_axis_quat(2, yaw), _axis_quat(1, pitch))),
-                  mass=_num(mass), diaginertia=_vec(capsule_inertia(mass, radius, straight)))
-    unit = np.array(end) / length
-    start, stop = unit * radius, np.array(end) - unit * radius
-    ET.SubElement(body, "geom", type="capsule", fromto=_vec((*start, *stop)), size=_num(radius),
-                  rgba="0.85 0.55 0.15 1", **common)
+    quat = _qmul(_axis_quat(2, segment.yaw), _axis_quat(1, segment.pitch))
+    ET.SubElement(body, "inertial", pos=_vec(middle), quat=_vec(quat), mass=_num(segment.mass),
+                  diaginertia=_vec(segment.moments()))
+    end = np.array(segment.end)
+    unit = end / segment.length
+    start, stop = unit * segment.radius, end - unit * segment.radius
+    ET.SubElement(body, "geom", type="capsule", fromto=_vec((*start, *stop)), size=_num(segment.radius),
+                  rgba=_rgba("link"), **common)
 
 
 def _actuators(root: ET.Element, robot: Robot) -> None:
@@ -242,18 +227,17 @@ def _actuators(root: ET.Element, robot: Robot) -> None:
     actuators = ET.SubElement(root, "actuator")
     limit = f"{_num(-servo.stall_torque)} {_num(servo.stall_torque)}"
     gains = ServoModel(servo).gains() if servo.control == "pd" else None
-    for names in leg_names(robot).values():
-        for joint_name in names.joints:
-            name = joint_name.removesuffix("_joint") + "_servo"
-            if servo.control == "dynamixel":
-                ET.SubElement(actuators, "motor", name=name, joint=joint_name, gear="1")
-            elif gains is not None:
-                ET.SubElement(actuators, "position", name=name, joint=joint_name, kp=_num(gains.stiffness),
-                              kv=_num(gains.damping),
-                              forcerange=f"{_num(-gains.torque_limit)} {_num(gains.torque_limit)}")
-            else:
-                ET.SubElement(actuators, "velocity", name=name, joint=joint_name, kv=_num(velocity_stiffness(robot)),
-                              forcerange=limit)
+    for joint_name in joint_names(robot):
+        name = joint_name.removesuffix("_joint") + "_servo"
+        if servo.control == "dynamixel":
+            ET.SubElement(actuators, "motor", name=name, joint=joint_name, gear="1")
+        elif gains is not None:
+            ET.SubElement(actuators, "position", name=name, joint=joint_name, kp=_num(gains.stiffness),
+                          kv=_num(gains.damping),
+                          forcerange=f"{_num(-gains.torque_limit)} {_num(gains.torque_limit)}")
+        else:
+            ET.SubElement(actuators, "velocity", name=name, joint=joint_name, kv=_num(velocity_stiffness(robot)),
+                          forcerange=limit)
 
 
 VELOCITY_ERROR_AT_STALL = 0.1

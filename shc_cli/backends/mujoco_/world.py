@@ -34,10 +34,10 @@ from shc_cli.backends.engine import Reading, rpy_from_matrix, servo_slots, spawn
 from shc_cli.backends.imu import Imu
 from shc_cli.backends.mujoco_.mjcf import Options, robot_mjcf, velocity_stiffness
 from shc_cli.backends.power import servo_power
-from shc_cli.backends.pybullet_.urdf import leg_names
 from shc_cli.backends.servo import ServoModel
 from shc_cli.backends.terrain import Terrain, TerrainSpec
 from shc_cli.errors import BackendError
+from shc_cli.model.body import leg_names
 from shc_cli.spec.robot import Robot
 
 RAY_GROUPS = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)
