@@ -567,8 +567,8 @@ def serve(target: str, host: str, port: int) -> None:
 
     server.on_client_connect(connect)
     server.on_client_disconnect(disconnect)
-    print(f"shc view: http://{host}:{server.get_port()}  (Ctrl-C to stop)", flush=True)
-    try:
+    try:  # the URL inside: a Ctrl-C right after it is printed still stops the server here
+        print(f"shc view: http://{host}:{server.get_port()}  (Ctrl-C to stop)", flush=True)
         while True:
             time.sleep(0.5)
     except KeyboardInterrupt:
@@ -577,5 +577,25 @@ def serve(target: str, host: str, port: int) -> None:
         for page in pages.values():
             if isinstance(page, RunPage):
                 page.close()
-        server.stop()
+        stop_within(server, STOP_WAIT_S)
+
+
+STOP_WAIT_S = 0.5
+"""How long Ctrl-C waits for viser's server to stop [s] before ``shc view`` leaves anyway."""
+
+
+def stop_within(server: Any, seconds: float) -> None:
+    """Stop ``server`` in a daemon thread, waiting at most ``seconds``, and silence its late warnings.
+
+    viser's ``stop`` joins its event-loop thread for up to 6 s, and pages still being built or redrawn in its worker
+    threads (a robot page's workspace search: seconds on a loaded machine) keep drawing into closed connections,
+    each draw a "Queued a … on a closed connection" warning. Python's exit would then wait for those workers to
+    finish every queued callback; ``shc view`` leaves at once instead (:func:`shc_cli.commands.view.run_view`).
+    """
+    import warnings
+
+    warnings.filterwarnings("ignore", message=r"Queued a \w+ on a closed connection")
+    stopper = threading.Thread(target=server.stop, name="shc-view-stop", daemon=True)
+    stopper.start()
+    stopper.join(timeout=seconds)
 
