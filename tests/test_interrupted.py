@@ -139,3 +139,51 @@ def test_gui_without_a_display_is_one_line(tmp_path: Path) -> None:
         "error: --gui: no display (DISPLAY is not set) (drop --gui, or set DISPLAY / run under a virtual display: "
         "xvfb-run shc simulate ...)"] or ("no display" in result.stderr and len(result.stderr.splitlines()) == 1)
     assert not list(tmp_path.iterdir())  # no run directory
+
+
+def _peak_rss_mb(pid: int) -> float:
+    """The process's peak resident memory so far (VmHWM) [MB]."""
+    status = Path(f"/proc/{pid}/status").read_text()
+    return int(status.split("VmHWM:")[1].split()[0]) / 1024
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads the peak memory from /proc (Linux)")
+def test_a_ten_hour_simulate_holds_no_memory_for_its_duration_and_a_sigterm_finishes_it(tmp_path: Path) -> None:
+    """``--duration 36000`` once built 3.6 million commands (1.7 GB) before its first step, and a SIGTERM then left
+    ``.partial/`` with only ``robot.toml``: memory must not depend on the requested duration, and the signal
+    finishes the run directory."""
+    out = tmp_path / "long"
+    process = subprocess.Popen([*SHC, "simulate", "--engine", "mujoco", "--duration", "36000", "--out", str(out),
+                                "--no-plots"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_rows(out.with_name("long.partial") / "log.csv")
+        peak = _peak_rss_mb(process.pid)
+        process.send_signal(signal.SIGTERM)
+        _, stderr = process.communicate(timeout=120)
+    finally:
+        process.kill()
+    assert peak < 400, f"{peak:.0f} MB at the first walking rows of a 10-hour run"
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["complete"] is False and summary["stop_reason"] == "SIGTERM", stderr
+
+
+def test_a_signal_before_the_first_cycle_finishes_the_run_directory(tmp_path: Path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """A SIGTERM while the physics opens (the run directory exists, the loop has not started) is kept: the loop
+    stops at once and the run is finished with no rows and ``"complete": false``."""
+    from shc_cli.backends import simulated
+    from shc_cli.domain.config import SimulationConfig
+    from shc_cli.domain.simulate import simulate
+
+    opened = simulated.open_world
+
+    def open_then_signal(*args, **kwargs):  # type: ignore[no-untyped-def]
+        world = opened(*args, **kwargs)
+        os.kill(os.getpid(), signal.SIGTERM)  # handled in the main thread before the loop's first cycle
+        return world
+
+    monkeypatch.setattr(simulated, "open_world", open_then_signal)
+    path, summary = simulate(SimulationConfig(robot="bullet", duration=1.0, out=tmp_path / "early", engine="mujoco",
+                                              plots=False)).pair
+    assert summary["complete"] is False and summary["stop_reason"] == "SIGTERM"
+    assert (path / "summary.json").exists() and (path / "log.csv").read_text().count("\n") == 1  # the header only
+    assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL

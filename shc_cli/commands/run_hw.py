@@ -33,6 +33,8 @@ from shc_cli.loop.input_sources import STATES
 from shc_cli.loop.run_inputs import parse_velocity, pose_sets_for, walk_cycles
 
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from shc_cli.backends.base import InputSource
     from shc_cli.control.controller import Command
     from shc_cli.spec.gait import Gait
@@ -150,7 +152,7 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
     return path
 
 
-def _source(kind: str, argument: str, robot: Robot, gait: Gait, commands: list[Command],
+def _source(kind: str, argument: str, robot: Robot, gait: Gait, commands: Sequence[Command],
             watchdog: float) -> InputSource:
     """The input source (keyboard and gamepad cycle through the bundled gaits that fit the robot's legs)."""
     from shc_cli.loop.input_sources import GamepadInput, KeyboardInput, StdinInput, TimelineInput

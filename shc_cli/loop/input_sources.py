@@ -28,7 +28,7 @@ import os
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import IO, Any
 
 from shc_cli.control.controller import Command, RobotState
@@ -49,7 +49,7 @@ class InputError(ShcError):
 class TimelineInput:
     """The commands of a timeline, one per cycle."""
 
-    def __init__(self, commands: list[Command]) -> None:
+    def __init__(self, commands: Sequence[Command]) -> None:
         self.commands = commands
         self.index = 0
 

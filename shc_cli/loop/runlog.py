@@ -36,6 +36,7 @@ from typing import IO, TYPE_CHECKING, Any
 import numpy as np
 
 from shc_cli.errors import OutputError
+from shc_cli.loop.stop_signals import StopSignals
 from shc_cli.spec.robot import Robot
 
 if TYPE_CHECKING:  # the controller (and numba) only for the annotation: readers of runs stay light
@@ -72,6 +73,9 @@ class RunDirectory:
             raise OutputError(f"{self.partial}: cannot create run directory: {error.strerror} "
                               "(choose another --out)") from None
         self._handles: list[IO[str]] = []
+        self.signals = StopSignals()
+        """SIGINT/SIGTERM become this run's stop request from now on (:mod:`shc_cli.loop.stop_signals`)."""
+        self.signals.install()
 
     def __enter__(self) -> RunDirectory:
         return self
@@ -80,6 +84,7 @@ class RunDirectory:
         """Close the tables; an unfinished run keeps its ``.partial`` directory with every written row — unless it
         failed before any table was opened (nothing half-written is left then)."""
         self.close()
+        self.signals.restore()
         if kind is not None and not self._handles and self.partial.exists():
             import shutil
 

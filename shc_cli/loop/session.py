@@ -9,8 +9,6 @@ signal while finishing skips the plots; the rows are on disk before anything els
 
 from __future__ import annotations
 
-import signal
-import threading
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -34,15 +32,11 @@ def execute(loop: RunLoop, run: RunDirectory, summarise: Callable[[LoopResult], 
     Returns:
         the finished run directory, its summary and the loop's result.
     """
-    state = {"finishing": False}
-    in_main = threading.current_thread() is threading.main_thread()
-
-    def handler(signum: int, frame: Any) -> None:
-        if state["finishing"]:
-            raise KeyboardInterrupt  # a second Ctrl-C while finishing: skip what is left (the plots)
-        loop.request_stop(signal.Signals(signum).name)  # on hardware a repeat while stopping changes nothing
-
-    previous = {sig: signal.signal(sig, handler) for sig in (signal.SIGINT, signal.SIGTERM)} if in_main else {}
+    signals = run.signals  # caught since the run directory was created (a signal before the loop stops it at once)
+    signals.install()
+    signals.on_stop = loop.request_stop
+    if signals.received is not None:
+        loop.request_stop(signals.received)
     try:
         try:
             result = loop.run()
@@ -50,18 +44,17 @@ def execute(loop: RunLoop, run: RunDirectory, summarise: Callable[[LoopResult], 
             run.close()  # every row on disk before anything else (also when the loop raised)
         if after_loop is not None:
             after_loop(result)  # not interruptible: a repeated signal only repeats the stop request
-        state["finishing"] = True
+        signals.finishing = True
         try:
             summary = summarise(result)
         except KeyboardInterrupt:  # a second signal in the (short) summary: the rows and a minimal summary
             summary = {"cycles": result.cycles, "summary_skipped": True}
         summary.update(complete=result.complete, stop_reason=result.stop_reason)
-        if plot is not None:
+        if plot is not None and result.cycles > 0:  # a run stopped before its first cycle has nothing to draw
             try:
                 plot(run.partial)
             except KeyboardInterrupt:
                 summary["plots_skipped"] = True
         return run.finish(summary), summary, result
     finally:
-        for sig, old in previous.items():
-            signal.signal(sig, old)
+        signals.restore()

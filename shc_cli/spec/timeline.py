@@ -45,10 +45,12 @@ changed; ``gait``, ``parameters``, ``cruise`` and ``leg_toggle`` are requests ma
 
 from __future__ import annotations
 
+import bisect
 import csv
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Literal, overload
 
 from pydantic import Field, ValidationError, model_validator
 
@@ -114,20 +116,66 @@ class Timeline:
     def last_cycle(self) -> int:
         return self.changes[-1][0] if self.changes else 0
 
-    def commands(self, cycles: int) -> list[Command]:
-        """The command of every cycle ``0 … cycles − 1``."""
+    def commands(self, cycles: int) -> TimelineCommands:
+        """The command of every cycle ``0 … cycles − 1``, made when asked for (memory independent of ``cycles``)."""
+        return TimelineCommands(self.changes, cycles)
+
+
+class TimelineCommands(Sequence[Command]):
+    """The commands of a timeline's cycles ``0 … cycles − 1`` as a sequence built on demand.
+
+    A run of hours (or ``--duration 1e9``) holds one entry per change, not one command per cycle: the command of
+    a cycle is made when it is read. Every read makes a new :class:`Command` (callers may change theirs).
+
+    Args:
+        changes: the timeline's ``(cycle, change)`` pairs; a change holds from its cycle on (one-off requests,
+            :data:`EVENTS`, only at it).
+        cycles: how many cycles.
+    """
+
+    def __init__(self, changes: list[tuple[int, dict[str, object]]], cycles: int) -> None:
+        self.cycles = cycles
+        self.starts: list[int] = []
+        """First cycle of each segment (ascending): where a change (or several on one cycle) takes effect."""
+        self.held: list[dict[str, object]] = []
+        """Inputs holding over each segment."""
+        self.events: list[dict[str, object]] = []
+        """One-off requests made at each segment's first cycle."""
         current: dict[str, object] = {}
-        out = []
-        changes = iter(sorted(self.changes, key=lambda c: c[0]))
-        pending = next(changes, None)
-        for cycle in range(cycles):
-            events: dict[str, object] = {}
-            while pending is not None and pending[0] <= cycle:
-                current.update({k: v for k, v in pending[1].items() if k not in EVENTS})
-                events.update({k: v for k, v in pending[1].items() if k in EVENTS})
-                pending = next(changes, None)
-            out.append(Command(**current, **events))  # type: ignore[arg-type]
-        return out
+        for cycle, change in sorted(changes, key=lambda c: c[0]):
+            start = max(cycle, 0)
+            if start >= cycles:
+                break
+            if not self.starts or self.starts[-1] != start:
+                self.starts.append(start)
+                self.events.append({})
+                self.held.append({})
+            current = {**current, **{k: v for k, v in change.items() if k not in EVENTS}}
+            self.held[-1] = current
+            self.events[-1].update({k: v for k, v in change.items() if k in EVENTS})
+
+    def __len__(self) -> int:
+        return self.cycles
+
+    @overload
+    def __getitem__(self, index: int) -> Command: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> list[Command]: ...
+
+    def __getitem__(self, index: int | slice) -> Command | list[Command]:
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(self.cycles))]
+        if index < 0:
+            index += self.cycles
+        if not 0 <= index < self.cycles:
+            raise IndexError("timeline cycle out of range")
+        segment = bisect.bisect_right(self.starts, index) - 1
+        if segment < 0:
+            return Command()
+        if index == self.starts[segment]:
+            return Command(**self.held[segment], **self.events[segment])  # type: ignore[arg-type]
+        return Command(**self.held[segment])  # type: ignore[arg-type]
 
 
 def constant(velocity: tuple[float, float, float]) -> Timeline:
