@@ -5,7 +5,9 @@ Shared by ``plan``, ``simulate`` and ``run-hw`` (and the Python API), so they ac
 
 from __future__ import annotations
 
+import logging
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -14,6 +16,28 @@ from shc_cli.spec.autopose import AutoPoseSet, compatibility_issues, load_auto_p
 from shc_cli.spec.gait import Gait
 from shc_cli.spec.robot import Robot
 from shc_cli.spec.timeline import Timeline, constant, load_timeline
+
+logger = logging.getLogger(__name__)
+
+MAX_DURATION_ENV = "SHC_MAX_DURATION"
+"""Environment variable (a test aid): when set to seconds, every run's time after start-up is cut to at most that,
+whatever ``--duration``, a timeline file, a sweep or a study asks (the docs tests run the docs' commands as written,
+only shorter)."""
+
+
+def max_duration() -> float | None:
+    """``SHC_MAX_DURATION`` [s] when set to a positive number, else None (a malformed value is a one-line error)."""
+    text = os.environ.get(MAX_DURATION_ENV, "").strip()
+    if not text:
+        return None
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = math.nan
+    if not (seconds > 0 and math.isfinite(seconds)):
+        raise SpecError([Issue(None, None, MAX_DURATION_ENV, f"'{text}' is not a positive number of seconds",
+                               f"unset it or set e.g. {MAX_DURATION_ENV}=2")])
+    return seconds
 
 
 def parse_velocity(text: str) -> tuple[float, float, float]:
@@ -39,12 +63,19 @@ def check_duration(duration: float | None) -> None:
 def walk_cycles(timeline: Timeline, duration: float | None, dt: float, from_file: bool,
                 default_s: float = 10.0) -> int:
     """Control cycles to play after start-up: ``duration`` [s] if given, else a timeline file's length plus 1 s,
-    else ``default_s`` [s]."""
+    else ``default_s`` [s]; at most ``SHC_MAX_DURATION`` [s] when that is set (:func:`max_duration`)."""
     if duration is not None:
-        return max(1, round(duration / dt))
-    if from_file:
-        return timeline.last_cycle + round(1.0 / dt)
-    return round(default_s / dt)
+        cycles = max(1, round(duration / dt))
+    elif from_file:
+        cycles = timeline.last_cycle + round(1.0 / dt)
+    else:
+        cycles = round(default_s / dt)
+    cap = max_duration()
+    if cap is not None and cycles * dt > cap:
+        logger.warning("%s=%g: the run is cut to %g s after start-up (%g s asked)", MAX_DURATION_ENV, cap, cap,
+                       cycles * dt)
+        cycles = max(1, round(cap / dt))
+    return cycles
 
 
 def pose_sets_for(robot: Robot, gait: Gait, timeline: Timeline, folder: Path) -> dict[str, AutoPoseSet]:
