@@ -10,6 +10,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+REINSTALL = "python3 -m uv pip install --python .venv -e ."
+"""The command, run in shc's clone, that installs shc with every dependency its commands need (README, Set-up)."""
+
+
+def install_hint(extra: str | None = None) -> str:
+    """How to install a missing dependency from shc's clone: the README's install with ``extra`` (e.g. ``dask``),
+    or the plain install when the dependency is one of shc's own (a partial install)."""
+    if extra is None:
+        return f"reinstall shc from its clone: {REINSTALL}"
+    return f"install shc's '{extra}' extra from its clone: {REINSTALL[:-1]}'.[{extra}]'"
+
 
 class ShcError(Exception):
     """Base class of every error shc reports to a user."""

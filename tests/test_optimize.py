@@ -18,7 +18,7 @@ from .test_cli import run
 from .test_sweep import _rows
 from .test_sweep import _write as write_file
 
-pytest.importorskip("optuna", reason="shc optimize needs optuna (pip install 'shc[optimize]')")
+pytest.importorskip("optuna", reason="shc optimize needs optuna (python3 -m uv pip install --python .venv -e .)")
 
 SMALL = """
 name = "small"

@@ -30,7 +30,7 @@ except ImportError:  # pragma: no cover - the test extra installs it
 needs_chromium = pytest.mark.skipif(
     CHROMIUM is None or not HAVE_PLAYWRIGHT,
     reason="needs Debian's chromium and playwright: apt-get update && apt-get install -y chromium chromium-driver; "
-           "pip install -e '.[test]'")
+           "python3 -m uv pip install --python .venv -e '.[test]'")
 
 ARGS = ["--headless=new", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
         "--disable-component-update", "--disable-sync", "--no-first-run", "--use-angle=swiftshader",

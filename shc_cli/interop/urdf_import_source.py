@@ -142,11 +142,11 @@ def require() -> None:
     """Fail with one line if the optional dependencies of ``shc import urdf`` are missing."""
     import importlib.util
 
-    from shc_cli.errors import BackendError
+    from shc_cli.errors import BackendError, install_hint
 
     missing = [name for name in ("xacro", "yourdfpy") if importlib.util.find_spec(name) is None]
     if missing:
-        raise BackendError(f"shc import urdf needs {' and '.join(missing)} (pip install 'shc[urdf]')")
+        raise BackendError(f"shc import urdf needs {' and '.join(missing)} ({install_hint()})")
 
 
 def _known_geometry(text: str) -> str:

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from shc_cli.errors import Issue, SpecError
+from shc_cli.errors import Issue, SpecError, install_hint
 from shc_cli.loop.runread import RunLog
 from shc_cli.view import scene
 
@@ -168,7 +168,7 @@ class Renderer:
             import mujoco
         except ImportError as error:
             raise SpecError([Issue(None, None, "render", f"MuJoCo is not installed ({error})",
-                                   "pip install 'shc[view]'")]) from None
+                                   install_hint())]) from None
         self.mujoco = mujoco
         self.shape = shape
         self.model = mujoco.MjModel.from_xml_string(scene_xml(shape, terrain, width, height))
@@ -340,7 +340,7 @@ def render_run(run: RunLog, out: Path, options: RenderOptions, progress: bool = 
             __import__(module)
         except ImportError as error:
             raise SpecError([Issue(None, None, "render", f"{module} is not installed ({error})",
-                                   "pip install 'shc[view]'")]) from None
+                                   install_hint())]) from None
     out.parent.mkdir(parents=True, exist_ok=True)
     partial = out.with_name(f".{out.name}.partial{out.suffix}")
     frames = render_frames(run, options)

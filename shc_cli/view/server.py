@@ -533,10 +533,10 @@ def serve(target: str, host: str, port: int) -> None:
     try:
         import viser
     except ImportError as error:
-        from shc_cli.errors import Issue, SpecError
+        from shc_cli.errors import Issue, SpecError, install_hint
 
         raise SpecError([Issue(None, None, "view", f"viser is not installed ({error})",
-                               "pip install 'shc[view]'")]) from None
+                               install_hint())]) from None
 
     from shc_cli.loop.opening import open_run as read_run  # directories and bags
     from shc_cli.spec.loading import load_robot
@@ -550,7 +550,7 @@ def serve(target: str, host: str, port: int) -> None:
     else:
         loaded = load_robot(target)  # a bad file fails now, with its one-line error and exit 2
         if loaded.robot is None:
-            from shc_cli.errors import Issue, SpecError
+            from shc_cli.errors import Issue, SpecError, install_hint
 
             raise SpecError([Issue(None, None, target, "does not load", "shc validate it")])
     with contextlib.redirect_stdout(io.StringIO()):  # viser's own banner: shc prints one line instead

@@ -1,0 +1,212 @@
+"""Every shell example of the README and of ``docs/`` runs, as written, in a fresh clone.
+
+What counts as an example (:func:`steps`):
+
+* every command of a ```` ```sh ```` block (a line ending in ``\\`` continues on the next);
+* every ``$ `` line of a ```` ```text ```` block (a transcript: the lines after it are its output; an output that
+  starts with ``error:`` shows a refusal, so the command must exit 2);
+* a ```` ```python ```` block of the README (run with the environment's ``python``);
+* a code block right after an ``<!-- file: NAME -->`` comment is a file a tutorial has the reader write: it is
+  written to ``NAME`` at that point, before the commands after it run.
+
+The README's first five minutes run after the README's own set-up command in a fresh clone (fast: no ``slow``
+marker; about 1–2 minutes). Every page of ``docs/`` runs in its own fresh clone with the test environment's
+``.venv/bin`` first on ``PATH`` (``slow``). Runs are shortened by ``SHC_MAX_DURATION``
+(:data:`shc_cli.loop.run_inputs.MAX_DURATION_ENV`), which cuts every run to :data:`MAX_DURATION_S` after its
+start-up; the docs themselves are run as written. :data:`EXEMPT` lists the commands that are not run, each with its
+reason; an unlabelled code block may not hold a command (label it ``sh`` or ``text``).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from shc_cli.loop.run_inputs import MAX_DURATION_ENV
+
+from .conftest import ROOT
+from .test_readme_setup import setup_commands
+
+MAX_DURATION_S = 1.0
+"""Seconds after start-up every documented run is cut to (``SHC_MAX_DURATION``)."""
+
+EXEMPT: dict[str, str] = {
+    "shc view": "serves a page until Ctrl-C; tests/test_view.py drives it in Chromium",
+    "rosbag record": "needs ROS 1 and a running OpenSHC",
+    "optuna-dashboard": "serves a page until Ctrl-C",
+    "taplo check": "taplo is an editor tool, not installed here (tests/test_robot_files.py checks the schema)",
+    "shc run-hw": "needs the robot's servos (tests/test_run_hw.py runs it against the servo emulator)",
+}
+"""Command prefixes that are not run, and why."""
+
+FILE_MARK = re.compile(r"<!--\s*file:\s*(\S+)\s*-->\s*\n *```\w*\n")
+BLOCK = re.compile(r"^( *)```(\w*)\n(.*?)^\1```", re.S | re.M)
+"""A fenced code block, also indented under a list item: indent, language, body."""
+
+
+@dataclass(frozen=True)
+class Step:
+    """One thing a page has the reader do: ``kind`` is ``run``, ``refuse`` (must exit 2), ``python`` or ``file``."""
+
+    kind: str
+    text: str
+    where: str
+    name: str = ""
+
+
+def _commands(block: str) -> list[str]:
+    """The commands of a ``sh`` block: comment-only and blank lines dropped, ``\\`` continuations joined."""
+    commands: list[str] = []
+    pending = ""
+    for line in block.splitlines():
+        if not pending and (not line.strip() or line.lstrip().startswith("#")):
+            continue
+        pending = f"{pending}\n{line}" if pending else line
+        if not line.endswith("\\"):
+            commands.append(pending)
+            pending = ""
+    assert not pending, f"a continued line ends the block: {pending}"
+    return commands
+
+
+def steps(path: Path, text: str | None = None, python: bool = False) -> list[Step]:
+    """The examples of one Markdown page (or of ``text``, a part of it), in order."""
+    text = path.read_text(encoding="utf-8") if text is None else text
+    files = {m.end(): m.group(1) for m in FILE_MARK.finditer(text)}
+    found: list[Step] = []
+    for block in BLOCK.finditer(text):
+        indent, language = len(block.group(1)), block.group(2)
+        body = "".join(line[indent:] for line in block.group(3).splitlines(keepends=True))
+        where = f"{path.name}:{text[:block.start()].count(chr(10)) + 1}"
+        if block.start(3) in files:
+            found.append(Step("file", body, where, files[block.start(3)]))
+        elif language == "sh":
+            found += [Step("run", command, where) for command in _commands(body)]
+        elif language == "text":
+            lines = body.splitlines()
+            for i, line in enumerate(lines):
+                if line.startswith("$ "):
+                    output = lines[i + 1] if i + 1 < len(lines) else ""
+                    found.append(Step("refuse" if output.startswith("error:") else "run", line[2:], where))
+        elif language == "python" and python:
+            found.append(Step("python", body, where))
+        elif language == "":
+            commands = [line for line in body.splitlines() if re.match(r"\s*(\$ |shc |\.venv/)", line)]
+            assert not commands, f"{where}: an unlabelled block holds commands (label it sh or text): {commands[0]}"
+    return found
+
+
+def exemption(command: str) -> str | None:
+    """Why ``command`` is not run, or None."""
+    return next((why for prefix, why in EXEMPT.items() if command.lstrip().startswith(prefix)), None)
+
+
+def script(examples: list[Step]) -> str:
+    """A bash script that runs the steps in order and stops at the first that fails, naming it."""
+    lines = ["set -o pipefail", "fail() { echo \"FAILED at $1 (exit $2)\" >&2; exit 1; }"]
+    for number, step in enumerate(examples):
+        first = step.text.splitlines()[0] if step.text.strip() else ""
+        lines.append(f"echo {shlex.quote(f'+ {step.where}: {first}')} >&2")
+        if step.kind == "file":
+            lines += [f"mkdir -p \"$(dirname {shlex.quote(step.name)})\"",
+                      f"cat > {shlex.quote(step.name)} <<'SHC_DOCS_EOF'", step.text.rstrip("\n"), "SHC_DOCS_EOF"]
+            continue
+        if step.kind == "python":
+            lines += [f"cat > .docs_example_{number}.py <<'SHC_DOCS_EOF'", step.text.rstrip("\n"), "SHC_DOCS_EOF",
+                      f"python .docs_example_{number}.py"]
+        elif (why := exemption(step.text)) is not None:
+            lines.append(f"echo {shlex.quote(f'  skipped: {why}')} >&2")
+            continue
+        else:
+            lines.append(step.text)
+        expected = 2 if step.kind == "refuse" else 0
+        lines.append(f"rc=$?; [ $rc -eq {expected} ] || fail {shlex.quote(step.where)} $rc")
+    return "\n".join(lines) + "\n"
+
+
+def clone(tmp_path: Path) -> Path:
+    """A fresh clone of this repository (its committed state) in ``tmp_path``."""
+    target = tmp_path / "clone"
+    subprocess.run(["git", "clone", "-q", str(ROOT), str(target)], check=True, timeout=120)
+    return target
+
+
+def run_script(examples: list[Step], where: Path, path_first: str | None, timeout: float) -> None:
+    env = {**os.environ, MAX_DURATION_ENV: f"{MAX_DURATION_S:g}", "MPLBACKEND": "Agg"}
+    env.pop("VIRTUAL_ENV", None)
+    if path_first is not None:
+        env["PATH"] = f"{path_first}{os.pathsep}{env.get('PATH', '')}"
+    done = subprocess.run(["bash", "-c", script(examples)], cwd=where, env=env, capture_output=True, text=True,
+                          timeout=timeout)
+    assert done.returncode == 0, f"exit {done.returncode}\n{done.stdout[-3000:]}\n{done.stderr[-5000:]}"
+
+
+def readme_sections() -> dict[str, str]:
+    """The README's ``## `` sections by title."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    return {part.split("\n", 1)[0].strip(): part for part in text.split("\n## ")[1:]}
+
+
+def doc_pages() -> list[Path]:
+    return sorted(p for p in (ROOT / "docs").rglob("*.md") if steps(p, python=False))
+
+
+needs_git = pytest.mark.skipif(shutil.which("git") is None or not (ROOT / ".git").exists(),
+                               reason="needs git and a git checkout to clone")
+
+
+def test_examples_are_found_and_every_exemption_is_used() -> None:
+    sections = readme_sections()
+    first = steps(ROOT / "README.md", sections["First five minutes"], python=True)
+    assert [s.kind for s in first].count("python") == 1 and len(first) >= 5
+    assert first[0].text.startswith(". .venv/bin/activate")
+    # every other shell block of the README is a set-up line, which tests/test_readme_setup.py runs
+    others = [s for title, part in sections.items() if title != "First five minutes"
+              for s in steps(ROOT / "README.md", part)]
+    assert all("python3 -m pip install -q uv" in s.text for s in others), others
+    every = [s for page in doc_pages() for s in steps(page)]
+    assert len(every) > 40
+    for prefix in EXEMPT:
+        assert any(s.text.startswith(prefix) for s in every + first), f"exemption {prefix!r} is not used"
+    assert not any("shared/" in s.text for s in every), "the docs may name only files of the repository"
+
+
+def test_a_refusal_must_exit_2_and_a_failure_names_its_line(tmp_path: Path) -> None:
+    page = tmp_path / "page.md"
+    page.write_text("<!-- file: a.txt -->\n```toml\nx = 1\n```\n\n```sh\ntest -f a.txt   # the file is there\n"
+                    "true \\\n  --and-more\n```\n\n```text\n$ exit 2\nerror: refused\n$ false\n```\n",
+                    encoding="utf-8")
+    found = steps(page)
+    assert [s.kind for s in found] == ["file", "run", "run", "refuse", "run"]
+    with pytest.raises(AssertionError, match=r"FAILED at page.md:13 \(exit 1\)"):
+        run_script(found, tmp_path, None, timeout=60)
+    run_script(found[:-1], tmp_path, None, timeout=60)
+
+
+@needs_git
+def test_readme_first_five_minutes_run_after_the_readme_set_up_in_a_fresh_clone(tmp_path: Path) -> None:
+    """Issue 26's acceptance: the set-up command, then the tour lines as written (shortened runs)."""
+    where = clone(tmp_path)
+    set_up, _ = setup_commands((ROOT / "README.md").read_text(encoding="utf-8"))
+    first = steps(ROOT / "README.md", readme_sections()["First five minutes"], python=True)
+    run_script([Step("run", set_up, "README.md: Set-up"), *first], where, None, timeout=900)
+    assert (where / "runs" / "walk" / "summary.json").is_file()
+    assert (where / "runs" / "api-walk" / "summary.json").is_file()
+
+
+@needs_git
+@pytest.mark.slow
+@pytest.mark.parametrize("page", [p.relative_to(ROOT).as_posix() for p in doc_pages()])
+def test_every_docs_example_runs_in_a_fresh_clone(page: str, tmp_path: Path) -> None:
+    where = clone(tmp_path)
+    if sys.prefix != sys.base_prefix:  # the test's environment stands in for the clone's .venv (docs name .venv/bin)
+        (where / ".venv").symlink_to(sys.prefix, target_is_directory=True)
+    run_script(steps(ROOT / page), where, str(Path(sys.executable).parent), timeout=1800)
