@@ -62,16 +62,19 @@ class Step:
     name: str = ""
 
 
-def _commands(block: str) -> list[str]:
-    """The commands of a ``sh`` block: comment-only and blank lines dropped, ``\\`` continuations joined."""
-    commands: list[str] = []
-    pending = ""
-    for line in block.splitlines():
+def _commands(block: str) -> list[tuple[int, str]]:
+    """The commands of a ``sh`` block with their line in it: comment-only and blank lines dropped, ``\\``
+    continuations joined."""
+    commands: list[tuple[int, str]] = []
+    pending, start = "", 0
+    for number, line in enumerate(block.splitlines()):
         if not pending and (not line.strip() or line.lstrip().startswith("#")):
             continue
+        if not pending:
+            start = number
         pending = f"{pending}\n{line}" if pending else line
         if not line.endswith("\\"):
-            commands.append(pending)
+            commands.append((start, pending))
             pending = ""
     assert not pending, f"a continued line ends the block: {pending}"
     return commands
@@ -85,21 +88,23 @@ def steps(path: Path, text: str | None = None, python: bool = False) -> list[Ste
     for block in BLOCK.finditer(text):
         indent, language = len(block.group(1)), block.group(2)
         body = "".join(line[indent:] for line in block.group(3).splitlines(keepends=True))
-        where = f"{path.name}:{text[:block.start()].count(chr(10)) + 1}"
+        line = text[:block.start()].count("\n") + 1  # the fence's line; the body starts on the next
+        where = f"{path.name}:{line}"
         if block.start(3) in files:
             found.append(Step("file", body, where, files[block.start(3)]))
         elif language == "sh":
-            found += [Step("run", command, where) for command in _commands(body)]
+            found += [Step("run", command, f"{path.name}:{line + 1 + i}") for i, command in _commands(body)]
         elif language == "text":
             lines = body.splitlines()
-            for i, line in enumerate(lines):
-                if line.startswith("$ "):
+            for i, text_line in enumerate(lines):
+                if text_line.startswith("$ "):
                     output = lines[i + 1] if i + 1 < len(lines) else ""
-                    found.append(Step("refuse" if output.startswith("error:") else "run", line[2:], where))
+                    found.append(Step("refuse" if output.startswith("error:") else "run", text_line[2:],
+                                      f"{path.name}:{line + 1 + i}"))
         elif language == "python" and python:
             found.append(Step("python", body, where))
         elif language == "":
-            commands = [line for line in body.splitlines() if re.match(r"\s*(\$ |shc |\.venv/)", line)]
+            commands = [code for code in body.splitlines() if re.match(r"\s*(\$ |shc |\.venv/)", code)]
             assert not commands, f"{where}: an unlabelled block holds commands (label it sh or text): {commands[0]}"
     return found
 
@@ -182,11 +187,11 @@ def test_examples_are_found_and_every_exemption_is_used() -> None:
 def test_a_refusal_must_exit_2_and_a_failure_names_its_line(tmp_path: Path) -> None:
     page = tmp_path / "page.md"
     page.write_text("<!-- file: a.txt -->\n```toml\nx = 1\n```\n\n```sh\ntest -f a.txt   # the file is there\n"
-                    "true \\\n  --and-more\n```\n\n```text\n$ exit 2\nerror: refused\n$ false\n```\n",
+                    "true \\\n  --and-more\n```\n\n```text\n$ (exit 2)\nerror: refused\n$ false\n```\n",
                     encoding="utf-8")
     found = steps(page)
     assert [s.kind for s in found] == ["file", "run", "run", "refuse", "run"]
-    with pytest.raises(AssertionError, match=r"FAILED at page.md:13 \(exit 1\)"):
+    with pytest.raises(AssertionError, match=r"FAILED at page.md:15 \(exit 1\)"):
         run_script(found, tmp_path, None, timeout=60)
     run_script(found[:-1], tmp_path, None, timeout=60)
 
