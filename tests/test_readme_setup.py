@@ -49,6 +49,7 @@ def _run(command: str, clone: Path) -> None:
 
 @pytest.mark.skipif(shutil.which("git") is None or not (ROOT / ".git").exists(),
                     reason="needs git and a git checkout to clone")
+@pytest.mark.slow  # two or three installs in a clone; the fast suite runs the set-up once (tests/test_docs_examples.py)
 @pytest.mark.parametrize("order", ["main, test", "test, main, main"])
 def test_readme_setup_commands_work_in_either_order_and_again(order: str, tmp_path: Path) -> None:
     main, test = setup_commands((ROOT / "README.md").read_text(encoding="utf-8"))
