@@ -18,17 +18,17 @@ Medians over the trials; the first trial is excluded (it loads numba's compiled 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import csv
-import io
-import math
 import re
 import statistics
 import tempfile
 import time
 from pathlib import Path
 
-from shc_cli.commands.optimize import _open_study, check_study, run_optimize, write_outputs
+from shc_cli.domain.optimize.checks import check_study
+from shc_cli.domain.optimize.loop import run_optimize
+from shc_cli.domain.optimize.outputs import write_outputs
+from shc_cli.domain.optimize.storage import open_study
 from shc_cli.spec.study import load_study
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -48,16 +48,12 @@ def main() -> None:
         checks = time.perf_counter() - started
         out = Path(folder) / "out"
         started = time.perf_counter()
-        buffer = io.StringIO()
-        with contextlib.redirect_stdout(buffer):
-            run_optimize(study_file, args.trials, 1, "local", None, out, False)
+        report = run_optimize(study_file, args.trials, 1, "local", None, out, False)
         total = time.perf_counter() - started
-        print(buffer.getvalue().strip())
-        found = re.search(r"search overhead (\d+) ms per trial", buffer.getvalue())
-        search = float(found.group(1)) / 1000.0 if found else math.nan
+        search = report.overhead_s / max(report.ran, 1)
         spec = load_study(study_file)
         started = time.perf_counter()
-        write_outputs(spec, out, _open_study(spec, out, True).get_trials(deepcopy=False), figures=True)
+        write_outputs(spec, out, open_study(spec, out, True).get_trials(deepcopy=False), figures=True)
         outputs = time.perf_counter() - started
         with (out / "trials.csv").open(newline="") as handle:
             rows = list(csv.DictReader(handle))

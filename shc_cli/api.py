@@ -16,6 +16,8 @@ if TYPE_CHECKING:
     from typing import Unpack
 
     from shc_cli.domain.config import SimulationConfig, SimulationOptions
+    from shc_cli.domain.optimize.loop import StudyReport
+    from shc_cli.domain.sweeps.run import OnRow, SweepReport
     from shc_cli.loop.runread import RunLog
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
@@ -60,10 +62,37 @@ class Run:
 
 @dataclass
 class SweepResult:
-    """A finished sweep: its output directory and the rows of ``results.csv`` (strings, as in the file)."""
+    """A finished sweep: its output directory and the rows of ``results.csv`` (strings, as in the file).
+
+    Attributes:
+        path: the output directory.
+        rows: the rows of ``results.csv``, grid order.
+        report: what the sweep computed (:class:`~shc_cli.domain.sweeps.run.SweepReport`: workers, wall time,
+            ok / failed / fell counts, the rows as values).
+    """
 
     path: Path
     rows: list[dict[str, str]]
+    report: SweepReport = field(repr=False)
+
+
+@dataclass
+class StudyResult:
+    """A finished study: its output directory and the rows of ``trials.csv`` and ``pareto.csv`` (strings, as in
+    the files).
+
+    Attributes:
+        path: the output directory (``study.db``, ``pareto/tNNNN.toml``, the plots).
+        trials: the rows of ``trials.csv``, one per trial of the study in number order.
+        pareto: the rows of ``pareto.csv``: the complete, feasible, non-dominated trials.
+        report: what the search computed (:class:`~shc_cli.domain.optimize.loop.StudyReport`: trials run by this
+            call, workers, wall time, search overhead).
+    """
+
+    path: Path
+    trials: list[dict[str, str]]
+    pareto: list[dict[str, str]]
+    report: StudyReport = field(repr=False)
 
 
 def load_robot(robot: str | Path = "bullet") -> Robot:
@@ -132,16 +161,35 @@ def open_run(path: Path | str) -> RunLog:
 
 
 def sweep(file: Path | str, *, workers: int | None = None, executor: str = "local", scheduler: str | None = None,
-          out: Path | str | None = None, resume: bool = False, overwrite: bool = False) -> SweepResult:
-    """``shc sweep``: a grid of simulations; returns the output directory and the results table's rows."""
+          out: Path | str | None = None, resume: bool = False, overwrite: bool = False, engine: str | None = None,
+          progress: OnRow | None = None) -> SweepResult:
+    """``shc sweep``: a grid of simulations; returns the output directory and the results table's rows.
+
+    ``engine`` is the physics engine of the runs whose sweep file does not choose one; ``progress`` is called
+    before the first run and as each run finishes (:data:`~shc_cli.domain.sweeps.run.OnRow`).
+    """
+    from shc_cli.domain.sweeps.run import run_sweep
+
+    report = run_sweep(Path(file), workers, executor, scheduler, _path(out), resume, overwrite, engine, progress)
+    return SweepResult(report.path, _table(report.path / "results.csv"), report)
+
+
+def optimize(file: Path | str, *, trials: int | None = None, workers: int | None = None, executor: str = "local",
+             scheduler: str | None = None, out: Path | str | None = None, resume: bool = False,
+             overwrite: bool = False) -> StudyResult:
+    """``shc optimize``: a multi-objective search over simulated runs; returns the output directory, the trials
+    and the Pareto front."""
+    from shc_cli.domain.optimize.loop import run_optimize
+
+    report = run_optimize(Path(file), trials, workers, executor, scheduler, _path(out), resume, overwrite)
+    return StudyResult(report.path, _table(report.path / "trials.csv"), _table(report.path / "pareto.csv"), report)
+
+
+def _table(path: Path) -> list[dict[str, str]]:
     import csv
 
-    from shc_cli.commands.sweep import run_sweep
-
-    path = run_sweep(Path(file), workers, executor, scheduler, _path(out), resume, overwrite)
-    with (path / "results.csv").open(encoding="utf-8", newline="") as handle:
-        rows = list(csv.DictReader(handle))
-    return SweepResult(path, rows)
+    with path.open(encoding="utf-8", newline="") as handle:
+        return list(csv.DictReader(handle))
 
 
 def _path(value: Path | str | None) -> Path | None:

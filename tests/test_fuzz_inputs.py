@@ -248,12 +248,12 @@ terrain = "flat"
 
 def _stub_sweep(monkeypatch: pytest.MonkeyPatch) -> None:
     """No simulations: every point is an ``ok`` row at once (the reading and checking are what is fuzzed)."""
-    from shc_cli.commands import sweep
+    from shc_cli.domain.sweeps import points
 
     def row(point: Any, out: str, *_: Any) -> dict[str, Any]:  # run_point's metrics and skip are not needed
         return {"index": point.index, "slug": point.slug, **point.values, "status": "ok", "error": ""}
 
-    monkeypatch.setattr(sweep, "run_point", row)
+    monkeypatch.setattr(points, "run_point", row)
 
 
 STUDY_TRIALS = 2
@@ -304,7 +304,7 @@ def _stub_study_runs(monkeypatch: pytest.MonkeyPatch) -> None:
     """No simulations: every run of a trial is an ``ok`` row at once, its metrics made from the trial's values (the
     reading, checking, sampling, telling and writing of the results are what is fuzzed; tests/test_optimize.py runs
     real trials)."""
-    from shc_cli.commands import sweep
+    from shc_cli.domain.sweeps import points
 
     def row(point: Any, out: str, metrics: tuple[str, ...] = (), skip: float = 0.0) -> dict[str, Any]:
         numbers = [float(v) for v in point.values.values() if isinstance(v, (int, float)) and not isinstance(v, bool)]
@@ -312,7 +312,7 @@ def _stub_study_runs(monkeypatch: pytest.MonkeyPatch) -> None:
         return {"index": point.index, "slug": point.slug, **point.values, "status": "ok", "error": "", "fell": False,
                 "max_tilt_rad": 0.0, "wall_time_s": 0.0, **{key: base * (k + 1) for k, key in enumerate(metrics)}}
 
-    monkeypatch.setattr(sweep, "run_point", row)
+    monkeypatch.setattr(points, "run_point", row)
 
 
 def _pose_prepare(folder: Path) -> None:

@@ -89,3 +89,24 @@ def test_no_import_cycles_in_shc_cli() -> None:
     graph = import_graph()
     assert {"shc_cli.loop.runread", "shc_cli.interop.bagrun"} <= graph["shc_cli.loop.opening"]
     assert cycles(graph) == []
+
+
+UPWARD = ("shc_cli.commands", "shc_cli.api", "shc_cli.cli")
+"""What the domain layer must not import: the API facade, the commands and the CLI above it."""
+
+
+def test_sweeps_and_optimize_import_nothing_above_the_domain() -> None:
+    graph = import_graph()
+    domain = {name: targets for name, targets in graph.items()
+              if name.startswith(("shc_cli.domain.sweeps", "shc_cli.domain.optimize"))}
+    assert "shc_cli.domain.optimize.loop" in domain and "shc_cli.domain.sweeps.pool" in domain
+    upward = {name: {t for t in targets if t.startswith(UPWARD)} for name, targets in domain.items()}
+    assert {name: targets for name, targets in upward.items() if targets} == {}
+
+
+def test_sweep_and_optimize_commands_only_parse_call_and_print() -> None:
+    for name in ("sweep", "optimize"):
+        path = PACKAGE / "commands" / f"{name}.py"
+        assert len(path.read_text(encoding="utf-8").splitlines()) <= 150, path
+        assert import_graph()[f"shc_cli.commands.{name}"] <= {"shc_cli.api", "shc_cli.progress",
+                                                               "shc_cli.domain.sweeps.results"}

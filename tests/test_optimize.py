@@ -59,7 +59,7 @@ def _write(tmp_path: Path, text: str, name: str = "study.toml") -> Path:
 
 
 def test_shipped_studies_load_and_check() -> None:
-    from shc_cli.commands.optimize import check_study
+    from shc_cli.domain.optimize.checks import check_study
 
     flat = load_study(ROOT / "studies" / "bullet_flat.toml")
     assert {d.key for d in flat.space} == {"gait", "walker.step_frequency", "stride_percent", "walker.swing_height",
@@ -251,6 +251,22 @@ def test_a_trial_with_the_values_of_a_finished_one_is_not_simulated_again(tmp_pa
     assert len(list((out / "runs").iterdir())) == len(rows) - len(copies)
 
 
+def test_the_api_returns_the_study_and_prints_nothing(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import shc_cli
+
+    out = tmp_path / "out"
+    result = shc_cli.optimize(_write(tmp_path, SMALL.format(duration=0.3, seeds="[0]")), trials=2, workers=1, out=out)
+    assert capsys.readouterr().out == ""
+    assert isinstance(result, shc_cli.StudyResult) and result.path == out
+    assert result.trials == _rows(out / "trials.csv") and [r["trial"] for r in result.trials] == ["0", "1"]
+    assert result.pareto == _rows(out / "pareto.csv") and result.pareto
+    assert {r["trial"] for r in result.pareto} <= {r["trial"] for r in result.trials if r["feasible"] == "True"}
+    report = result.report
+    assert (report.ran, report.complete, report.workers, report.executor) == (2, 2, 1, "local")
+    assert report.feasible == sum(r["feasible"] == "True" for r in result.trials)
+    assert 0.0 < report.overhead_s < report.elapsed_s
+
+
 def test_an_existing_study_is_refused_unless_resumed_or_overwritten(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     path = _write(tmp_path, SMALL.format(duration=0.3, seeds="[0]"))
     out = tmp_path / "out"
@@ -295,7 +311,7 @@ def test_a_trial_interrupted_before_all_its_values_were_drawn_is_completed_on_re
 def test_ctrl_c_inside_a_run_stops_the_study_instead_of_failing_the_run(tmp_path: Path,
                                                                          monkeypatch: pytest.MonkeyPatch) -> None:
     """simulate turns Ctrl-C into a one-line error; run_point must not record that as a failed run and go on."""
-    from shc_cli.commands import sweep
+    from shc_cli.domain.sweeps import points
     from shc_cli.errors import ShcError
 
     def interrupted(*_: object) -> None:
@@ -308,11 +324,11 @@ def test_ctrl_c_inside_a_run_stops_the_study_instead_of_failing_the_run(tmp_path
         raise ShcError("a terrain file is missing")
 
     point = load_study(_write(tmp_path, SMALL.format(duration=0.3, seeds="[0]"))).points(0, {"gait": "tripod"})[0]
-    monkeypatch.setattr(sweep, "_simulate", interrupted)
+    monkeypatch.setattr(points, "simulate_point", interrupted)
     with pytest.raises(KeyboardInterrupt):
-        sweep.run_point(point, str(tmp_path))
-    monkeypatch.setattr(sweep, "_simulate", broken)
-    row = sweep.run_point(point, str(tmp_path))
+        points.run_point(point, str(tmp_path))
+    monkeypatch.setattr(points, "simulate_point", broken)
+    row = points.run_point(point, str(tmp_path))
     assert row["status"] == "failed" and "terrain file is missing" in row["error"]
 
 

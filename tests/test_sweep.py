@@ -56,7 +56,7 @@ robot = "bullet_mammalian"
 
 
 def test_engine_is_a_sweepable_option_and_sweep_engine_fills_it_in(tmp_path: Path) -> None:
-    from shc_cli.commands.sweep import with_engine
+    from shc_cli.domain.sweeps.run import with_engine
 
     both = load_sweep(_write(tmp_path, '[grid]\nengine = ["pybullet", "mujoco"]\n"walker.step_frequency" = [1.0]\n'))
     assert [p.options["engine"] for p in both.points] == ["pybullet", "mujoco"]
@@ -97,11 +97,11 @@ def test_the_papers_table4_and_cot_sweeps_are_its_rows_and_figures() -> None:
 
 
 def test_a_variant_changes_only_the_swept_default(tmp_path: Path) -> None:
-    from shc_cli.commands.sweep import _robot_for
+    from shc_cli.domain.sweeps.points import robot_for
     from shc_cli.spec.loading import load_robot
 
     sweep = load_sweep(_write(tmp_path, '[grid]\n"walker.step_frequency" = [0.6]\n"walker.body_clearance" = [0.2]\n'))
-    variant = load_robot(_robot_for(sweep.points[0], tmp_path)).robot
+    variant = load_robot(robot_for(sweep.points[0], tmp_path)).robot
     base = load_robot("bullet").robot
     assert variant is not None and base is not None
     assert variant.walker.step_frequency.default == 0.6
@@ -162,6 +162,33 @@ def test_local_and_dask_give_the_same_results_and_a_failure_is_a_row(tmp_path: P
         assert float(rows[0]["mean_power_w"]) > 0.0
         tables[executor] = [{k: v for k, v in r.items() if k not in TIMING} for r in rows]
     assert tables["local"] == tables["dask"]
+
+
+def test_a_programming_error_is_a_row_that_keeps_its_traceback(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                                caplog: pytest.LogCaptureFixture) -> None:
+    """A bug in shc fails its point like a user error does, but its traceback is kept in the run directory (and
+    logged) and the row says where; a user error stays one line; the next attempt runs the point again."""
+    from shc_cli.domain.sweeps import points
+    from shc_cli.errors import ShcError
+
+    def buggy(*_: object) -> None:
+        raise KeyError("no such column")
+
+    def missing(*_: object) -> None:
+        raise ShcError("a terrain file is missing")
+
+    point = load_sweep(_write(tmp_path, "[grid]\nseed = [1]\n")).points[0]
+    monkeypatch.setattr(points, "simulate_point", buggy)
+    row = points.run_point(point, str(tmp_path / "out"))
+    log = tmp_path / "out" / "runs" / "seed=1" / "error.log"
+    assert row["status"] == "failed" and row["error"] == f"KeyError: 'no such column' (traceback in {log})"
+    text = log.read_text(encoding="utf-8")
+    assert text.startswith("Traceback") and "in buggy" in text and text.rstrip().endswith("'no such column'")
+    assert str(log) in caplog.text
+    monkeypatch.setattr(points, "simulate_point", missing)
+    row = points.run_point(point, str(tmp_path / "out"))
+    assert row["status"] == "failed" and row["error"] == "ShcError: a terrain file is missing"
+    assert not log.exists()
 
 
 def test_ci_smoke_sweep_matches_its_golden_results(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]

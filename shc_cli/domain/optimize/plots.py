@@ -1,7 +1,7 @@
 """Figures of an optimisation study (``shc optimize``): Pareto fronts, parallel coordinates, parameter importance.
 
 matplotlib is imported here only, with the Agg backend; ``trials.csv`` rows are the input (see
-:func:`shc_cli.commands.optimize.trial_rows`).
+:func:`shc_cli.domain.optimize.outputs.trial_rows`).
 """
 
 from __future__ import annotations
