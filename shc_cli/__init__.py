@@ -4,7 +4,7 @@ The public Python API (docs/python-api.md), imported lazily so ``import shc_cli`
 
     import shc_cli
     run = shc_cli.simulate("bullet", gait="tripod", duration=20)
-    run.summary["cot"], run.log.position, run.path
+    run.summary.cot, run.log.position, run.path
 """
 
 from __future__ import annotations
@@ -19,16 +19,16 @@ _EXPORTS = {
     "load_robot": "shc_cli.api", "open_run": "shc_cli.api", "plan": "shc_cli.api", "simulate": "shc_cli.api",
     "sweep": "shc_cli.api", "optimize": "shc_cli.api", "StudyResult": "shc_cli.api",
     "SimulationConfig": "shc_cli.domain.config",
-    "RunLog": "shc_cli.loop.runread",
+    "RunLog": "shc_cli.loop.runread", "RunSummary": "shc_cli.loop.summary",
     "Controller": "shc_cli.control.controller", "Command": "shc_cli.control.controller",
     "RobotState": "shc_cli.control.controller",
     "ShcError": "shc_cli.errors", "SpecError": "shc_cli.errors",
 }
 """Public name → the module that defines it."""
 
-__all__ = ["Command", "Controller", "RobotState", "Run", "RunLog", "ShcError", "SimulationConfig", "SpecError",
-           "StudyResult", "SweepResult", "__version__", "analyze", "load_gait", "load_robot", "open_run", "optimize",
-           "plan", "simulate", "sweep"]
+__all__ = ["Command", "Controller", "RobotState", "Run", "RunLog", "RunSummary", "ShcError", "SimulationConfig",
+           "SpecError", "StudyResult", "SweepResult", "__version__", "analyze", "load_gait", "load_robot", "open_run",
+           "optimize", "plan", "simulate", "sweep"]
 
 if TYPE_CHECKING:
     from shc_cli.api import (
@@ -48,6 +48,7 @@ if TYPE_CHECKING:
     from shc_cli.domain.config import SimulationConfig
     from shc_cli.errors import ShcError, SpecError
     from shc_cli.loop.runread import RunLog
+    from shc_cli.loop.summary import RunSummary
 
 
 def __getattr__(name: str) -> Any:

@@ -19,6 +19,7 @@ if TYPE_CHECKING:
     from shc_cli.domain.optimize.loop import StudyReport
     from shc_cli.domain.sweeps.run import OnRow, SweepReport
     from shc_cli.loop.runread import RunLog
+    from shc_cli.loop.summary import RunSummary
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
 
@@ -33,11 +34,12 @@ class Run:
 
     Attributes:
         path: the run directory.
-        summary: its ``summary.json`` (e.g. ``summary["cot"]``, ``summary["mean_speed_mps"]``).
+        summary: its ``summary.json`` (:class:`~shc_cli.loop.summary.RunSummary`: e.g. ``summary.cot``,
+            ``summary.mean_speed_mps``).
     """
 
     path: Path
-    summary: dict[str, Any]
+    summary: RunSummary
     _log: RunLog | None = field(default=None, repr=False)
 
     @property
@@ -53,7 +55,7 @@ class Run:
     @property
     def complete(self) -> bool:
         """The run played its input to the end (not stopped by a signal, a fall or a fault)."""
-        return bool(self.summary.get("complete", True))
+        return self.summary.complete
 
     def analyze(self, skip: float = 0.0, steady: bool = False) -> dict[str, Any]:
         """``shc analyze`` of this run: CoT, power, speeds, duty factor, slip, stability (keys as ``--json``)."""
@@ -149,7 +151,7 @@ def analyze(run: Run | Path | str, *, skip: float = 0.0, steady: bool = False) -
 
     log = run.log if isinstance(run, Run) else open_run(run)
     result = public(analyze_run(log, Window(skip_s=skip, steady=steady)))
-    result.update(complete=log.complete, stop_reason=log.summary.get("stop_reason", "end"))
+    result.update(complete=log.complete, stop_reason=log.summary.stop_reason)
     return result
 
 

@@ -456,12 +456,13 @@ def import_urdf(
 
 @app.command()
 def schema(
-    kind: Annotated[str, typer.Argument(help="'robot' or 'gait'.")],
+    kind: Annotated[str, typer.Argument(help="'robot', 'gait' or 'summary'.")],
 ) -> None:
-    """Print the JSON Schema of robot or gait files (for editor completion)."""
+    """Print the JSON Schema of robot or gait files (for editor completion) or of a run's summary.json."""
     import json
 
     from shc_cli.errors import NotFoundError
+    from shc_cli.loop.summary import summary_schema
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.loading import robot_file_schema
 
@@ -469,8 +470,10 @@ def schema(
         document = robot_file_schema()
     elif kind == "gait":
         document = Gait.model_json_schema()
+    elif kind == "summary":
+        document = summary_schema()
     else:
-        raise NotFoundError(f"schema: unknown kind '{kind}' (use 'robot' or 'gait')")
+        raise NotFoundError(f"schema: unknown kind '{kind}' (use 'robot', 'gait' or 'summary')")
     typer.echo(json.dumps(document, indent=2))
 
 

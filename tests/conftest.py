@@ -37,3 +37,34 @@ def field_csv(tmp_path: Path) -> Path:
     path = tmp_path / "field.csv"
     np.savetxt(path, grid, delimiter=",", fmt="%.6f")
     return path
+
+
+def summary_problems(root: Path) -> list[str]:
+    """Every ``summary.json`` under ``root`` checked against ``shc schema summary`` (a JSON Schema validator, not the
+    model that wrote it): one line per file and problem."""
+    import json
+
+    import jsonschema
+
+    from shc_cli.loop.summary import summary_schema
+
+    validator = jsonschema.Draft202012Validator(summary_schema())
+    problems = []
+    for file in sorted(root.rglob("summary.json")):
+        try:
+            data = json.loads(file.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as error:
+            problems.append(f"{file}: {error}")
+            continue
+        problems += [f"{file}: {'.'.join(map(str, e.absolute_path)) or '(top)'}: {e.message}"
+                     for e in validator.iter_errors(data)]
+    return problems
+
+
+@pytest.fixture(scope="session", autouse=True)
+def summaries_follow_their_schema(tmp_path_factory: pytest.TempPathFactory):  # type: ignore[no-untyped-def]
+    """At the end of the session, every ``summary.json`` the tests wrote (under pytest's temporary folders) must
+    validate against ``shc schema summary``; an error at the last test's teardown names each file that does not."""
+    yield
+    problems = summary_problems(tmp_path_factory.getbasetemp())
+    assert not problems, "summary.json files that do not follow `shc schema summary`:\n" + "\n".join(problems)

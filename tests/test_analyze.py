@@ -22,6 +22,7 @@ from shc_cli.analysis.metrics import (
     window_mask,
 )
 from shc_cli.loop.runread import RunLog, read_run
+from shc_cli.loop.summary import RunSummary
 
 from .test_cli import run
 
@@ -117,7 +118,7 @@ def _synthetic(bullet, n: int = 400) -> RunLog:  # type: ignore[no-untyped-def]
     legs = len(bullet.legs)
     return RunLog(
         path=Path("synthetic"), kind="simulate",
-        summary={"scenario": "WG", "gait": "tripod", "step_period_cycles": 100},
+        summary=RunSummary(scenario="WG", gait="tripod", step_period_cycles=100),
         robot=bullet, t=t, running=np.ones(n, dtype=bool), walk_state=np.array(["MOVING"] * n),
         command=np.tile([1.0, 0.0, 0.0], (n, 1)), desired=np.tile([0.25, 0.0, 0.0], (n, 1)), position=position,
         rpy=np.zeros((n, 3)), joints=np.repeat(q[None], n, axis=0), contact=np.ones((n, legs), dtype=bool),
@@ -241,7 +242,7 @@ def test_several_runs_make_a_table_and_plots(walked: Path, planned: Path, tmp_pa
     assert isinstance(data, list) and [d["kind"] for d in data] == ["simulate", "plan"]
     # the plan's ideal body path at its steady speed is the speed its stance feet achieve (plan's own summary)
     assert data[1]["cot"] is None and data[1]["steady_speed_mps"] == pytest.approx(
-        read_run(planned).summary["eq16_speed_mps"], rel=1e-3)
+        read_run(planned).summary.eq16_speed_mps, rel=1e-3)
 
 
 @pytest.mark.parametrize(("make", "message"), [

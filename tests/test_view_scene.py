@@ -7,6 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
+from shc_cli.loop.summary import RunSummary
 from shc_cli.model.chains import Chains
 from shc_cli.spec.robot import Robot
 from shc_cli.view import scene
@@ -90,14 +91,14 @@ def test_scene_xml_has_one_mocap_body_per_link_and_foot(bullet: Robot) -> None:
 def test_terrain_shapes_follow_the_summary(tmp_path) -> None:  # type: ignore[no-untyped-def]
     from shc_cli.backends.terrain import Terrain, parse_terrain
 
-    assert scene.terrain_shapes({}) == scene.TerrainShapes("flat", [])
-    stairs = scene.terrain_shapes({"terrain": "stairs:0.05,0.3", "seed": 0})
+    assert scene.terrain_shapes(RunSummary()) == scene.TerrainShapes("flat", [])
+    stairs = scene.terrain_shapes(RunSummary(terrain="stairs:0.05,0.3", seed=0))
     assert stairs.text == "stairs:0.05,0.3" and len(stairs.boxes) > 3 and stairs.mesh is None
     assert max(b.centre[2] + b.size[2] / 2 for b in stairs.boxes) > 0.5
     field = tmp_path / "field.csv"
     field.write_text("0,0.1,0.2\n0.3,0.4,0.5\n", encoding="utf-8")
     text = f"heightfield:{field},1,0.1"
-    shapes = scene.terrain_shapes({"terrain": text})
+    shapes = scene.terrain_shapes(RunSummary(terrain=text))
     assert shapes.mesh is not None
     vertices, faces = shapes.mesh
     assert vertices.shape == (6, 3) and faces.shape == (4, 3)
@@ -107,7 +108,7 @@ def test_terrain_shapes_follow_the_summary(tmp_path) -> None:  # type: ignore[no
     centroids = vertices[faces].mean(axis=1)
     assert all(abs(terrain.height_at(x, y) - z) < 1e-9 for x, y, z in centroids)
     assert sorted(vertices[:, 2]) == sorted([0.0, 0.1, 0.2, 0.3, 0.4, 0.5])
-    assert scene.terrain_shapes({"terrain": "heightfield:/nowhere.csv"}).mesh is None
+    assert scene.terrain_shapes(RunSummary(terrain="heightfield:/nowhere.csv")).mesh is None
 
 
 def _synthetic_run(robot: Robot, rows: int = 400) -> object:
@@ -125,7 +126,8 @@ def _synthetic_run(robot: Robot, rows: int = 400) -> object:
     joints = np.tile(chains.default_joints(), (rows, 1, 1))
     contact = np.zeros((rows, len(robot.legs)), dtype=bool)
     contact[: rows // 2, ::2] = True
-    return RunLog(path=Path("synthetic"), kind="plan", summary={}, robot=robot, t=t, running=np.ones(rows, bool),
+    return RunLog(path=Path("synthetic"), kind="plan", summary=RunSummary(), robot=robot, t=t,
+                  running=np.ones(rows, bool),
                   walk_state=np.full(rows, "MOVING"), command=desired, desired=desired, position=position,
                   rpy=np.column_stack([np.zeros(rows), np.zeros(rows), yaw]), joints=joints, contact=contact,
                   power=np.linspace(10.0, 50.0, rows))

@@ -64,7 +64,7 @@ def window_mask(run: RunLog, window: Window) -> np.ndarray:
     skip = round(window.skip_s / run.dt)
     mask[first:first + skip] = False
     if window.steady:
-        period = max(int(run.summary.get("step_period_cycles") or 1), 1)
+        period = max(run.summary.step_period_cycles or 1, 1)
         same = np.zeros_like(mask)
         if period < len(mask):
             same[period:] = np.abs(run.desired[period:] - run.desired[:-period]).max(axis=1) < 1e-9
@@ -205,12 +205,12 @@ def _period(run: RunLog) -> int:
     from shc_cli.spec.loading import load_gait
 
     try:
-        gait = load_gait(str(run.summary.get("gait") or run.robot.walker.gait)).gait
+        gait = load_gait(run.summary.gait or run.robot.walker.gait).gait
     except ShcError:
         return 0
     if gait is None:
         return 0
-    frequency = float(run.summary.get("step_frequency_hz") or run.robot.walker.step_frequency.default)
+    frequency = float(run.summary.step_frequency_hz or run.robot.walker.step_frequency.default)
     return step_cycle(gait, frequency, run.dt).period
 
 
@@ -221,9 +221,10 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
     dt = run.dt
     summary = run.summary
     out: dict[str, Any] = {
-        "run": str(run.path), "kind": run.kind, "robot": run.robot.name, "gait": summary.get("gait"),
-        "scenario": summary.get("scenario", "plan"),
-        "step_frequency_hz": summary.get("step_frequency_hz", run.robot.walker.step_frequency.default),
+        "run": str(run.path), "kind": run.kind, "robot": run.robot.name, "gait": summary.gait,
+        "scenario": summary.scenario or "plan",
+        "step_frequency_hz": (summary.step_frequency_hz if "step_frequency_hz" in summary.model_fields_set
+                              else run.robot.walker.step_frequency.default),
         "window_s": len(rows) * dt, "window_start_s": float(run.t[rows[0]]) if len(rows) else None,
     }
     keys = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps", "steady_speed_mps",
@@ -250,7 +251,7 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
     if run.power is not None:
         power = float(run.power[rows].mean())
         out["mean_power_w"] = power
-        walking = summary.get("scenario", "WG") == "WG"
+        walking = (summary.scenario or "WG") == "WG"
         out["cot"] = cost_of_transport(power, mass, speed) if walking else None  # eq. 22
     from shc_cli.analysis.joint_limits import joint_limit_fraction
 
@@ -290,7 +291,7 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
         out["zmp_centre_distance_median_m"], out["zmp_centre_distance_iqr_m"] = _median_iqr(zmp_centre)
 
     cycles = {"height": np.zeros(0), "roll_rate": np.zeros(0), "pitch_rate": np.zeros(0)}
-    period = int(summary.get("step_period_cycles") or _period(run))
+    period = summary.step_period_cycles or _period(run)
     if period > 0:
         first, last = rows[0], rows[-1] + 1  # whole cycles of the window's span
         height = per_cycle_rms(run.height[first:last], period) if run.height is not None else np.zeros(0)

@@ -8,7 +8,10 @@ and :func:`progress_note` turns a summary's flag into the words the summary line
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from shc_cli.loop.summary import RunSummary
 
 NO_PROGRESS_SHARE = 0.25
 """A run makes no progress when its body travelled less than this share of the commanded path [ratio]."""
@@ -41,11 +44,11 @@ def progress_fields(walked_m: float, commanded_speed_mps: float, window_s: float
     return {"commanded_distance_m": float(commanded), "walked_share": share, "no_progress": stuck}
 
 
-def progress_note(summary: dict[str, Any]) -> str:
+def progress_note(summary: RunSummary) -> str:
     """``", NO PROGRESS (walked 11% of the 1.20 m commanded)"`` for a summary flagged by :func:`progress_fields`,
     else ``""`` — appended to the plan / simulate summary line."""
-    if not summary.get("no_progress"):
+    if not summary.no_progress:
         return ""
-    share = summary.get("walked_share") or 0.0
-    return (f", NO PROGRESS (walked {share:.0%} of the {summary.get('commanded_distance_m', 0.0):.2f} m "
+    share = summary.walked_share or 0.0
+    return (f", NO PROGRESS (walked {share:.0%} of the {summary.commanded_distance_m or 0.0:.2f} m "
             "commanded)")

@@ -63,7 +63,7 @@ def run_analyze(runs: list[Path], as_json: bool, out: Path | None, skip: float, 
     results = [analyze_run(log, window) for log in logs]
     for log, result in zip(logs, results, strict=True):
         result["complete"] = log.complete
-        result["stop_reason"] = log.summary.get("stop_reason", "end")
+        result["stop_reason"] = log.summary.stop_reason
         note = log.partial_note()
         if note is not None:
             typer.echo(f"note: {note}", err=True)

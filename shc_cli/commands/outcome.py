@@ -7,9 +7,12 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING
 
 import typer
+
+if TYPE_CHECKING:
+    from shc_cli.loop.summary import RunSummary
 
 EXIT_FAULT = 3
 """``run-hw``: a servo fault ended the run."""
@@ -19,15 +22,15 @@ EXIT_INTERRUPTED = {"SIGINT": 130, "SIGTERM": 143}
 """``plan``/``simulate`` stopped by a signal: 128 + the signal's number, as shells report it."""
 
 
-def interrupted_note(summary: dict[str, Any]) -> str:
+def interrupted_note(summary: RunSummary) -> str:
     """``", INTERRUPTED (SIGINT; partial run)"`` for a run that did not play to its end, else ``""``."""
-    if summary.get("complete", True) or summary.get("stop_reason") in ("fault", "fell"):
+    if summary.complete or summary.stop_reason in ("fault", "fell"):
         return ""
-    return f", INTERRUPTED ({summary.get('stop_reason')}; partial run)"
+    return f", INTERRUPTED ({summary.stop_reason}; partial run)"
 
 
-def exit_if_interrupted(summary: dict[str, Any]) -> None:
+def exit_if_interrupted(summary: RunSummary) -> None:
     """Exit 130/143 when a signal stopped the run."""
-    code = EXIT_INTERRUPTED.get(str(summary.get("stop_reason")))
+    code = EXIT_INTERRUPTED.get(summary.stop_reason)
     if code is not None:
         raise typer.Exit(code)

@@ -6,18 +6,21 @@ import time
 from collections.abc import Callable
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 import typer
 
 from shc_cli.loop.run_inputs import parse_velocity, pose_sets_for, walk_cycles
+
+if TYPE_CHECKING:
+    from shc_cli.loop.summary import RunSummary
 
 __all__ = ["parse_velocity", "plan_to", "pose_sets_for", "run_plan", "walk_cycles"]
 
 
 def plan_to(robot_name: str, gait_name: str | None, velocity: str, duration: float | None,
             commands: Path | None, out: Path | None, plots: bool, overwrite: bool = False
-            ) -> tuple[Path, dict[str, Any]]:
+            ) -> tuple[Path, RunSummary]:
     """Load, run through the one loop on the kinematic backend, log (silently); returns the run directory and its
     summary (``complete`` false when a signal stopped it; ``overwrite``: replace an existing run directory when the
     run finishes)."""
@@ -62,12 +65,12 @@ def run_plan(robot_name: str, gait_name: str | None, velocity: str, duration: fl
     from shc_cli.commands.outcome import exit_if_interrupted, interrupted_note
 
     path, summary = plan_to(robot_name, gait_name, velocity, duration, commands, out, plots, overwrite)
-    typer.echo(f"{summary['robot']} / {summary['gait']}: {summary['cycles']} cycles "
-               f"({summary['duration_s']:.2f} s), path speed {summary['path_speed_mps']:.4f} m/s, displacement "
-               f"speed {summary['displacement_speed_mps']:.4f} m/s, stance feet "
-               f"{summary['achieved_mean_speed_mps']:.4f} m/s (eq. 16: {summary['eq16_speed_mps']:.4f}), "
-               f"IK deviations {summary['ik_deviation_count']}, "
-               f"clamped {summary['ik_clamp_count']}{progress_note(summary)}{interrupted_note(summary)} → {path}")
+    typer.echo(f"{summary.robot} / {summary.gait}: {summary.cycles} cycles "
+               f"({summary.duration_s:.2f} s), path speed {summary.path_speed_mps:.4f} m/s, displacement "
+               f"speed {summary.displacement_speed_mps:.4f} m/s, stance feet "
+               f"{summary.achieved_mean_speed_mps:.4f} m/s (eq. 16: {summary.eq16_speed_mps:.4f}), "
+               f"IK deviations {summary.ik_deviation_count}, "
+               f"clamped {summary.ik_clamp_count}{progress_note(summary)}{interrupted_note(summary)} → {path}")
     if after is not None:
         after(path)
     exit_if_interrupted(summary)

@@ -62,6 +62,7 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
     from shc_cli.loop.run_loop import ControlledStop, RunLoop, StartUp
     from shc_cli.loop.runlog import LogRecorder, RunDirectory
     from shc_cli.loop.session import execute
+    from shc_cli.loop.summary import RunSummary
 
     for option, value in (("--on-fault", on_fault), ("--on-stop", on_stop)):
         if value not in ("hold", "torque-off"):
@@ -117,14 +118,14 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
             assert backend is not None
             backend.close(faulted)
 
-        def summarise(result: Any) -> dict[str, Any]:
+        def summarise(result: Any) -> RunSummary:
             assert backend is not None
             cycles = result.cycles
             if len(backend.cycle_times) > 20 and sum(t > dt for t in backend.cycle_times) / len(backend.cycle_times) \
                     > 0.05:
                 typer.echo(f"warning: the loop missed its {dt * 1e3:.0f} ms period in {backend.overruns} of {cycles} "
                            "cycles", err=True)
-            return {
+            return RunSummary.model_validate({
                 "robot": robot.name, "gait": controller.gait.name, "scenario": "hardware", "port": bus.port_name,
                 "baud": bus.baud, "dry_run": dry_run, "cycles": cycles, "sim_time_s": cycles * dt,
                 **backend.statistics(), "wire_time_ms": bus.wire_time() * 1e3, "read_retries": bus.retries,
@@ -134,7 +135,7 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
                 "step_period_cycles": controller.cycle.period, "duty_factor": controller.cycle.duty_factor,
                 "input": input_mode, "watchdog_trips": getattr(source, "watchdog_trips", 0),
                 "unmeasured": UNMEASURED,
-            }
+            })
 
         path, summary, _ = execute(loop, run, summarise, after_loop=release)
     finally:
@@ -143,11 +144,11 @@ def run_hw(robot_name: str, gait_name: str | None, ports: list[str], baud: int |
         if source is not None:
             source.close()
         bus.close()
-    fault = f", FAULT: {summary['fault']}" if summary["fault"] else ""
-    typer.echo(f"{robot.name} on {bus.port_name}: {summary['cycles']} cycles, cycle time mean "
-               f"{summary['cycle_time_mean_ms']:.2f} ms, p99 {summary['cycle_time_p99_ms']:.2f} ms, "
-               f"{summary['overruns']} overruns, ended {summary['final_state']}{fault} → {path}")
-    if summary["fault"]:
+    fault = f", FAULT: {summary.fault}" if summary.fault else ""
+    typer.echo(f"{robot.name} on {bus.port_name}: {summary.cycles} cycles, cycle time mean "
+               f"{summary.cycle_time_mean_ms:.2f} ms, p99 {summary.cycle_time_p99_ms:.2f} ms, "
+               f"{summary.overruns} overruns, ended {summary.final_state}{fault} → {path}")
+    if summary.fault:
         raise typer.Exit(EXIT_FAULT)
     return path
 

@@ -21,19 +21,20 @@ def run_simulate(config: SimulationConfig, after: Callable[[Path], None] | None 
 
     run = simulate(config=config)
     path, summary = run.path, run.summary
-    typer.echo(f"{summary['robot']} / {summary['gait']} / {summary['scenario']} on {config.terrain}: "
-               f"{summary['sim_time_s']:.1f} s simulated in {summary['wall_time_s']:.1f} s, distance "
-               f"{summary['distance_m']:.3f} m, path speed {summary['path_speed_mps']:.4f} m/s, displacement speed "
-               f"{summary['displacement_speed_mps']:.4f} m/s, mean power "
-               f"{summary['mean_power_w']:.1f} W, "
-               f"CoT {summary['cot'] if summary['cot'] is None else round(summary['cot'], 3)}"
-               f"{', FELL' if summary['fell'] else progress_note(summary)}{interrupted_note(summary)} → {path}")
-    for warning in summary.get("engine_warnings", []):
+    cot = summary.cot if summary.cot is None else round(summary.cot, 3)
+    typer.echo(f"{summary.robot} / {summary.gait} / {summary.scenario} on {config.terrain}: "
+               f"{summary.sim_time_s:.1f} s simulated in {summary.wall_time_s:.1f} s, distance "
+               f"{summary.distance_m:.3f} m, path speed {summary.path_speed_mps:.4f} m/s, displacement speed "
+               f"{summary.displacement_speed_mps:.4f} m/s, mean power "
+               f"{summary.mean_power_w:.1f} W, "
+               f"CoT {cot}"
+               f"{', FELL' if summary.fell else progress_note(summary)}{interrupted_note(summary)} → {path}")
+    for warning in summary.engine_warnings or []:
         hint = "" if "--physics-rate" in warning else " (try a higher --physics-rate)"
-        typer.echo(f"note: {summary['engine']}: {warning}{hint}", err=True)
+        typer.echo(f"note: {summary.engine}: {warning}{hint}", err=True)
     if after is not None:
         after(path)
     exit_if_interrupted(summary)
-    if summary["fell"] and config.fail_on_fall:
+    if summary.fell and config.fail_on_fall:
         raise typer.Exit(EXIT_FELL)
     return path

@@ -4,12 +4,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from shc_cli.loop.summary import RunSummary
 
 
 @dataclass(frozen=True)
 class RunResult:
-    """A finished run (also an interrupted one: ``summary["complete"]`` is False).
+    """A finished run (also an interrupted one: ``summary.complete`` is False).
 
     Attributes:
         path: the run directory.
@@ -17,9 +20,9 @@ class RunResult:
     """
 
     path: Path
-    summary: dict[str, Any]
+    summary: RunSummary
 
     @property
-    def pair(self) -> tuple[Path, dict[str, Any]]:
+    def pair(self) -> tuple[Path, RunSummary]:
         """``(path, summary)``, to unpack."""
         return self.path, self.summary

@@ -12,6 +12,7 @@ from shc_cli.domain.result import RunResult
 
 if TYPE_CHECKING:
     from shc_cli.control.controller import Command, CycleOutput
+    from shc_cli.loop.summary import RunSummary
     from shc_cli.progress import ProgressBar
 
 
@@ -64,15 +65,15 @@ def simulate(config: SimulationConfig | None = None) -> RunResult:
                            StartUp(round((robot.start_up.time_to_start + START_UP_MARGIN_S) / robot.time_delta)),
                            observers=observers, flush_every=200)
 
-            def summarise(_: Any) -> dict[str, Any]:
+            def summarise(_: Any) -> RunSummary:
                 import numpy as np
 
                 if progress is not None:
                     progress.stop()
-                return {**record.summary(o.scenario, controller.gait.name, controller), "seed": o.seed,
-                        "terrain": str(world.terrain.spec), "engine": world.name, "engine_version": world.version,
-                        "engine_warnings": world.warnings,
-                        "versions": {"shc": __version__, world.name: world.version, "numpy": np.__version__}}
+                return record.summary(o.scenario, controller.gait.name, controller).updated(
+                    seed=o.seed, terrain=str(world.terrain.spec), engine=world.name, engine_version=world.version,
+                    engine_warnings=world.warnings,
+                    versions={"shc": __version__, world.name: world.version, "numpy": np.__version__})
 
             def plot(folder: Path) -> None:
                 from shc_cli.plots import plot_simulation

@@ -310,7 +310,7 @@ def _topics(run: RunLog, m: _Messages) -> list[Topic]:
 
     # shc's own records, so that `shc analyze` reads a bag as it reads the run directory.
     robot_text = (run.path / ROBOT_FILE).read_text(encoding="utf-8") if (run.path / ROBOT_FILE).exists() else ""
-    summary_text = json.dumps(run.summary)
+    summary_text = json.dumps(run.summary.model_dump(mode="json", exclude_unset=True))
     topics.append(("/shc/robot", "std_msgs/msg/String", lambda s, ns, v: T["std_msgs/msg/String"](data=robot_text),
                    0, np.zeros((n, 0)), True))
     topics.append(("/shc/summary", "std_msgs/msg/String",

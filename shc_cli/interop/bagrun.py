@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from shc_cli.loop.runlog import joint_slots
-from shc_cli.loop.runread import RunLog, bad_run
+from shc_cli.loop.runread import RunLog, bad_run, checked_summary
 
 
 def read_bag_run(path: Path) -> RunLog:
@@ -27,7 +27,7 @@ def read_bag_run(path: Path) -> RunLog:
     topics = read_topics(path)
     if "/shc/robot" not in topics or "/shc/state" not in topics:
         raise bad_run(path, "a bag without shc's /shc/robot and /shc/state topics", "export it with shc export bag")
-    summary = json.loads(topics["/shc/summary"][0][1].data)
+    summary = checked_summary(path, json.loads(topics["/shc/summary"][0][1].data))
     with tempfile.TemporaryDirectory() as directory:
         robot_file = Path(directory) / "robot.toml"
         robot_file.write_text(topics["/shc/robot"][0][1].data, encoding="utf-8")

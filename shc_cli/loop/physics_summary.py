@@ -16,6 +16,7 @@ import numpy as np
 from shc_cli.analysis.cot import cost_of_transport
 from shc_cli.backends.engine import tilt
 from shc_cli.control.controller import RobotState
+from shc_cli.loop.summary import RunSummary
 
 if TYPE_CHECKING:
     from shc_cli.control.controller import Command, CycleOutput
@@ -67,7 +68,7 @@ class PhysicsRecord:
                 return "fell"
         return None
 
-    def summary(self, scenario: str, gait: str, controller: Any) -> dict[str, Any]:
+    def summary(self, scenario: str, gait: str, controller: Any) -> RunSummary:
         """Paper eq. 22 cost of transport over the RUNNING window: mean power / (m·g·v) (WG only)."""
         world = self.backend.world
         wall = time.perf_counter() - self.started
@@ -91,7 +92,7 @@ class PhysicsRecord:
         mean_power = float(power[running].mean()) if running.any() else 0.0
         mass = robot.total_mass()
         cot = cost_of_transport(mean_power, mass, speed) if scenario == "WG" else None
-        return {
+        return RunSummary.model_validate({
             "robot": robot.name,
             "gait": gait,
             "scenario": scenario,
@@ -119,7 +120,7 @@ class PhysicsRecord:
             "cot": cot,
             "max_tilt_rad": self.max_tilt,
             "fell": self.fell,
-        }
+        })
 
 
 def _window_path(xy: np.ndarray, running: np.ndarray) -> np.ndarray:

@@ -17,6 +17,7 @@ import numpy as np
 
 from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
 from shc_cli.control.walk import WalkState
+from shc_cli.loop.summary import RunSummary
 
 
 class PlanRecord:
@@ -52,7 +53,7 @@ def eq16_speed(controller: Controller, linear_input: tuple[float, float]) -> flo
     return stride * cycle.frequency / cycle.duty_factor
 
 
-def plan_summary(robot: Any, controller: Controller, record: PlanRecord, seconds: float) -> dict[str, Any]:
+def plan_summary(robot: Any, controller: Controller, record: PlanRecord, seconds: float) -> RunSummary:
     """Cycles, speeds (achieved by the stance feet vs paper eq. 16), odometry, IK statistics."""
     dt = robot.time_delta
     outputs = record.outputs
@@ -77,7 +78,7 @@ def plan_summary(robot: Any, controller: Controller, record: PlanRecord, seconds
     path_speed, displacement_speed = window_speeds(xy, running, dt)  # as `shc analyze` measures the plan
     desired = np.array([o.velocity[:2] for o in outputs]).reshape(-1, 2)[running]
     commanded = float(np.linalg.norm(desired, axis=1).mean()) if len(desired) else 0.0
-    return {
+    return RunSummary.model_validate({
         "robot": robot.name,
         "gait": controller.gait.name,
         "cycles": len(outputs),
@@ -101,4 +102,4 @@ def plan_summary(robot: Any, controller: Controller, record: PlanRecord, seconds
         "ik_clamp_count": sum(o.ik_clamped for o in outputs),
         "wall_time_s": seconds,
         "walkspace": {str(b): r for b, r in controller.walkspace.items()},
-    }
+    })

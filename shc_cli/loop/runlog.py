@@ -28,7 +28,6 @@ marked only by ``"complete": false``.
 
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
@@ -41,6 +40,7 @@ from shc_cli.spec.robot import Robot
 
 if TYPE_CHECKING:  # the controller (and numba) only for the annotation: readers of runs stay light
     from shc_cli.control.controller import CycleOutput
+    from shc_cli.loop.summary import RunSummary
 
 PARTIAL_SUFFIX = ".partial"
 ROBOT_FILE = "robot.toml"
@@ -118,10 +118,13 @@ class RunDirectory:
     def finished(self) -> bool:
         return not self.partial.exists() and self.directory.exists()
 
-    def finish(self, summary: dict[str, Any]) -> Path:
-        """Write ``summary.json``, close the tables and give the directory its final name."""
+    def finish(self, summary: RunSummary) -> Path:
+        """Write ``summary.json`` (:class:`~shc_cli.loop.summary.RunSummary`), close the tables and give the
+        directory its final name."""
+        from shc_cli.loop.summary import write_summary
+
         self.close()
-        (self.partial / "summary.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+        write_summary(self.partial, summary)
         replace_directory(self.partial, self.directory, self.overwrite)
         return self.directory
 

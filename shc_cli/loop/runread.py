@@ -19,6 +19,7 @@ import numpy as np
 
 from shc_cli.errors import OutputError, SpecError
 from shc_cli.loop.runlog import PARTIAL_SUFFIX, ROBOT_FILE
+from shc_cli.loop.summary import RunSummary
 from shc_cli.spec.robot import Robot
 
 
@@ -55,7 +56,7 @@ class RunLog:
 
     path: Path
     kind: str
-    summary: dict[str, Any]
+    summary: RunSummary
     robot: Robot
     t: np.ndarray
     running: np.ndarray
@@ -90,14 +91,14 @@ class RunLog:
     @property
     def complete(self) -> bool:
         """The run played its input to the end (runs written before ``complete`` existed count as complete)."""
-        return bool(self.summary.get("complete", True))
+        return self.summary.complete
 
     def partial_note(self) -> str | None:
         """``"<path>: a partial run (stopped by SIGINT after 4.2 s)"`` for an interrupted run, else None."""
         if self.complete:
             return None
         seconds = float(self.t[-1]) if len(self.t) else 0.0
-        return f"{self.path}: a partial run (stopped by {self.summary.get('stop_reason', '?')} after {seconds:.2f} s)"
+        return f"{self.path}: a partial run (stopped by {self.summary.stop_reason} after {seconds:.2f} s)"
 
 
 def read_run(path: Path) -> RunLog:
@@ -111,12 +112,12 @@ def read_run(path: Path) -> RunLog:
     if path.name.endswith(PARTIAL_SUFFIX) and not (path / "summary.json").exists():
         raise bad_run(path, "an unfinished run (no summary.json)", "analyse a finished run")
     try:
-        summary = json.loads((path / "summary.json").read_text(encoding="utf-8"))
+        data = json.loads((path / "summary.json").read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise bad_run(path, "no summary.json", "give a directory written by shc plan or shc simulate") from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
         raise bad_run(path / "summary.json", f"unreadable: {first_line(error)}", "re-run to regenerate it") from None
-    _check_summary(path / "summary.json", summary)
+    summary = checked_summary(path / "summary.json", data)
     robot = _robot(path, summary)
     try:
         if (path / "log.csv").exists():
@@ -128,33 +129,27 @@ def read_run(path: Path) -> RunLog:
     raise bad_run(path, "neither log.csv (simulate) nor joints.csv and body.csv (plan)", "re-run to regenerate it")
 
 
-SUMMARY_NUMBERS = ("step_period_cycles", "step_frequency_hz", "duty_factor", "time_delta_s")
-"""Summary keys the readers of a run compute with: numbers when present."""
-SUMMARY_TEXTS = ("robot", "gait", "scenario")
-
-
 def first_line(error: BaseException) -> str:
     text = str(error).strip().splitlines()
     return f"{type(error).__name__}: {text[0].strip() if text else ''}".rstrip(": ")
 
 
-def _check_summary(file: Path, summary: Any) -> None:
-    """A summary is a JSON object whose keys that readers use have the right types; one line if not."""
-    import math
+def checked_summary(file: Path, data: Any) -> RunSummary:
+    """The :class:`RunSummary` of a ``summary.json``'s JSON data; one line naming the first bad field if it is not
+    one (keys this version does not know are left out)."""
+    from pydantic import ValidationError
 
-    if not isinstance(summary, dict):
-        raise bad_run(file, f"a JSON {type(summary).__name__}, not an object", "re-run to regenerate it")
-    for key in SUMMARY_NUMBERS:
-        value = summary.get(key)
-        if value is not None and (isinstance(value, bool) or not isinstance(value, int | float)
-                                  or not math.isfinite(value) or value < 0):
-            raise bad_run(file, f"{key}: {value!r} is not a non-negative number", "re-run to regenerate it")
-    if isinstance(summary.get("step_period_cycles"), float):
-        raise bad_run(file, "step_period_cycles: not a whole number", "re-run to regenerate it")
-    for key in SUMMARY_TEXTS:
-        value = summary.get(key)
-        if value is not None and not isinstance(value, str):
-            raise bad_run(file, f"{key}: {value!r} is not text", "re-run to regenerate it")
+    from shc_cli.loop.summary import parse_summary
+
+    try:
+        return parse_summary(data)
+    except TypeError as error:
+        raise bad_run(file, str(error), "re-run to regenerate it") from None
+    except ValidationError as error:
+        first = error.errors()[0]
+        where = ".".join(str(part) for part in first["loc"])
+        raise bad_run(file, f"{where}: {first.get('input')!r} {first['msg'].lower()}",
+                      "re-run to regenerate it") from None
 
 
 def is_bag(path: Path) -> bool:
@@ -168,11 +163,11 @@ def bad_run(path: Path, problem: str, fix: str) -> SpecError:
     return SpecError([Issue(path, None, "", problem, fix)])
 
 
-def _robot(path: Path, summary: dict[str, Any]) -> Robot:
+def _robot(path: Path, summary: RunSummary) -> Robot:
     """The run's own expanded robot, or the bundled robot it names (runs written before robot.toml existed)."""
     from shc_cli.spec.loading import load_robot
 
-    source: str | Path = path / ROBOT_FILE if (path / ROBOT_FILE).exists() else str(summary.get("robot", ""))
+    source: str | Path = path / ROBOT_FILE if (path / ROBOT_FILE).exists() else str(summary.robot or "")
     loaded = load_robot(source)
     if loaded.robot is None:
         raise bad_run(path, f"robot '{source}' cannot be loaded", "keep robot.toml in the run directory")
@@ -233,7 +228,7 @@ def _stack(columns: dict[str, np.ndarray], names: list[str]) -> np.ndarray:
     return np.stack([columns[name] for name in names], axis=1)
 
 
-def _simulate_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
+def _simulate_run(path: Path, summary: RunSummary, robot: Robot) -> RunLog:
     c = _table(path / "log.csv")
     rows = len(c["t"])
     legs = list(robot.legs)
@@ -257,7 +252,7 @@ def _simulate_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
     )
 
 
-def _plan_run(path: Path, summary: dict[str, Any], robot: Robot) -> RunLog:
+def _plan_run(path: Path, summary: RunSummary, robot: Robot) -> RunLog:
     joints = _table(path / "joints.csv")
     body = _table(path / "body.csv")
     tips = _table(path / "tips.csv") if (path / "tips.csv").exists() else None

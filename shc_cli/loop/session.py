@@ -11,15 +11,15 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 from shc_cli.loop.run_loop import LoopResult, RunLoop
 from shc_cli.loop.runlog import RunDirectory
+from shc_cli.loop.summary import RunSummary
 
 
-def execute(loop: RunLoop, run: RunDirectory, summarise: Callable[[LoopResult], dict[str, Any]],
+def execute(loop: RunLoop, run: RunDirectory, summarise: Callable[[LoopResult], RunSummary],
             plot: Callable[[Path], None] | None = None, after_loop: Callable[[LoopResult], None] | None = None
-            ) -> tuple[Path, dict[str, Any], LoopResult]:
+            ) -> tuple[Path, RunSummary, LoopResult]:
     """Run the loop, then finish the run directory (summary, plots, final name), interrupted or not.
 
     Args:
@@ -48,13 +48,13 @@ def execute(loop: RunLoop, run: RunDirectory, summarise: Callable[[LoopResult], 
         try:
             summary = summarise(result)
         except KeyboardInterrupt:  # a second signal in the (short) summary: the rows and a minimal summary
-            summary = {"cycles": result.cycles, "summary_skipped": True}
-        summary.update(complete=result.complete, stop_reason=result.stop_reason)
+            summary = RunSummary(cycles=result.cycles, summary_skipped=True)
+        summary = summary.updated(complete=result.complete, stop_reason=result.stop_reason)
         if plot is not None and result.cycles > 0:  # a run stopped before its first cycle has nothing to draw
             try:
                 plot(run.partial)
             except KeyboardInterrupt:
-                summary["plots_skipped"] = True
+                summary.plots_skipped = True
         return run.finish(summary), summary, result
     finally:
         signals.restore()

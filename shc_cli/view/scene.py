@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from shc_cli.analysis.metrics import rotation_rpy
+from shc_cli.loop.summary import RunSummary
 from shc_cli.model.chains import Chains, FloatArray
 from shc_cli.spec.robot import Robot
 
@@ -184,15 +184,15 @@ class TerrainShapes:
     mesh: tuple[FloatArray, np.ndarray] | None = None
 
 
-def terrain_shapes(summary: dict[str, Any]) -> TerrainShapes:
+def terrain_shapes(summary: RunSummary) -> TerrainShapes:
     """The terrain a run walked on, from its summary (``terrain``, ``seed``), as the simulation built it. A terrain
     that cannot be rebuilt (a height-field file no longer there) is drawn flat."""
     from shc_cli.backends.terrain import FEATURE_START_X, Terrain, parse_terrain
     from shc_cli.errors import ShcError
 
-    text = str(summary.get("terrain") or "flat")
+    text = summary.terrain or "flat"
     try:
-        terrain = Terrain(parse_terrain(text), int(summary.get("seed") or 0))
+        terrain = Terrain(parse_terrain(text), summary.seed or 0)
         raw = terrain.boxes()
     except (ShcError, OSError, ValueError):
         return TerrainShapes(text, [])

@@ -405,11 +405,11 @@ class RunPage:
         self.zmp = api.add_icosphere("/zmp", radius=0.012, color=(150, 40, 200), visible=False)
         duration = float(run.t[-1])
         summary = run.summary
-        gui.add_markdown(f"**{run.robot.name}** / {summary.get('gait', '')} — {run.kind} run `{run.path.name}`, "
+        gui.add_markdown(f"**{run.robot.name}** / {summary.gait or ''} — {run.kind} run `{run.path.name}`, "
                          f"{duration:.1f} s on {data.terrain.text}.  \nBlue: body path; orange: commanded path; red: "
                          "CoM; purple: ZMP; green feet: on the ground."
                          + ("" if run.complete else f"  \n**Partial run**: stopped by "
-                            f"{summary.get('stop_reason', '?')} after {duration:.1f} s."))
+                            f"{summary.stop_reason} after {duration:.1f} s."))
         self.timeline = gui.add_slider("time [s]", min=float(run.t[0]), max=duration, step=run.dt,
                                        initial_value=float(run.t[0]))
         buttons = gui.add_button_group("playback", ("Play", "Pause"))

@@ -49,8 +49,9 @@ def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: 
             raise KeyboardInterrupt
         run = open_run(directory)
         result = analyze_run(run, Window(skip_s=skip))
-        row.update({key: run.summary.get(key) for key in RUN_KEYS})
-        row[WARNINGS] = "; ".join(run.summary.get(WARNINGS) or [])
+        summary = run.summary.model_dump(include=set(RUN_KEYS))  # RunSummary fields
+        row.update({key: summary[key] for key in RUN_KEYS})
+        row[WARNINGS] = "; ".join(run.summary.engine_warnings or [])
         row.update({key: result.get(key) for key in metrics})
     except ShcError as error:  # a failing run is a row, not the end of the sweep
         if interrupted(error):
@@ -98,11 +99,13 @@ def stopped_by_signal(directory: Path) -> bool:
     """A finished run directory whose summary says it did not play to its end because of a signal."""
     import json
 
+    from shc_cli.loop.summary import parse_summary
+
     try:
-        summary = json.loads((directory / "summary.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
+        summary = parse_summary(json.loads((directory / "summary.json").read_text(encoding="utf-8")))
+    except (OSError, ValueError, TypeError):  # pydantic's ValidationError is a ValueError
         return False
-    return summary.get("stop_reason") in ("SIGINT", "SIGTERM")
+    return summary.stop_reason in ("SIGINT", "SIGTERM")
 
 
 def one_line(error: BaseException) -> str:
