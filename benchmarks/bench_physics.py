@@ -115,7 +115,7 @@ def floor(cycles: int) -> None:
     with tempfile.TemporaryDirectory() as directory:
         summary = simulate(SimulationConfig(duration=cycles * sim.robot.time_delta, out=Path(directory) / "run",
                                             plots=False)).summary
-    wall, physics = summary["running_wall_time_s"], summary["running_physics_time_s"]
+    wall, physics = summary.running_wall_time_s or 0.0, summary.running_physics_time_s or 1.0
     print(f"{'whole loop + log.csv':24s} wall/physics {wall / physics:.3f} (walking part of the run loop)")
 
 

@@ -63,7 +63,7 @@ def _tiny_frames(run_dir: Path, frames: int) -> tuple[list[float], float]:
 
     run = read_run(run_dir)
     client = p.connect(p.DIRECT)
-    build_terrain(client, parse_terrain(str(run.summary.get("terrain", "flat"))), 0.9, 0.0, 0)
+    build_terrain(client, parse_terrain(run.summary.terrain or "flat"), 0.9, 0.0, 0)
     with tempfile.NamedTemporaryFile("w", suffix=".urdf", delete=False) as handle:
         handle.write(robot_urdf(run.robot))
     body = p.loadURDF(handle.name, physicsClientId=client)

@@ -184,6 +184,6 @@ def test_a_signal_before_the_first_cycle_finishes_the_run_directory(tmp_path: Pa
     monkeypatch.setattr(simulated, "open_world", open_then_signal)
     path, summary = simulate(SimulationConfig(robot="bullet", duration=1.0, out=tmp_path / "early", engine="mujoco",
                                               plots=False)).pair
-    assert summary["complete"] is False and summary["stop_reason"] == "SIGTERM"
+    assert summary.complete is False and summary.stop_reason == "SIGTERM"
     assert (path / "summary.json").exists() and (path / "log.csv").read_text().count("\n") == 1  # the header only
     assert signal.getsignal(signal.SIGTERM) is signal.SIG_DFL

@@ -24,7 +24,7 @@ def _walk(tmp: Path, name: str, robot: str, seconds: float, switches: dict[str, 
           engine: str = "pybullet") -> list[dict[str, str]]:
     path, summary = simulate(SimulationConfig.from_options(switches, robot=robot, duration=seconds, out=tmp / name,
                                                            plots=False, terrain="ramp:10", engine=engine)).pair
-    assert summary["fell"] is False
+    assert summary.fell is False
     return _log(path)
 
 
@@ -88,7 +88,7 @@ def test_admittance_keeps_more_feet_on_the_ground_over_a_step(engine: str, tmp_p
     for name, on in (("off", False), ("on", True)):
         path, summary = simulate(SimulationConfig(robot=str(robot), duration=8.0, out=tmp_path / name, plots=False,
                                                   terrain="stairs:0.06,1.0", admittance=on, engine=engine)).pair
-        assert summary["fell"] is False
+        assert summary.fell is False
         rows = [r for r in _log(path) if r["robot_state"] == "RUNNING" and 0.2 < float(r["x"]) < 1.4]
         assert len(rows) > 300
         counts[name] = [sum(int(float(r[f"{leg}_contact"])) for leg in legs) for r in rows]
@@ -141,7 +141,7 @@ def test_rough_terrain_mode_keeps_more_feet_down_on_blocks(engine: str, tmp_path
     for name, robot_name in (("normal", "bullet"), ("rough", str(robot))):
         path, summary = simulate(SimulationConfig(robot=robot_name, gait="tripod", duration=8.0, out=tmp_path / name,
                                                   plots=False, terrain="blocks:0.01,0.05", engine=engine)).pair
-        assert summary["fell"] is False
+        assert summary.fell is False
         rows = [r for r in _log(path) if r["robot_state"] == "RUNNING" and float(r["x"]) > 0.8]
         assert len(rows) > 150
         counts = [sum(int(float(r[f"{leg}_contact"])) for leg in legs) for r in rows]
