@@ -16,6 +16,7 @@ if TYPE_CHECKING:
     from typing import Unpack
 
     from shc_cli.domain.config import SimulationConfig, SimulationOptions
+    from shc_cli.domain.hardware import HardwareConfig
     from shc_cli.domain.optimize.loop import StudyReport
     from shc_cli.domain.sweeps.run import OnRow, SweepReport
     from shc_cli.loop.runread import RunLog
@@ -121,11 +122,10 @@ def plan(robot: str | Path = "bullet", *, gait: str | None = None, velocity: Vel
          duration: float | None = None, commands: Path | str | None = None, out: Path | str | None = None,
          plots: bool = True, overwrite: bool = False) -> Run:
     """``shc plan``: the controller run kinematically; returns the run (joints, tips and body tables)."""
-    from shc_cli.commands.plan import plan_to
+    from shc_cli.domain.plan import plan as run
 
-    path, summary = plan_to(str(robot), gait, _velocity(velocity), duration, _path(commands), _path(out), plots,
-                            overwrite)
-    return Run(path, summary)
+    result = run(str(robot), gait, _velocity(velocity), duration, _path(commands), _path(out), plots, overwrite)
+    return Run(result.path, result.summary)
 
 
 def simulate(robot: str | Path | None = None, *, config: SimulationConfig | None = None,
@@ -144,15 +144,22 @@ def simulate(robot: str | Path | None = None, *, config: SimulationConfig | None
     return Run(result.path, result.summary)
 
 
+def run_hardware(config: HardwareConfig) -> Run:
+    """``shc run-hw``: the controller on the robot's Dynamixel servos, started, stopped and shut down safely
+    (:class:`~shc_cli.domain.hardware.HardwareConfig`); ``summary["fault"]`` names a servo fault. The bus set-up,
+    warnings and faults are logged (logger ``shc_cli.domain.hardware``)."""
+    from shc_cli.domain.hardware import run_hardware as run
+
+    result = run(config)
+    return Run(result.path, result.summary)
+
+
 def analyze(run: Run | Path | str, *, skip: float = 0.0, steady: bool = False) -> dict[str, Any]:
     """``shc analyze --json`` of a run directory, a bag or a :class:`Run`."""
-    from shc_cli.analysis.metrics import Window, analyze_run
-    from shc_cli.commands.analyze import public
+    from shc_cli.analysis.metrics import Window, analyze_log, public
 
     log = run.log if isinstance(run, Run) else open_run(run)
-    result = public(analyze_run(log, Window(skip_s=skip, steady=steady)))
-    result.update(complete=log.complete, stop_reason=log.summary.stop_reason)
-    return result
+    return public(analyze_log(log, Window(skip_s=skip, steady=steady)))
 
 
 def open_run(path: Path | str) -> RunLog:

@@ -244,9 +244,12 @@ def run_hw(
 ) -> None:
     """Run the controller on the robot's Dynamixel servos (Protocol 2.0), safely."""
     from shc_cli.commands.run_hw import run_hw as run
+    from shc_cli.domain.hardware import HardwareConfig
 
-    run(robot, gait, port, baud, velocity, duration, commands, out, dry_run, on_fault, on_stop, input_mode, watchdog,
-        stop_state, profile_velocity, overwrite)
+    run(HardwareConfig(robot=robot, ports=port, baud=baud, gait=gait, on_fault=on_fault, on_stop=on_stop,
+                       stop_state=stop_state, input_mode=input_mode, velocity=velocity, duration=duration,
+                       commands=commands, out=out, dry_run=dry_run, profile_velocity=profile_velocity,
+                       watchdog=watchdog, overwrite=overwrite))
 
 
 @app.command()

@@ -113,7 +113,7 @@ def test_a_gait_for_other_legs_is_refused_on_stdin(monkeypatch: pytest.MonkeyPat
     """run-hw's stdin gait loader refuses a gait for another leg set (the line is ignored with a warning)."""
     import sys
 
-    from shc_cli.commands.run_hw import _source
+    from shc_cli.domain.hardware import _source
 
     monkeypatch.setattr(sys, "stdin", io.StringIO(""))
     from shc_cli.errors import SpecError

@@ -307,3 +307,17 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
     out["_series"] = {"rows": rows, "margin": margins, "zmp": zmp, "zmp_margin": zmp_margin, "feet": feet,
                       "com": com, "contact": contact, "cycles": cycles}
     return out
+
+
+def analyze_log(run: RunLog, window: Window = Window()) -> dict[str, Any]:
+    """:func:`analyze_run` plus whether the run played to its end (``complete``) and why it stopped
+    (``stop_reason``: ``end``, ``SIGINT``, ``fell``, ``fault``, …)."""
+    result = analyze_run(run, window)
+    result["complete"] = run.complete
+    result["stop_reason"] = run.summary.stop_reason
+    return result
+
+
+def public(result: dict[str, Any]) -> dict[str, Any]:
+    """A result of :func:`analyze_run` without its plot series (the ``_``-keys): what ``analyze --json`` prints."""
+    return {k: v for k, v in result.items() if not k.startswith("_")}

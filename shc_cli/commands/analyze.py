@@ -31,11 +31,6 @@ COLUMNS = (
 """Terminal table columns: result key, header, format."""
 
 
-def public(result: dict[str, Any]) -> dict[str, Any]:
-    """A result without its plot series (what ``--json`` prints)."""
-    return {k: v for k, v in result.items() if not k.startswith("_")}
-
-
 def _cell(value: Any, fmt: str) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return "–"
@@ -54,16 +49,14 @@ def table(results: list[dict[str, Any]]) -> str:
 
 
 def run_analyze(runs: list[Path], as_json: bool, out: Path | None, skip: float, steady: bool) -> None:
-    from shc_cli.analysis.metrics import analyze_run
-    from shc_cli.loop.opening import open_run
+    from shc_cli.analysis.metrics import analyze_log, public
+    from shc_cli.api import open_run
     from shc_cli.outputs import ensure_dir, write_text
 
     logs = [open_run(path) for path in runs]
     window = Window(skip_s=skip, steady=steady)
-    results = [analyze_run(log, window) for log in logs]
-    for log, result in zip(logs, results, strict=True):
-        result["complete"] = log.complete
-        result["stop_reason"] = log.summary.stop_reason
+    results = [analyze_log(log, window) for log in logs]
+    for log in logs:
         note = log.partial_note()
         if note is not None:
             typer.echo(f"note: {note}", err=True)

@@ -15,7 +15,7 @@ from shc_cli.errors import Issue, SpecError
 def run_replay(source: Path, robot_name: str, gait_name: str | None, as_json: bool, out: Path | None,
                tolerance_joints: float | None) -> int:
     """Replay, print, write ``--out``; returns the exit code (1 only when ``--tolerance-joints`` is exceeded)."""
-    from shc_cli.commands.plan import pose_sets_for
+    from shc_cli.loop.run_inputs import pose_sets_for
     from shc_cli.outputs import ensure_dir, write_text
     from shc_cli.replay import replay
     from shc_cli.replay.opening import open_source

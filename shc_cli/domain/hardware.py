@@ -1,0 +1,235 @@
+"""One run on real Dynamixel servos (``shc run-hw``), at the robot's control period.
+
+Start: open every bus, ping every servo, check models, hardware errors, operating modes and position limits (refuse
+to start with every problem listed), write the robot file's return delay and current limit, read the present
+positions — the controller starts from them and runs the robot file's start-up (direct, or unpack + start-up
+sequence). Each cycle:
+one sync read per bus (positions, velocities, currents), the controller step, goal positions clamped to the joint
+limits and to the joints' speed limits, one sync write per bus (optionally with profile velocity). The loop keeps
+its period with a drift-free deadline (``next += period``) and counts overruns. The input (timeline, stdin,
+keyboard, gamepad) drives velocity, posing, gait and the robot state once the start-up is done. Ctrl-C, SIGTERM or
+the end of the input: the robot stops walking and shuts down to ``stop_state`` (sequence mode: shut-down sequence
+and pack; direct mode: back to the joints it started from), then the torque goes off (or is held, ``on_stop``).
+A servo fault (no reply to the sync read, hardware error status) stops commanding motion at once — no further goal
+is written — and holds or turns the torque off (``on_fault``), naming the servo. ``dry_run`` does everything
+except the current-limit, torque-enable and goal writes.
+
+The run directory has the ``simulate`` log format (quantities a real robot does not measure — body pose, IMU,
+foot forces — are 0 and listed in the summary's ``unmeasured``) plus ``cycle_time_ms`` in ``timing.csv``; the
+summary adds cycle-time statistics, overruns and faults. The loop is the one run loop
+(:mod:`shc_cli.loop.run_loop`) on the Dynamixel backend (:mod:`shc_cli.backends.dynamixel`). Never prints: the
+bus set-up, warnings and faults go to ``logging`` (logger ``shc_cli.domain.hardware``).
+"""
+
+from __future__ import annotations
+
+import logging
+from datetime import datetime
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, field_validator
+
+from shc_cli.domain.result import RunResult
+from shc_cli.errors import Issue, SpecError
+from shc_cli.loop.input_sources import STATES
+
+if TYPE_CHECKING:
+    from collections.abc import Sequence
+
+    from shc_cli.backends.base import InputSource
+    from shc_cli.control.controller import Command
+    from shc_cli.loop.run_loop import LoopResult
+    from shc_cli.loop.summary import RunSummary
+    from shc_cli.spec.gait import Gait
+    from shc_cli.spec.robot import Robot
+
+log = logging.getLogger(__name__)
+
+STOP_TIMEOUT_S = 10.0
+"""Longest controlled stop and shut-down after Ctrl-C, beyond the sequences' own time, before the torque goes off
+anyway [s]."""
+INPUTS = "timeline, commands:FILE, stdin, keyboard, gamepad or gamepad:DEVICE"
+_TAKES_ARGUMENT = {"timeline": False, "commands": True, "stdin": False, "keyboard": False, "gamepad": None}
+"""Input kind → whether it takes ``:ARGUMENT`` (None: optional)."""
+OnFault = Literal["hold", "torque-off"]
+
+
+class HardwareConfig(BaseModel):
+    """Every option of ``shc run-hw`` (the same names, the same defaults), checked on construction.
+
+    Attributes:
+        robot: robot file or bundled name (its ``[hardware]`` servo table).
+        ports: serial device of each servo bus, bus 0 first.
+        baud: baud rate (None: ``hardware.baud``) [bit/s].
+        gait: gait file or name (None: the robot's).
+        input_mode: ``timeline``, ``commands:FILE``, ``stdin``, ``keyboard`` or ``gamepad[:DEVICE]``.
+        velocity: constant velocity input ``"VX,VY,WZ"`` of the timeline.
+        duration: seconds to run after start-up (None: a timeline's length + 1 s, or 20 s) [s].
+        commands: command timeline (CSV or TOML plan script).
+        out: run directory (None: ``runs/<timestamp>-run-hw``).
+        dry_run: everything except current-limit, torque-enable and goal writes.
+        stop_state: the state to shut down to: ``packed``, ``ready`` or ``running``.
+        on_fault: on a servo fault, ``hold`` or ``torque-off``.
+        on_stop: after the controlled stop, ``hold`` or ``torque-off``.
+        profile_velocity: also write Profile Velocity.
+        watchdog: stdin: seconds without a line before the velocity goes to 0 [s].
+        overwrite: replace an existing run directory at ``out`` when the run finishes.
+    """
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    robot: str
+    ports: list[str]
+    baud: int | None = None
+    gait: str | None = None
+    on_fault: OnFault = "torque-off"
+    on_stop: OnFault = "torque-off"
+    stop_state: str = "packed"
+    input_mode: str = "timeline"
+    velocity: str = "0,0,0"
+    duration: float | None = None
+    commands: Path | None = None
+    out: Path | None = None
+    dry_run: bool = False
+    profile_velocity: bool = False
+    watchdog: float = 0.5
+    overwrite: bool = False
+
+    @field_validator("on_fault", "on_stop", mode="before")
+    @classmethod
+    def _hold_or_off(cls, value: object, info: Any) -> object:
+        if value not in ("hold", "torque-off"):
+            option = "--" + str(info.field_name).replace("_", "-")
+            raise SpecError([Issue(None, None, option, f"'{value}' is not hold or torque-off",
+                                   "use hold or torque-off")])
+        return value
+
+    @field_validator("stop_state")
+    @classmethod
+    def _stop_state(cls, value: str) -> str:
+        if value not in STATES:
+            raise SpecError([Issue(None, None, "--stop-state", f"'{value}' is not a robot state",
+                                   "use packed, ready or running")])
+        return value
+
+    @field_validator("input_mode")
+    @classmethod
+    def _input(cls, value: str) -> str:
+        kind, _, argument = value.partition(":")
+        if kind not in _TAKES_ARGUMENT or _TAKES_ARGUMENT[kind] not in (None, bool(argument)):
+            raise SpecError([Issue(None, None, "--input", f"'{value}' is not an input", f"use {INPUTS}")])
+        return value
+
+
+def run_hardware(config: HardwareConfig) -> RunResult:
+    """Start up, run the input on the servos, stop and shut down safely; returns the run directory and its summary
+    (``summary["fault"]`` names a servo fault)."""
+    from shc_cli.backends.dynamixel import UNMEASURED, DynamixelBackend
+    from shc_cli.control.controller import Controller
+    from shc_cli.hardware.bus import HardwareError, ServoBus
+    from shc_cli.loop.run_inputs import load_inputs
+    from shc_cli.loop.run_loop import ControlledStop, RunLoop, StartUp
+    from shc_cli.loop.runlog import LogRecorder, RunDirectory
+    from shc_cli.loop.session import execute
+    from shc_cli.loop.summary import RunSummary
+
+    c = config
+    kind, _, argument = c.input_mode.partition(":")
+    commands = Path(argument) if kind == "commands" else c.commands
+    inputs = load_inputs(c.robot, c.gait, c.velocity, c.duration, commands, default_s=20.0)
+    robot, gait = inputs.robot, inputs.gait
+    bus = ServoBus(robot, c.ports, c.baud, c.profile_velocity)
+    source: InputSource | None = None
+    backend: DynamixelBackend | None = None
+    faulted = False
+    try:
+        source = _source(kind, argument, robot, gait, inputs.timeline.commands(inputs.cycles), c.watchdog)
+        bus.open()
+        problems = bus.check()
+        if problems:
+            raise HardwareError(f"{bus.port_name}: refusing to start: " + "; ".join(problems))
+        if not c.dry_run:
+            for done in bus.configure():
+                log.info("%s", done)
+        bus_time = bus.wire_time()
+        if bus_time > robot.time_delta:
+            log.warning("warning: one cycle needs %.1f ms on the bus (packets and return delays at %s baud), more "
+                        "than the %.0f ms period: raise the baud rate, lower Return Delay Time "
+                        "(hardware.return_delay_us) or split the servos over more buses", bus_time * 1e3, bus.baud,
+                        robot.time_delta * 1e3)
+        directory = c.out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-run-hw"
+        run = RunDirectory(directory, c.overwrite)
+        backend = DynamixelBackend(robot, bus, c.dry_run, run, c.on_fault, c.on_stop)
+        controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
+                                direct_shutdown=True)
+        run.write_robot(robot)
+        dt = robot.time_delta
+        stop = STATES[c.stop_state]
+        action = "holding" if c.on_fault == "hold" else "torque off"
+        loop = RunLoop(controller, backend, source, LogRecorder(run, robot, backend),
+                       StartUp(round((robot.start_up.time_to_start * 2.5 + 10.0) / dt), as_fault=True),
+                       ControlledStop(stop, STOP_TIMEOUT_S), flush_every=100,
+                       on_fault=lambda text: log.error("fault: %s — %s", text, action))
+
+        def release(result: LoopResult) -> None:
+            nonlocal faulted
+            faulted = result.fault is not None
+            assert backend is not None
+            backend.close(faulted)
+
+        def summarise(result: LoopResult) -> RunSummary:
+            assert backend is not None
+            cycles = result.cycles
+            if len(backend.cycle_times) > 20 and sum(t > dt for t in backend.cycle_times) / len(backend.cycle_times) \
+                    > 0.05:
+                log.warning("warning: the loop missed its %.0f ms period in %d of %d cycles", dt * 1e3,
+                            backend.overruns, cycles)
+            return RunSummary.model_validate({
+                "robot": robot.name, "gait": controller.gait.name, "scenario": "hardware", "port": bus.port_name,
+                "baud": bus.baud, "dry_run": c.dry_run, "cycles": cycles, "sim_time_s": cycles * dt,
+                **backend.statistics(), "wire_time_ms": bus.wire_time() * 1e3, "read_retries": bus.retries,
+                "fault": result.fault, "stopped_by_request": bool(result.stop_reason != "fault"),
+                "final_state": controller.state.name, "stop_state": stop.name,
+                "step_frequency_hz": controller.parameters["step_frequency"],
+                "step_period_cycles": controller.cycle.period, "duty_factor": controller.cycle.duty_factor,
+                "input": c.input_mode, "watchdog_trips": getattr(source, "watchdog_trips", 0),
+                "unmeasured": UNMEASURED,
+            })
+
+        path, summary, _ = execute(loop, run, summarise, after_loop=release)
+    finally:
+        if backend is not None:
+            backend.close(faulted)  # torque off (or held) also when the loop raised
+        if source is not None:
+            source.close()
+        bus.close()
+    return RunResult(path, summary)
+
+
+def _source(kind: str, argument: str, robot: Robot, gait: Gait, commands: Sequence[Command],
+            watchdog: float) -> InputSource:
+    """The input source (keyboard and gamepad cycle through the bundled gaits that fit the robot's legs)."""
+    from shc_cli.loop.input_sources import GamepadInput, KeyboardInput, StdinInput, TimelineInput
+    from shc_cli.spec.loading import bundled, load_gait
+
+    def gait_of(name: str) -> Gait:
+        found = load_gait(name).gait
+        assert found is not None  # load_gait raises a SpecError on a bad file
+        if set(found.offset_multiplier) != set(robot.legs):
+            legs = ", ".join(found.offset_multiplier)
+            raise SpecError([Issue(None, None, "gait", f"gait '{name}' is for legs {legs}",
+                                   f"use a gait for {', '.join(robot.legs)}")])
+        return found
+
+    if kind == "stdin":
+        return StdinInput(watchdog_s=watchdog, load_gait=gait_of)
+    if kind in ("keyboard", "gamepad"):
+        gaits = [g for g in (load_gait(name).gait for name in bundled("gaits"))
+                 if g is not None and set(g.offset_multiplier) == set(robot.legs)]
+        source: KeyboardInput | GamepadInput = KeyboardInput(gaits) if kind == "keyboard" else GamepadInput(
+            argument or None, gaits)
+        names = [g.name for g in gaits]
+        source.gait_index = names.index(gait.name) if gait.name in names else 0  # the next gait is the one after
+        return source
+    return TimelineInput(commands)
