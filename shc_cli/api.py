@@ -203,3 +203,10 @@ def _table(path: Path) -> list[dict[str, str]]:
 
 def _path(value: Path | str | None) -> Path | None:
     return None if value is None else Path(value)
+
+
+def warm_up() -> float:
+    """Compile shc's numba kernels into their cache (``shc warmup``); returns the seconds it took."""
+    from shc_cli.domain.warmup import warm_up as compile_kernels
+
+    return compile_kernels()

@@ -480,6 +480,14 @@ def schema(
     typer.echo(json.dumps(document, indent=2))
 
 
+@app.command()
+def warmup() -> None:
+    """Compile the kinematics and walk kernels into numba's cache now (the set-up command runs it once)."""
+    from shc_cli.commands.warmup import run_warmup
+
+    run_warmup()
+
+
 def main() -> None:
     """Console entry point: user errors become one line and exit code 2; no traceback unless --debug."""
     debug = "--debug" in sys.argv[1:]

@@ -1,0 +1,35 @@
+"""Compile shc's numba kernels into numba's cache ahead of the first real command (``shc warmup``).
+
+The kinematics (:mod:`shc_cli.model.kernels`), the walk (:mod:`shc_cli.control.stepping`) and admittance control
+(:mod:`shc_cli.control.admittance`) are compiled by numba on first use and cached beside their sources (the
+editable install's ``__pycache__``); later processes load them in milliseconds. Compiling takes ≈ 10 s on a 2-core
+machine (≈ 5× a short simulation; docs/performance.md), so the README's set-up command runs this once: the first
+``shc simulate`` of a new install then starts as fast as the second.
+
+The kernels are compiled by running what calls them, with the types the commands pass (numba compiles one version
+per argument-type signature): a short simulation — start-up, the workspace search, walking — with and without
+admittance control, into a throwaway run directory.
+"""
+
+from __future__ import annotations
+
+import logging
+import tempfile
+import time
+from pathlib import Path
+
+log = logging.getLogger(__name__)
+
+
+def warm_up() -> float:
+    """Compile (or load) every kernel; returns the seconds it took."""
+    from shc_cli.domain.config import SimulationConfig
+    from shc_cli.domain.simulate import simulate
+
+    started = time.perf_counter()
+    with tempfile.TemporaryDirectory(prefix="shc-warmup-") as folder:
+        for admittance in (False, True):
+            out = Path(folder) / f"admittance-{admittance}"
+            simulate(SimulationConfig(duration=0.2, out=out, plots=False, admittance=admittance))
+            log.debug("warm-up run %s done", out.name)
+    return time.perf_counter() - started
