@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -15,6 +16,23 @@ ROOT = Path(__file__).resolve().parents[1]
 GOLDEN = ROOT / "golden"
 EXPERIMENTS = ROOT / "docs" / "experiments"
 sys.path.insert(0, str(EXPERIMENTS))  # the experiment scripts (a folder, not a package) import as modules in tests
+
+IN_CI = os.environ.get("CI") == "true"
+"""CI (``CI=true``, as .ci/run and CI services set it): a browser or GL test must run, not skip."""
+
+
+def unless_missing(missing: bool, reason: str) -> pytest.MarkDecorator:
+    """Skip a test whose tool (Chromium, offscreen OpenGL) is ``missing`` — except in CI, where it fails with
+    ``reason`` instead, so a CI machine without the tool cannot pass by skipping."""
+    if missing and IN_CI:
+        return pytest.mark.missing_in_ci(reason)
+    return pytest.mark.skipif(missing, reason=reason)
+
+
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    missing = item.get_closest_marker("missing_in_ci")
+    if missing is not None:
+        pytest.fail(f"CI=true and {missing.args[0]}", pytrace=False)
 
 
 @pytest.fixture(scope="session")

@@ -37,7 +37,7 @@ def test_the_readme_has_one_line_commands_and_ci_runs_the_readme_test_command() 
         assert "\n" not in command
         assert "--allow-existing" in command  # a second run must not stop at "A virtual environment already exists"
         assert command.startswith("python3 -m pip install")  # only python3 and its pip are assumed
-    assert test.endswith("pytest -q")
+    assert test.endswith("pytest -q -n auto")  # the fast suite (pyproject: -m "not slow") on every core
     ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8")
     assert "README.md" in ci and "pytest" in ci  # .ci/run takes its test command from the README
 

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from .conftest import ROOT
+from .conftest import ROOT, unless_missing
 from .test_cli import run
 
 FPS = 5.0
@@ -22,8 +22,8 @@ def _has_offscreen_gl() -> bool:
     return subprocess.run([sys.executable, "-c", code], capture_output=True).returncode == 0
 
 
-needs_gl = pytest.mark.skipif(not _has_offscreen_gl(),
-                              reason="needs offscreen OpenGL: apt-get update && apt-get install -y libosmesa6")
+needs_gl = unless_missing(not _has_offscreen_gl(),
+                         reason="needs offscreen OpenGL: apt-get update && apt-get install -y libosmesa6")
 
 
 @pytest.fixture(scope="module")

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from .conftest import ROOT
+from .conftest import ROOT, unless_missing
 
 CHROMIUM = shutil.which("chromium") or ("/usr/bin/chromium" if Path("/usr/bin/chromium").exists() else None)
 try:
@@ -27,7 +27,7 @@ try:
 except ImportError:  # pragma: no cover - the test extra installs it
     HAVE_PLAYWRIGHT = False
 
-needs_chromium = pytest.mark.skipif(
+needs_chromium = unless_missing(
     CHROMIUM is None or not HAVE_PLAYWRIGHT,
     reason="needs Debian's chromium and playwright: apt-get update && apt-get install -y chromium chromium-driver; "
            "python3 -m uv pip install --python .venv -e '.[test]'")
