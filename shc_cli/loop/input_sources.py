@@ -32,7 +32,7 @@ from collections.abc import Callable, Sequence
 from typing import IO, Any
 
 from shc_cli.control.controller import Command, RobotState
-from shc_cli.errors import ShcError
+from shc_cli.errors import ShcError, install_hint
 from shc_cli.spec.gait import Gait
 
 STATES = {"packed": RobotState.PACKED, "ready": RobotState.READY, "running": RobotState.RUNNING}
@@ -264,7 +264,7 @@ class GamepadInput(HeldInput):
         try:
             import evdev
         except ImportError:  # evdev is Linux only
-            raise InputError("--input gamepad needs the evdev package (Linux): pip install evdev") from None
+            raise InputError(f"--input gamepad needs the evdev package (Linux only): {install_hint()}") from None
         self.device = _open_gamepad(evdev, device)
         self.mapping = GamepadMapping(self.device.capabilities(absinfo=True))
         print(f"gamepad: {self.device.name} ({self.device.path})", file=sys.stderr, flush=True)
