@@ -45,3 +45,19 @@ def test_every_link_and_named_file_of_the_docs_exists() -> None:
             if not (ROOT / named).exists():
                 missing.append(f"{page.relative_to(ROOT)}: {named}")
     assert not missing, "\n".join(missing)
+
+
+def test_install_hints_name_the_clone_install_and_extras_that_exist() -> None:
+    """A missing dependency's message says the install that works from a clone (uv's venv has no pip, and `shc` on
+    the package index is another project), and every extra it names is in pyproject.toml."""
+    import tomllib
+
+    from shc_cli.errors import install_hint
+
+    extras = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]["optional-dependencies"]
+    named = {m for p in (ROOT / "shc_cli").rglob("*.py")
+             for m in re.findall(r"install_hint\('(\w+)'\)", p.read_text(encoding="utf-8"))}
+    assert named and named <= set(extras), named
+    assert install_hint("dask").endswith("python3 -m uv pip install --python .venv -e '.[dask]'")
+    assert install_hint().endswith("python3 -m uv pip install --python .venv -e .")
+    assert "shc[" not in "".join(p.read_text(encoding="utf-8") for p in (ROOT / "shc_cli").rglob("*.py"))

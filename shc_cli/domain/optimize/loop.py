@@ -36,7 +36,7 @@ from shc_cli.domain.optimize.storage import STORAGE, open_study, prepare_output
 from shc_cli.domain.sweeps.checks import check_executor
 from shc_cli.domain.sweeps.pool import RunPool
 from shc_cli.domain.sweeps.results import Row
-from shc_cli.errors import Issue, ShcError, SpecError
+from shc_cli.errors import Issue, ShcError, SpecError, install_hint
 from shc_cli.spec.study import Dimension, load_study
 
 if TYPE_CHECKING:
@@ -129,7 +129,7 @@ def run_optimize(file: Path, trials: int | None = None, workers: int | None = No
         import optuna
     except ImportError:
         raise SpecError([Issue(None, None, "optimize", "optuna is not installed",
-                               "pip install 'shc[optimize]' (optuna, optuna-dashboard)")]) from None
+                               install_hint())]) from None
     spec = load_study(file)
     check_executor(executor, scheduler)
     check_study(spec)

@@ -9,7 +9,7 @@ from typing import Any
 
 from shc_cli.domain.sweeps import points
 from shc_cli.domain.sweeps.results import METRICS, Row
-from shc_cli.errors import Issue, SpecError
+from shc_cli.errors import Issue, SpecError, install_hint
 from shc_cli.spec.sweep import Point
 
 
@@ -35,8 +35,8 @@ class RunPool:
             try:
                 from dask import distributed
             except ImportError:
-                raise SpecError([Issue(None, None, "--executor", "dask is not installed", "pip install 'shc[dask]' "
-                                       "(dask[distributed]) or use --executor local")]) from None
+                raise SpecError([Issue(None, None, "--executor", "dask is not installed",
+                                       f"{install_hint('dask')}, or use --executor local")]) from None
             self._dask = distributed
             if self.scheduler is None:
                 self._cluster = self._dask.LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
