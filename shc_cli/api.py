@@ -18,6 +18,8 @@ if TYPE_CHECKING:
     from shc_cli.domain.config import SimulationConfig, SimulationOptions
     from shc_cli.domain.hardware import HardwareConfig
     from shc_cli.domain.optimize.loop import StudyReport
+    from shc_cli.domain.result import RunResult
+    from shc_cli.domain.ros_node import NodeConfig
     from shc_cli.domain.sweeps.run import OnRow, SweepReport
     from shc_cli.loop.runread import RunLog
     from shc_cli.loop.summary import RunSummary
@@ -210,3 +212,10 @@ def warm_up() -> float:
     from shc_cli.domain.warmup import warm_up as compile_kernels
 
     return compile_kernels()
+
+
+def ros_node(config: NodeConfig) -> RunResult:
+    """``shc ros``: OpenSHC's ROS 1 node until its duration, a signal or ``rosnode kill``; the finished run."""
+    from shc_cli.domain.ros_node import run_node
+
+    return run_node(config)

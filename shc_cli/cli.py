@@ -253,6 +253,33 @@ def run_hw(
 
 
 @app.command()
+def ros(
+    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name, or 'server': OpenSHC's parameters "
+                                              "from the parameter server (/syropod, as its launch files load them).")]
+    = "bullet",
+    backend: Annotated[str, typer.Option(help="none: outputs only, as OpenSHC (a hardware node of yours reads "
+                                              "them).")] = "none",
+    name: Annotated[str, typer.Option(help="Node name.")] = "/shc",
+    master: Annotated[str | None, typer.Option(help="ROS master URI (default: $ROS_MASTER_URI).")] = None,
+    duration: Annotated[float | None, typer.Option(help="Stop after this many seconds (default: until Ctrl-C).")]
+    = None,
+    individual: Annotated[bool, typer.Option(help="Publish /<LEG>_<joint>_joint/command (Float64, + offset).")]
+    = True,
+    combined: Annotated[bool, typer.Option(help="Publish /desired_joint_states.")] = True,
+    out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-ros).")] = None,
+    overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
+) -> None:
+    """Run as OpenSHC's ROS 1 node: its topics, messages and parameters, driven by syropod_remote."""
+    from shc_cli.commands.ros import run_ros
+    from shc_cli.domain.ros_node import NodeConfig
+
+    if backend not in ("none",):
+        raise ShcError(f"--backend: '{backend}' is not a backend here (use none)")
+    run_ros(NodeConfig(robot=robot, backend="none", name=name, master_uri=master, duration=duration, out=out,
+                       individual=individual, combined=combined, overwrite=overwrite))
+
+
+@app.command()
 def analyze(
     runs: Annotated[list[Path], typer.Argument(help="Run directories from plan or simulate.")],
     json_output: Annotated[bool, typer.Option("--json", help="Print JSON only (an object, or a list for several).")]

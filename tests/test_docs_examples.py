@@ -43,6 +43,8 @@ EXEMPT: dict[str, str] = {
     "rosbag record": "needs ROS 1 and a running OpenSHC",
     "optuna-dashboard": "serves a page until Ctrl-C",
     "taplo check": "taplo is an editor tool, not installed here (tests/test_robot_files.py checks the schema)",
+    "shc ros": "needs a ROS 1 master (tests/test_ros_session.py runs it against Debian's roscore)",
+    "rosparam": "needs a ROS 1 master (tests/test_ros_node.py reads rosparam values)",
     "shc run-hw": "needs the robot's servos (tests/test_run_hw.py runs it against the servo emulator)",
 }
 """Command prefixes that are not run, and why."""

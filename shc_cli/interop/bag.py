@@ -138,7 +138,7 @@ def quaternions(rotations: np.ndarray) -> np.ndarray:
     return out.reshape(*shape, 4)
 
 
-class _Messages:
+class Messages:
     """Message constructors of one typestore (ROS 1 headers carry a ``seq``)."""
 
     def __init__(self, store: Any) -> None:
@@ -199,7 +199,7 @@ def export_bag(run: RunLog, out: Path, fmt: str) -> Path:
     temporary = staging / out.name
     store = typestore_for(fmt)
     serialize: Callable[[Any, str], bytes] = store.serialize_ros1 if fmt == "ros1" else store.serialize_cdr
-    topics = _topics(run, _Messages(store))
+    topics = _topics(run, Messages(store))
     if fmt == "ros1":
         from rosbags.rosbag1 import Writer as Writer1
 
@@ -235,7 +235,7 @@ def export_bag(run: RunLog, out: Path, fmt: str) -> Path:
 Topic = tuple[str, str, Callable[[int, int, np.ndarray], Any], int, np.ndarray, bool]
 
 
-def _topics(run: RunLog, m: _Messages) -> list[Topic]:
+def _topics(run: RunLog, m: Messages) -> list[Topic]:
     """Every topic: (name, type, builder, numbers per message, numbers ``(N, width)``, written once)."""
     from shc_cli.analysis.metrics import rotation_rpy
     from shc_cli.backends.pybullet_.urdf import robot_urdf
@@ -370,7 +370,7 @@ def _topics(run: RunLog, m: _Messages) -> list[Topic]:
     return topics
 
 
-def _leg_states(run: RunLog, m: _Messages, chains: Any, legs: list[str], measured: np.ndarray,
+def _leg_states(run: RunLog, m: Messages, chains: Any, legs: list[str], measured: np.ndarray,
                 commanded: np.ndarray, efforts: np.ndarray, leg_of_slot: np.ndarray, actual: np.ndarray) -> list[Topic]:
     """One LegState topic per leg (``/shc/LEG/state``)."""
     T = m.T

@@ -163,7 +163,8 @@ class RunLoop:
             command = self.source.next()
             if command is not None:
                 return command
-            self.stop_reason = "end"  # the input is over
+            if self.stop_reason is None:  # (a stop requested while the input waited keeps its reason)
+                self.stop_reason = "end"  # the input is over
         if self.stop_reason is not None:
             return self._stopping(cycle)
         assert self.start_up is not None

@@ -135,10 +135,19 @@ class RunSummary(BaseModel):
     port: str | None = Field(None, description="run-hw: the serial port(s), comma-separated.")
     baud: NonNegativeInt | None = Field(None, description="run-hw: the bus baud rate [bit/s].")
     dry_run: bool | None = Field(None, description="run-hw: no goal, torque or current-limit write was made.")
-    cycle_time_mean_ms: NonNegativeFloat | None = Field(None, description="run-hw: mean cycle time [ms].")
-    cycle_time_p99_ms: NonNegativeFloat | None = Field(None, description="run-hw: 99th percentile cycle time [ms].")
-    cycle_time_max_ms: NonNegativeFloat | None = Field(None, description="run-hw: longest cycle [ms].")
-    overruns: NonNegativeInt | None = Field(None, description="run-hw: cycles longer than the control period.")
+    cycle_time_mean_ms: NonNegativeFloat | None = Field(None, description="run-hw, ros: mean cycle time [ms].")
+    cycle_time_p50_ms: NonNegativeFloat | None = Field(None, description="ros: median cycle period [ms].")
+    cycle_time_p99_ms: NonNegativeFloat | None = Field(None, description="run-hw, ros: 99th percentile cycle time "
+                                                                         "[ms].")
+    cycle_time_max_ms: NonNegativeFloat | None = Field(None, description="run-hw, ros: longest cycle [ms].")
+    rate_hz: NonNegativeFloat | None = Field(None, description="ros: mean control rate held against the wall clock, "
+                                                               "waits while SUSPENDED left out [Hz].")
+    pauses: NonNegativeInt | None = Field(None, description="ros: waits (SUSPENDED system) left out of the cycle "
+                                                            "times.")
+    overruns: NonNegativeInt | None = Field(None, description="run-hw, ros: cycles longer than the control period.")
+    node: str | None = Field(None, description="ros: the node's name.")
+    ros_master: str | None = Field(None, description="ros: the ROS master's URI.")
+    backend: str | None = Field(None, description="ros: none (outputs only) or the physics engine.")
     wire_time_ms: NonNegativeFloat | None = Field(None, description="run-hw: bus time one cycle needs (packets and "
                                                                     "return delays) [ms].")
     read_retries: NonNegativeInt | None = Field(None, description="run-hw: sync reads repeated after a bad reply.")

@@ -1,0 +1,22 @@
+"""``shc ros``: OpenSHC's node on ROS 1 (parse, call the API, print the summary line, choose the exit code)."""
+
+from __future__ import annotations
+
+import typer
+
+from shc_cli.domain.ros_node import NodeConfig
+
+
+def run_ros(config: NodeConfig) -> None:
+    """Run the node; print where it listens, then one line when it stops (exit 0 also after Ctrl-C: that is how an
+    open-ended node ends)."""
+    from shc_cli.api import ros_node
+
+    typer.echo(f"shc ros: node {config.name} on {config.master_uri or 'ROS_MASTER_URI'}, backend {config.backend}; "
+               "Ctrl-C stops it", err=True)
+    result = ros_node(config)
+    s = result.summary
+    timing = (f" at {s.rate_hz:.1f} Hz (period p50 {s.cycle_time_p50_ms:.2f} ms, p99 {s.cycle_time_p99_ms:.2f} ms, max "
+              f"{s.cycle_time_max_ms:.2f} ms)" if s.rate_hz and s.cycle_time_p50_ms is not None
+              and s.cycle_time_p99_ms is not None and s.cycle_time_max_ms is not None else "")
+    typer.echo(f"{s.robot} / {s.gait}: {s.cycles} cycles{timing}, stopped by {s.stop_reason} → {result.path}")

@@ -1,0 +1,178 @@
+"""``shc ros``: OpenSHC's node on ROS 1 — the one controller on the one run loop, with ROS as its input and output.
+
+The node subscribes OpenSHC's remote topics (:mod:`shc_cli.ros.remote`), publishes what OpenSHC publishes
+(:mod:`shc_cli.ros.outputs`) at the controller's rate against the wall clock (:mod:`shc_cli.loop.pacing`), and
+drives a backend: ``none`` (outputs only, as OpenSHC with a separate hardware node), or a physics engine (the
+robot simulated — a Gazebo-free OpenSHC simulation — with its measured joints and IMU published on
+``/joint_states`` and ``/imu/data``). The robot comes from an shc robot file or from the parameter server's
+``/syropod`` tree that OpenSHC's launch files load. Every session is also an ordinary run directory (log, summary).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+from datetime import datetime
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Literal
+
+from shc_cli.domain.result import RunResult
+
+if TYPE_CHECKING:
+    from shc_cli.loop.summary import RunSummary
+    from shc_cli.ros.node import RosNode
+    from shc_cli.spec.gait import Gait
+    from shc_cli.spec.robot import Robot
+
+log = logging.getLogger(__name__)
+
+NodeBackend = Literal["none", "mujoco", "pybullet"]
+SERVER = "server"
+"""The robot name that reads the robot from the parameter server (``/syropod/parameters`` …)."""
+
+
+@dataclass(frozen=True)
+class NodeConfig:
+    """Options of ``shc ros``.
+
+    Attributes:
+        robot: robot file or bundled name, or ``"server"``: OpenSHC's parameters from the parameter server.
+        backend: ``none`` (outputs only) or a physics engine.
+        name: the node's name.
+        master_uri: the ROS master (None: ``$ROS_MASTER_URI``).
+        duration: stop after this many seconds of wall time (None: until Ctrl-C / SIGTERM / rosnode kill).
+        out: the run directory (None: ``runs/<timestamp>-ros``).
+        individual: publish the per-joint command topics (default: as the robot's parameters say, else on).
+        combined: publish ``/desired_joint_states``.
+        overwrite: replace an existing run directory.
+        namespace: the parameter tree read for ``robot = "server"``.
+    """
+
+    robot: str = "bullet"
+    backend: NodeBackend = "none"
+    name: str = "/shc"
+    master_uri: str | None = None
+    duration: float | None = None
+    out: Path | None = None
+    individual: bool = True
+    combined: bool = True
+    overwrite: bool = False
+    namespace: str = "/syropod"
+
+
+def run_node(config: NodeConfig) -> RunResult:
+    """Run the node until its duration passes, a signal, or ``rosnode kill``; returns the finished run directory.
+
+    Raises:
+        ShcError: bad input, or no ROS master (one line), before anything is written.
+    """
+    from shc_cli.ros.messages import MessageTypes
+    from shc_cli.ros.node import RosNode
+
+    directory = config.out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-ros"
+    node = RosNode(config.name, MessageTypes(), config.master_uri)
+    try:
+        robot, gait, pose_sets, gaits = _robot(node, config, directory)
+        return _run(node, config, robot, gait, pose_sets, gaits, directory)
+    finally:
+        node.close()
+
+
+def _robot(node: RosNode, config: NodeConfig, directory: Path) -> tuple[Robot, Gait, Any, dict[str, Gait]]:
+    """The robot, its gait and auto-pose sets, and the gaits ``gait_selection`` can choose."""
+    import tempfile
+
+    from shc_cli.loop.run_inputs import load_inputs
+    from shc_cli.spec.loading import load_gait
+
+    source = config.robot
+    if source == SERVER:
+        source = str(_robot_from_server(node, config.namespace, Path(tempfile.mkdtemp(prefix="shc-ros-"))))
+    inputs = load_inputs(source, None, "0,0,0", None, None, default_s=1.0)
+    gaits: dict[str, Gait] = {}
+    for name in ("wave", "amble", "ripple", "tripod"):
+        try:
+            candidate = load_gait(name).gait
+        except Exception:
+            continue
+        if candidate is not None and set(candidate.offset_multiplier) >= set(inputs.robot.legs):
+            gaits[name] = candidate
+    return inputs.robot, inputs.gait, inputs.pose_sets, gaits
+
+
+def _robot_from_server(node: RosNode, namespace: str, folder: Path) -> Path:
+    """Write the robot (and its gaits) of the parameter server's OpenSHC tree as shc files; the robot file."""
+    from shc_cli.errors import Issue, SpecError
+    from shc_cli.interop.openshc import gaits_from_openshc, robot_from_openshc
+    from shc_cli.outputs import write_text
+    from shc_cli.spec.toml_out import dump_toml
+
+    if not node.has_param(f"{namespace}/parameters"):
+        raise SpecError([Issue(None, None, "robot", f"the parameter server has no {namespace}/parameters",
+                               "load OpenSHC's parameters first (rosparam load ROBOT.yaml, or its launch file), "
+                               "or give an shc robot file")])
+    params = node.get_param(f"{namespace}/parameters")
+    assert isinstance(params, dict)
+    name = str(params.get("syropod_type", "server_robot"))
+    try:
+        tree, _unused = robot_from_openshc(params, name)
+    except (KeyError, TypeError, ValueError) as error:
+        raise SpecError([Issue(None, None, f"{namespace}/parameters", f"missing or malformed OpenSHC parameter: "
+                               f"{error}", "compare with OpenSHC's config/default.yaml")]) from None
+    if node.has_param(f"{namespace}/gait_parameters"):
+        gait_params = node.get_param(f"{namespace}/gait_parameters")
+        assert isinstance(gait_params, dict)
+        for gait_name, gait in gaits_from_openshc(gait_params).items():
+            write_text(folder / "gaits" / f"{gait_name}.toml", dump_toml(gait))
+        if tree["walker"]["gait"] in gaits_from_openshc(gait_params):
+            tree["walker"]["gait"] = f"../gaits/{tree['walker']['gait']}.toml"
+    path = folder / "robots" / f"{name}.toml"
+    write_text(path, f"# From the parameter server's {namespace} tree (shc ros).\n{dump_toml(tree)}")
+    log.info("robot %s read from the parameter server (%s)", name, namespace)
+    return path
+
+
+def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: Any, gaits: dict[str, Gait],
+         directory: Path) -> RunResult:
+    from shc_cli.backends.kinematic import KinematicBackend
+    from shc_cli.control.controller import Controller
+    from shc_cli.loop.pacing import WallClock
+    from shc_cli.loop.plan_summary import PlanRecord, plan_summary
+    from shc_cli.loop.run_loop import Observer, RunLoop
+    from shc_cli.loop.runlog import RunWriter
+    from shc_cli.loop.session import execute
+    from shc_cli.ros.outputs import NodeOutputs
+    from shc_cli.ros.remote import RemoteInput
+
+    if config.backend != "none":
+        from shc_cli.errors import Issue, SpecError
+
+        raise SpecError([Issue(None, None, "--backend", f"'{config.backend}' is not available yet",
+                               "use --backend none")])
+    controller = Controller(robot, gait, pose_sets=pose_sets)
+    writer = RunWriter(directory, robot, config.overwrite)
+    writer.write_robot(robot)
+    record = PlanRecord(controller)
+    clock = WallClock(robot.time_delta)
+    holder: dict[str, RunLoop] = {}
+    remote = RemoteInput(node, robot, gaits, stopped=lambda: "loop" in holder and holder["loop"].requested)
+    outputs = NodeOutputs(node, robot, config.individual, config.combined, walkspace=lambda: controller.walkspace,
+                          after=remote.latch)
+    limit = None if config.duration is None else time.monotonic() + config.duration
+
+    def deadline(cycle: int, command: object, out: object, reading: object) -> str | None:
+        return "end" if limit is not None and time.monotonic() >= limit else None
+
+    observers: list[Observer] = [record, outputs, clock, deadline]
+    loop = RunLoop(controller, KinematicBackend(), remote, writer, None, observers=observers, flush_every=100)
+    holder["loop"] = loop
+    started = time.perf_counter()
+
+    def summarise(_: object) -> RunSummary:
+        summary = plan_summary(robot, controller, record, time.perf_counter() - started)
+        return summary.updated(backend=config.backend, ros_master=node.master_uri, node=node.name,
+                               **clock.statistics())
+
+    path, summary, _ = execute(loop, writer, summarise, None)
+    return RunResult(path, summary)

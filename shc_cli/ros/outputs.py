@@ -1,0 +1,160 @@
+"""What ``syropod_highlevel_controller`` publishes each cycle, from one cycle's output (study §10.3).
+
+``/desired_joint_states`` (all joints: desired position without offset, desired velocity, the last measured effort),
+the per-joint ``/<LEG>_<joint>_joint/command`` (Float64, desired position + offset) when the individual interface
+is on, ``/shc/<LEG>/state`` (OpenSHC's LegState), ``/shc/velocity`` and ``/shc/pose`` (Twist), ``/shc/walkspace``
+(Float32MultiArray, RUNNING only) and ``/tf`` (``odom_ideal → base_link``, ``base_link → walk_plane``,
+``base_link → <LEG>_tip``). Headers carry the wall clock. The publisher is an observer of the run loop; after
+publishing it lets the remote input take its snapshot, as OpenSHC's ``spinOnce`` follows its publications.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from shc_cli.control.controller import Command, CycleOutput, RobotState
+from shc_cli.interop.bag import LEG_STATE_TYPE, Messages, quaternions
+from shc_cli.model.body import leg_names
+from shc_cli.ros.node import Publisher, RosNode
+from shc_cli.spec.robot import Robot
+
+_RUNNING = RobotState.RUNNING
+_IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
+
+
+class NodeOutputs:
+    """Publishes a cycle's outputs on OpenSHC's topics (see the module's text).
+
+    Args:
+        node: the ROS node.
+        robot: the robot (leg and joint names, joint offsets).
+        individual: publish the per-joint command topics (OpenSHC's ``individual_control_interface``).
+        combined: publish ``/desired_joint_states`` (``combined_control_interface``).
+        walkspace: gives the controller's walkspace (radius [m] by bearing [°]), published while RUNNING as OpenSHC's
+            9 radii at bearings 0, 45, …, 360°; None: not published.
+        after: called after each cycle's publications (the remote input's :meth:`latch`).
+        efforts: the last measured joint efforts ``(L, n)`` [N·m] or None (published as 0).
+    """
+
+    def __init__(self, node: RosNode, robot: Robot, individual: bool = True, combined: bool = True,
+                 walkspace: Callable[[], dict[int, float]] | None = None,
+                 after: Callable[[], None] | None = None) -> None:
+        self.m = Messages(node.types.store)
+        self.after = after
+        self.efforts: np.ndarray | None = None
+        self.period = robot.time_delta
+        names = leg_names(robot)
+        self.legs = list(robot.legs)
+        self.joint_ids = [joint for leg in names.values() for joint in leg.joints]
+        self.slots = [(i, k) for i, leg in enumerate(self.legs) for k in range(len(robot.legs[leg].joints))]
+        self.rows = np.array([i for i, _ in self.slots])
+        self.cols = np.array([k for _, k in self.slots])
+        self.offsets = np.array([joint.offset for leg in robot.legs.values() for joint in leg.joints.values()])
+        self.walkspace = walkspace
+        self.combined = node.advertise("/desired_joint_states", "sensor_msgs/JointState") if combined else None
+        self.individual: list[Publisher] = [node.advertise(f"/{name}/command", "std_msgs/Float64")
+                                            for name in self.joint_ids] if individual else []
+        self.leg_states = [node.advertise(f"/shc/{leg}/state", LEG_STATE_TYPE) for leg in self.legs]
+        self.velocity = node.advertise("/shc/velocity", "geometry_msgs/Twist")
+        self.pose = node.advertise("/shc/pose", "geometry_msgs/Twist")
+        self.walkspace_pub = node.advertise("/shc/walkspace", "std_msgs/Float32MultiArray")
+        self.tf = node.advertise("/tf", "tf2_msgs/TFMessage")
+        self.seq = 0
+
+    def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: object) -> str | None:
+        """Publish this cycle (an observer of the run loop; never stops the run). The remote input's snapshot is
+        taken just before ``/desired_joint_states`` goes out: what a recorder saw before that message is what the
+        next cycle uses (OpenSHC's publish-then-spin order, without the time our publishing takes)."""
+        if self.after is not None:
+            self.after()
+        self.publish(out)
+        return None
+
+    def publish(self, out: CycleOutput, stamp: float | None = None) -> None:
+        """Every topic of one cycle, stamped ``stamp`` (seconds since the epoch; default now)."""
+        T, m = self.m.T, self.m
+        now = time.time() if stamp is None else stamp
+        sec, nanosec = int(now), round((now % 1.0) * 1e9) % 1_000_000_000
+        joints = out.joints[self.rows, self.cols]
+        velocities = out.joint_velocities[self.rows, self.cols]
+        efforts = self.efforts[self.rows, self.cols] if self.efforts is not None else np.zeros_like(joints)
+        if self.combined is not None:
+            header = m.header(sec, nanosec, "")
+            header.seq = self.seq
+            self.combined.publish(T["sensor_msgs/msg/JointState"](header=header, name=self.joint_ids,
+                                                                  position=joints, velocity=velocities,
+                                                                  effort=efforts))
+        for publisher, value in zip(self.individual, (joints + self.offsets).tolist(), strict=True):
+            publisher.publish(T["std_msgs/msg/Float64"](data=value))
+        for i, publisher in enumerate(self.leg_states):
+            publisher.publish(self._leg_state(sec, nanosec, out, i))
+        vx, vy, wz = out.velocity
+        self.velocity.publish(self._twist((vx, vy, 0.0), (0.0, 0.0, wz)))
+        self.pose.publish(self._twist(out.pose[:3], out.pose[3:]))
+        if self.walkspace is not None and out.robot_state == _RUNNING:
+            layout = T["std_msgs/msg/MultiArrayLayout"](dim=[], data_offset=0)
+            radii = self.walkspace()
+            if radii:
+                values = [radii.get(bearing % 360, 0.0) for bearing in range(0, 361, 45)]
+                self.walkspace_pub.publish(T["std_msgs/msg/Float32MultiArray"](
+                    layout=layout, data=np.asarray(values, dtype=np.float32)))
+        self.tf.publish(self._tf(sec, nanosec, out))
+        self.seq += 1
+
+    def _twist(self, linear: Any, angular: Any) -> Any:
+        T, m = self.m.T, self.m
+        return T["geometry_msgs/msg/Twist"](linear=m.vector(np.asarray(linear, dtype=float)),
+                                            angular=m.vector(np.asarray(angular, dtype=float)))
+
+    def _leg_state(self, sec: int, nanosec: int, out: CycleOutput, i: int) -> Any:
+        T, m = self.m.T, self.m
+        leg = self.legs[i]
+        count = int(np.count_nonzero(self.rows == i))
+
+        def stamped(position: np.ndarray, frame: str) -> Any:
+            return T["geometry_msgs/msg/PoseStamped"](header=m.header(sec, nanosec, frame),
+                                                      pose=m.pose(np.concatenate([position, _IDENTITY])))
+
+        zero_pose = m.pose(np.concatenate([np.zeros(3), _IDENTITY]))
+        poser = out.poser_tips[i] if np.all(np.isfinite(out.poser_tips[i])) else np.zeros(3)
+        return T[LEG_STATE_TYPE](
+            header=m.header(sec, nanosec, "base_link"), name=leg,
+            walker_tip_pose=stamped(out.walker_tips[i], "walk_plane"),
+            target_tip_pose=stamped(np.zeros(3), "walk_plane"),
+            poser_tip_pose=stamped(poser, "base_link"), model_tip_pose=stamped(out.model_tips[i], "base_link"),
+            actual_tip_pose=stamped(out.model_tips[i], "base_link"),
+            model_tip_velocity=T["geometry_msgs/msg/TwistStamped"](
+                header=m.header(sec, nanosec, "base_link"), twist=self._twist(np.zeros(3), np.zeros(3))),
+            joint_positions=out.joints[i, :count].astype(float).copy(),
+            joint_velocities=out.joint_velocities[i, :count].astype(float).copy(),
+            joint_efforts=(self.efforts[i, :count].astype(float).copy() if self.efforts is not None
+                           else np.zeros(count)),
+            stance_progress=float(out.stance_progress[i]), swing_progress=float(out.swing_progress[i]),
+            time_to_swing_end=0.0, pose_delta=zero_pose, auto_pose=zero_pose, tip_force=m.vector(np.zeros(3)),
+            admittance_delta=m.vector(np.zeros(3)), virtual_stiffness=0.0)
+
+    def _tf(self, sec: int, nanosec: int, out: CycleOutput) -> Any:
+        T, m = self.m.T, self.m
+        x, y, z, roll, pitch, yaw = out.pose
+        body_q = quaternions(_rotation(roll, pitch, yaw)[None])[0]
+        transforms = [m.transform(sec, nanosec, "odom_ideal", "base_link", np.array([x, y, z, *body_q])),
+                      m.transform(sec, nanosec, "base_link", "walk_plane",
+                                  np.array([0.0, 0.0, -z, *quaternions(_rotation(-roll, -pitch, 0.0)[None])[0]]))]
+        transforms += [m.transform(sec, nanosec, "base_link", f"{leg}_tip", np.concatenate([out.model_tips[i],
+                                                                                             _IDENTITY]))
+                       for i, leg in enumerate(self.legs)]
+        return T["tf2_msgs/msg/TFMessage"](transforms=transforms)
+
+
+def _rotation(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Rotation matrix of roll, pitch, yaw (z·y·x) [rad]."""
+    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch), math.cos(yaw),
+                              math.sin(yaw))
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
