@@ -72,6 +72,28 @@ def test_shipped_studies_load_and_check() -> None:
         check_study(study)
 
 
+def test_a_pareto_robots_header_repeats_every_option_that_is_not_the_default() -> None:
+    """The 'Found with: shc simulate' line of a Pareto robot file: velocity, terrain, scenario and duration, then the
+    options the study changed (as SimulationConfig has them) — each a flag shc simulate takes."""
+    import typer
+
+    from shc_cli.backends.engine_registry import DEFAULT_ENGINE, ENGINES
+    from shc_cli.cli import app
+    from shc_cli.domain.config import SimulationConfig
+    from shc_cli.domain.sweeps.options import simulate_flags
+
+    other = next(e for e in ENGINES if e != DEFAULT_ENGINE)
+    assert simulate_flags(SimulationConfig(velocity="0.5,0,0")) == [
+        "--velocity 0.5,0,0", "--terrain flat", "--scenario WG", "--duration 20"]
+    flags = simulate_flags(SimulationConfig(velocity="0.5,0,0", duration=8, physics_rate=800, friction=0.5,
+                                            stand=False, admittance=True, engine=other, seed=3))
+    assert flags == ["--velocity 0.5,0,0", "--terrain flat", "--scenario WG", "--duration 8", "--physics-rate 800",
+                     "--friction 0.5", "--ground", "--admittance", f"--engine {other}"]
+    simulate = typer.main.get_command(app).commands["simulate"]  # type: ignore[attr-defined]
+    known = {name for param in simulate.params for name in (*param.opts, *param.secondary_opts)}
+    assert {flag.split()[0] for flag in flags} <= known
+
+
 def test_study_points_carry_seeds_options_and_robot_values(tmp_path: Path) -> None:
     study = load_study(_write(tmp_path, SMALL.format(duration=0.5, seeds="[3, 4]")))
     points = study.points(12, {"gait": "bipod", "walker.step_frequency": 1.2, "walker.swing_height": 0.07,
@@ -99,7 +121,11 @@ def test_study_points_carry_seeds_options_and_robot_values(tmp_path: Path) -> No
      "is not a constraint"),
     ('[space]\ngait = { choices = ["tripod"] }\n[objectives]\ncot = "minimize"\n[sampler]\nname = "cmaes"\n', 6,
      "is not a sampler"),
-    ('engine = "ode"\n', 1, "not an engine"),
+    ('engine = "ode"\n[space]\ngait = { choices = ["tripod"] }\n[objectives]\ncot = "minimize"\n', 1,
+     "'ode' is not a physics engine"),
+    ('[space]\nterrain = { low = 1, high = 2 }\n[objectives]\ncot = "minimize"\n', 2, "'terrain' is not numeric"),
+    ('[space]\nfriction = { choices = ["high"] }\n[objectives]\ncot = "minimize"\n', 2,
+     "'high' is not a int or float"),
     ('seeds = [1, 1]\n', 1, "distinct integers"),
     ('seeds = [-1]\n', 1, "distinct integers ≥ 0"),
     ('[space]\ngait = { choices = ["tripod"] }\n[objectives]\ncot = "minimize"\n[sampler]\nseed = 4294967296\n', 6,

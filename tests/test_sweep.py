@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from shc_cli.errors import SpecError
 from shc_cli.spec.sweep import load_sweep
 
 from .conftest import GOLDEN, ROOT
@@ -56,6 +57,8 @@ robot = "bullet_mammalian"
 
 
 def test_engine_is_a_sweepable_option_and_sweep_engine_fills_it_in(tmp_path: Path) -> None:
+    from shc_cli.backends.engine_registry import DEFAULT_ENGINE
+    from shc_cli.domain.sweeps.options import point_config
     from shc_cli.domain.sweeps.run import with_engine
 
     both = load_sweep(_write(tmp_path, '[grid]\nengine = ["pybullet", "mujoco"]\n"walker.step_frequency" = [1.0]\n'))
@@ -64,12 +67,33 @@ def test_engine_is_a_sweepable_option_and_sweep_engine_fills_it_in(tmp_path: Pat
                                             "engine=mujoco-walker.step_frequency=1"]
     assert with_engine(both, "mujoco") == both  # the file chooses
     plain = load_sweep(ROOT / "sweeps" / "bullet_cot.toml")
-    assert {p.options["engine"] for p in plain.points} == {"pybullet"}  # the default
+    assert not any("engine" in p.options for p in plain.points)
+    assert {point_config(p).engine for p in plain.points} == {DEFAULT_ENGINE}  # shc simulate's default
     assert {p.options["engine"] for p in with_engine(plain, "mujoco").points} == {"mujoco"}
     assert [p.slug for p in with_engine(plain, "mujoco").points] == [p.slug for p in plain.points]
     for name in ("engines_agreement.toml", "engines_agreement_paper.toml"):
         agreement = load_sweep(ROOT / "sweeps" / name)
         assert len(agreement.points) == 12 and {p.options["engine"] for p in agreement.points} == {"pybullet", "mujoco"}
+
+
+def test_the_options_are_simulates_and_each_run_is_one_config(tmp_path: Path) -> None:
+    """Every option of shc simulate but the per-run ones is a sweep option, checked by SimulationConfig with the
+    sweep file's line; a point's run is the SimulationConfig of its options (stride_percent as the velocity)."""
+    from shc_cli.domain.config import SimulationConfig
+    from shc_cli.domain.sweeps.checks import check_points
+    from shc_cli.domain.sweeps.options import OPTIONS, PER_RUN, point_config
+
+    assert set(OPTIONS) == (set(SimulationConfig.model_fields) - PER_RUN) | {"stride_percent"}
+    assert {"posture", "inclination", "admittance", "imu_posing", "engine", "stand"} <= set(OPTIONS)
+    sweep = load_sweep(_write(tmp_path, '[grid]\nstride_percent = [50]\ninclination = ["off", "openshc"]\n'
+                                        '[fixed]\nfriction = 1\nscenario = "wg"\nstand = false\n'))
+    check_points(sweep)
+    config = point_config(sweep.points[1], out=tmp_path / "run", plots=False)
+    assert config == SimulationConfig(velocity="0.5,0,0", inclination="openshc", friction=1.0, scenario="WG",
+                                      stand=False, out=tmp_path / "run", plots=False)
+    bad = load_sweep(_write(tmp_path, '[fixed]\nrobot = "bullet"\nposture = "kz=2"\n'))
+    with pytest.raises(SpecError, match=r"sweep.toml:3: fixed.posture: kz='2' is not a gain in \[0, 1\]"):
+        check_points(bad)
 
 
 def test_shipped_sweeps_load_and_bullet_cot_is_the_papers_grid() -> None:

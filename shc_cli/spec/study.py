@@ -35,8 +35,10 @@ seed = 1
 population = 20                    # nsga2 / nsga3 generation size
 ```
 
-Keys of ``[space]`` and ``[fixed]`` are the simulation options of sweeps (:data:`shc_cli.spec.sweep.OPTIONS`;
-``seed``, ``duration`` and ``robot`` excepted) or dotted robot-file paths, as in sweep files.
+Keys of ``[space]`` and ``[fixed]`` are the simulation options of sweeps (``shc simulate``'s options and
+``stride_percent``; ``seed``, ``duration`` and ``robot`` excepted) or dotted robot-file paths, as in sweep files.
+The options' types and values are checked against ``shc simulate``'s before any run
+(:mod:`shc_cli.domain.sweeps.options`).
 """
 
 from __future__ import annotations
@@ -48,12 +50,10 @@ from typing import Any, Literal
 
 from shc_cli.errors import Issue, SpecError
 from shc_cli.spec.source import Document
-from shc_cli.spec.sweep import OPTIONS, Point, _check_value, _slug_value
+from shc_cli.spec.sweep import DEFAULT_DURATION, Point, check_value, is_option, slug_value
 
 TOP_LEVEL = {"name", "description", "robot", "terrain", "scenario", "engine", "duration", "skip", "seeds", "trials",
              "fixed", "space", "objectives", "constraints", "sampler"}
-ENGINES = ("pybullet", "mujoco")
-"""Physics engines a study can name (``shc simulate --engine``)."""
 SAMPLERS = ("nsga2", "nsga3", "tpe", "random")
 SAMPLER_KEYS = {"name", "seed", "population"}
 MAX_SAMPLER_SEED = 2**32 - 1
@@ -115,7 +115,7 @@ class Study:
     name: str
     description: str
     robot: str
-    engine: str
+    engine: str | None
     seeds: tuple[int, ...]
     skip: float
     trials: int | None
@@ -137,10 +137,10 @@ class Study:
         out = []
         for k, seed in enumerate(self.seeds):
             merged = {**self.fixed, **params, "seed": seed}
-            options = {key: merged.get(key, default) for key, (_, default) in OPTIONS.items()}
+            options = {key: value for key, value in merged.items() if is_option(key)}
             options["robot"] = self.robot
-            overrides = {key: value for key, value in merged.items() if key not in OPTIONS}
-            out.append(Point(number * len(self.seeds) + k, f"t{number:04d}-s{_slug_value(seed)}", dict(params),
+            overrides = {key: value for key, value in merged.items() if not is_option(key)}
+            out.append(Point(number * len(self.seeds) + k, f"t{number:04d}-s{slug_value(seed)}", dict(params),
                              options, overrides))
         return out
 
@@ -176,7 +176,7 @@ def _dimension(document: Document, key: str, spec: Any) -> Dimension:
             raise _issue(document, (*where, "choices"), "must be a non-empty list", f"e.g. {key} = "
                          '{ choices = ["tripod", "bipod"] }')
         for value in choices:
-            _check_value(document, where, key, value)
+            check_value(document, where, key, value)
         if len(set(map(repr, choices))) != len(choices):
             raise _issue(document, (*where, "choices"), "a choice is repeated", "list each value once")
         return Dimension(key, "categorical", choices=tuple(choices), line=line)
@@ -187,7 +187,7 @@ def _dimension(document: Document, key: str, spec: Any) -> Dimension:
     if not low < high:
         raise _issue(document, where, f"low ({low:g}) must be below high ({high:g})", "swap or widen them")
     for bound in ("low", "high"):
-        _check_value(document, (*where, bound), key, spec[bound])
+        check_value(document, (*where, bound), key, spec[bound])
     log = spec.get("log", False)
     if not isinstance(log, bool):
         raise _issue(document, (*where, "log"), f"{log!r} is not true or false", "write log = true")
@@ -208,8 +208,6 @@ def _dimension(document: Document, key: str, spec: Any) -> Dimension:
         raise _issue(document, (*where, "low"), f"a log range needs low > 0 (got {low:g})", "raise low")
     integer = all(isinstance(spec[k], int) for k in ("low", "high") if k in spec) and (
         step is None or isinstance(spec["step"], int))
-    if key in OPTIONS and OPTIONS[key][0] is str:
-        raise _issue(document, where, f"'{key}' is not numeric", f'give {key} as {{ choices = [...] }}')
     return Dimension(key, "int" if integer else "float", low, high, step, log, line=line)
 
 
@@ -244,16 +242,14 @@ def load_study(path: Path) -> Study:
     fixed: dict[str, Any] = {}
     for key in ("terrain", "scenario", "duration"):
         if key in data:
-            _check_value(document, (key,), key, data[key])
+            check_value(document, (key,), key, data[key])
             fixed[key] = data[key]
     robot = data.get("robot", "bullet")
     if not isinstance(robot, str):
         raise _issue(document, ("robot",), f"{robot!r} is not a robot name or file", 'e.g. robot = "bullet"')
-    engine = data.get("engine", "pybullet")
-    if engine not in ENGINES:
-        raise _issue(document, ("engine",), f"'{engine}' is not an engine of this version",
-                     f"use {' or '.join(ENGINES)}")
-    if "engine" in data:
+    engine = data.get("engine")  # None: shc simulate's default
+    if engine is not None:
+        check_value(document, ("engine",), "engine", engine)
         fixed["engine"] = engine
     seeds = data.get("seeds", [0])
     if (not isinstance(seeds, list) or not seeds
@@ -263,7 +259,7 @@ def load_study(path: Path) -> Study:
                      "e.g. seeds = [0, 1, 2]")
     skip = data.get("skip", 0.0)
     if isinstance(skip, bool) or not isinstance(skip, (int, float)) or not 0.0 <= skip < float(
-            fixed.get("duration", OPTIONS["duration"][1])):
+            fixed.get("duration", DEFAULT_DURATION)):
         raise _issue(document, ("skip",), f"{skip!r} is not a number of seconds in [0, duration)",
                      "e.g. skip = 2.0")
     trials = data.get("trials")
@@ -274,7 +270,7 @@ def load_study(path: Path) -> Study:
             raise _issue(document, ("fixed", key), f"'{key}' is set at the top of the file", f"move {key} there")
         if key in fixed:
             raise _issue(document, ("fixed", key), f"'{key}' is also set at the top of the file", "keep one")
-        _check_value(document, ("fixed", key), key, value)
+        check_value(document, ("fixed", key), key, value)
         fixed[key] = value
     space = [_dimension(document, key, spec) for key, spec in data.get("space", {}).items()]
     if not space:
@@ -325,6 +321,6 @@ def load_study(path: Path) -> Study:
     gait_line = document.line(("space", "gait")) or document.line(("fixed", "gait"))
     lines["gait"] = gait_line or lines["robot"]
     name = str(data.get("name") or document.path.stem)
-    return Study(document.path, name, str(data.get("description", "")), robot, str(engine), tuple(seeds),
+    return Study(document.path, name, str(data.get("description", "")), robot, engine, tuple(seeds),
                  float(skip), trials,
                  fixed, space, objectives, constraints, str(sampler), sampler_seed, population, lines)

@@ -16,10 +16,14 @@ terrain = "flat"
 
 Several ``[[grid]]`` tables instead of one ``[grid]`` run each product in turn (e.g. one gain at a time).
 
-A key is either a simulation option (:data:`OPTIONS`) or a dotted robot-file path (``walker.body_clearance``,
-``servo.stall_torque``); a number given for an adjustable parameter (``{ default, min, max, step }``) sets its
-``default``. ``stride_percent`` is the stride as a percentage of the largest the walkspace allows: the forward
-velocity input in throttle mode (100 % = input 1).
+A key is either a simulation option (a key without a dot: an option of ``shc simulate``, or ``stride_percent``) or a
+dotted robot-file path (``walker.body_clearance``, ``servo.stall_torque``); a number given for an adjustable
+parameter (``{ default, min, max, step }``) sets its ``default``. ``stride_percent`` is the stride as a percentage
+of the largest the walkspace allows: the forward velocity input in throttle mode (100 % = input 1).
+
+This module reads the file's structure. The simulation options' names, types and defaults are those of
+:class:`shc_cli.domain.config.SimulationConfig`, which checks a sweep's values (with the file's lines) before any
+run (:mod:`shc_cli.domain.sweeps.options`): the one place they are declared.
 """
 
 from __future__ import annotations
@@ -34,24 +38,11 @@ from typing import Any
 from shc_cli.errors import Issue, SpecError
 from shc_cli.spec.source import Document
 
-OPTIONS: dict[str, tuple[type | tuple[type, ...], Any]] = {
-    "robot": (str, "bullet"),
-    "gait": (str, ""),
-    "terrain": (str, "flat"),
-    "scenario": (str, "WG"),
-    "velocity": (str, "1,0,0"),
-    "stride_percent": ((int, float), None),
-    "duration": ((int, float), 20.0),
-    "physics_rate": ((int, float), 400.0),
-    "friction": ((int, float), 0.9),
-    "restitution": ((int, float), 0.0),
-    "seed": (int, 0),
-    "imu_noise": ((int, float), 0.0),
-    "start": (str, "unpacked"),
-    "stand": (bool, None),
-    "engine": (str, "pybullet"),
-}
-"""Simulation options a sweep can set: type and default (as ``shc simulate``; ``gait`` "" = the robot's own)."""
+STRIDE = "stride_percent"
+"""The sweep files' own option: the stride as a percentage of the largest (sets the velocity input)."""
+DEFAULT_DURATION = 20.0
+"""Seconds of walking after start-up when a sweep or study file gives no ``duration`` (``shc simulate``'s default
+for a constant velocity)."""
 TOP_LEVEL = {"name", "description", "duration", "grid", "fixed"}
 
 
@@ -63,7 +54,9 @@ class Point:
         index: position in the grid (row order of the results).
         slug: directory name of its run, built from its grid values.
         values: its grid values, by key (for the results table).
-        options: every simulation option (:data:`OPTIONS`), filled in.
+        options: the simulation options the file sets for it (keys without a dot; the others keep
+            ``shc simulate``'s defaults), unchecked: :mod:`shc_cli.domain.sweeps.options` checks them and makes the
+            run's :class:`~shc_cli.domain.config.SimulationConfig`.
         overrides: robot-file values by dotted path.
     """
 
@@ -86,35 +79,29 @@ class Sweep:
     points: list[Point]
 
 
-def _slug_value(value: Any) -> str:
+def is_option(key: str) -> bool:
+    """A simulation option (``stride_percent`` or an option of ``shc simulate``), not a dotted robot-file path."""
+    return "." not in key
+
+
+def slug_value(value: Any) -> str:
+    """A value as part of a run's directory name."""
     text = f"{value:g}" if isinstance(value, float) else str(value)
     return re.sub(r"[^A-Za-z0-9._+-]", "_", Path(text).stem if text.endswith(".toml") else text)
 
 
-def _check_value(document: Document, where: tuple[str, ...], key: str, value: Any) -> None:
-    if key not in OPTIONS:
-        if "." not in key:
-            close = [k for k in OPTIONS if k.startswith(key[:3])]
-            hint = f" (did you mean '{close[0]}'?)" if close else ""
-            raise SpecError([Issue(document.path, document.line(where), ".".join(where),
-                                   f"'{key}' is not a simulation option{hint}",
-                                   f"use one of {', '.join(OPTIONS)} or a dotted robot-file path such as "
-                                   "walker.step_frequency")])
-        if not isinstance(value, (int, float, str, bool)) or (isinstance(value, float) and not math.isfinite(value)):
-            raise SpecError([Issue(document.path, document.line(where), ".".join(where),
-                                   f"{value!r} is not a single finite number, string or boolean",
-                                   "give plain values")])
-        return
-    kind, _ = OPTIONS[key]
-    ok = isinstance(value, kind) and not (isinstance(value, bool) and kind is not bool)
-    if not ok:
-        names = " or ".join(t.__name__ for t in (kind if isinstance(kind, tuple) else (kind,)))
+def check_value(document: Document, where: tuple[str, ...], key: str, value: Any) -> None:
+    """A plain value (one finite number, string or boolean); ``duration`` and ``stride_percent`` numbers in their
+    ranges. The simulation options' own types and values are checked against ``shc simulate``'s before any run
+    (:mod:`shc_cli.domain.sweeps.options`)."""
+    if not isinstance(value, (int, float, str, bool)) or (isinstance(value, float) and not math.isfinite(value)):
         raise SpecError([Issue(document.path, document.line(where), ".".join(where),
-                               f"{value!r} is not a {names}", f"give {key} as a {names}")])
-    if key == "engine" and value not in ("pybullet", "mujoco"):
+                               f"{value!r} is not a single finite number, string or boolean",
+                               "give plain values")])
+    if key in ("duration", STRIDE) and (isinstance(value, bool) or not isinstance(value, (int, float))):
         raise SpecError([Issue(document.path, document.line(where), ".".join(where),
-                               f"'{value}' is not a physics engine", "use pybullet or mujoco")])
-    if key == "stride_percent" and not 0.0 < float(value) <= 100.0:
+                               f"{value!r} is not a int or float", f"give {key} as a int or float")])
+    if key == STRIDE and not 0.0 < float(value) <= 100.0:
         raise SpecError([Issue(document.path, document.line(where), ".".join(where),
                                f"stride {value}% is outside (0, 100]", "give a percentage of the maximum stride")])
 
@@ -135,10 +122,10 @@ def load_sweep(path: Path) -> Sweep:
         raise SpecError([Issue(document.path, document.line((bad,)), bad, "must be a table",
                                f"write [{bad}]" + (" or [[grid]] tables" if bad == "grid" else ""))])
     if "duration" in data:
-        _check_value(document, ("duration",), "duration", data["duration"])
+        check_value(document, ("duration",), "duration", data["duration"])
         fixed.setdefault("duration", data["duration"])
     for key, value in fixed.items():
-        _check_value(document, ("fixed", key), key, value)
+        check_value(document, ("fixed", key), key, value)
     grid: dict[str, list[Any]] = {}  # every key of every grid, with its values in order of first appearance
     points: list[Point] = []
     for one in grids:
@@ -148,7 +135,7 @@ def load_sweep(path: Path) -> Sweep:
                 raise SpecError([Issue(document.path, document.line(where), ".".join(where),
                                        "must be a non-empty list of values", f'e.g. {key} = [...]')])
             for value in values:
-                _check_value(document, where, key, value)
+                check_value(document, where, key, value)
             if key in fixed:
                 raise SpecError([Issue(document.path, document.line(where), ".".join(where),
                                        f"'{key}' is both in [grid] and in [fixed]", "keep one")])
@@ -163,9 +150,9 @@ def load_sweep(path: Path) -> Sweep:
         for combination in itertools.product(*one.values()):
             values = dict(zip(keys, combination, strict=True))
             merged = {**fixed, **values}
-            options = {key: merged.get(key, default) for key, (_, default) in OPTIONS.items()}
-            overrides = {key: value for key, value in merged.items() if key not in OPTIONS}
-            slug = "-".join(f"{_slug_value(v)}" if k in ("robot", "gait") else f"{k}={_slug_value(v)}"
+            options = {key: value for key, value in merged.items() if is_option(key)}
+            overrides = {key: value for key, value in merged.items() if not is_option(key)}
+            slug = "-".join(f"{slug_value(v)}" if k in ("robot", "gait") else f"{k}={slug_value(v)}"
                             for k, v in values.items()) or "run"
             points.append(Point(len(points), slug, values, options, overrides))
     slugs = [p.slug for p in points]

@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 from shc_cli.domain.sweeps.checks import check_runs, field
+from shc_cli.domain.sweeps.options import check_study as check_options
 from shc_cli.errors import Issue, SpecError
 from shc_cli.spec.study import Study
 
 
 def check_study(study: Study) -> None:
-    """Before any run: the robot loads, every robot-file path exists (and lies inside an adjustable parameter's
-    [min, max]), every gait choice fits — one line with the study file's line, exit 2."""
+    """Before any run: every simulation option is one ``shc simulate`` takes, the robot loads, every robot-file path
+    exists (and lies inside an adjustable parameter's [min, max]), every gait choice fits — one line with the study
+    file's line, exit 2."""
+    check_options(study)
     from shc_cli.spec.loading import load_robot, resolve
     from shc_cli.spec.robot import Adjustable
 

@@ -58,26 +58,21 @@ def pareto_robot(study: Study, row: Row) -> str:
     """A robot file that ``extends`` the study's robot with a trial's robot-file values (and its gait as
     ``walker.gait``); the simulation options it was found with are in the header's ``shc simulate`` line."""
     from shc_cli.domain.sweeps.checks import is_adjustable
+    from shc_cli.domain.sweeps.options import point_config, simulate_flags
     from shc_cli.spec.loading import data_dir, load_robot, resolve
-    from shc_cli.spec.sweep import OPTIONS, variant_text
+    from shc_cli.spec.sweep import variant_text
 
     params = {d.key: row[d.key] for d in study.space}
     point = study.points(int(row["trial"]), params)[0]
+    config = point_config(point)
     overrides = dict(point.overrides)
-    if point.options["gait"]:
-        overrides["walker.gait"] = point.options["gait"]
+    if config.gait:
+        overrides["walker.gait"] = config.gait
     base = resolve("robots", study.robot)
     robot = load_robot(base).robot
     adjustable = {path for path in overrides if is_adjustable(robot, path)}
     bundled = base.resolve().parent == data_dir("robots").resolve()
-    options = point.options
-    velocity = options["velocity"] if options["stride_percent"] is None else \
-        f"{float(options['stride_percent']) / 100.0:g},0,0"
-    flags = [f"--velocity {velocity}", f"--terrain {options['terrain']}", f"--scenario {options['scenario']}",
-             f"--duration {float(options['duration']):g}"]
-    flags += [f"--{key.replace('_', '-')} {options[key]:g}" for key in ("physics_rate", "friction", "restitution",
-                                                                          "imu_noise")
-              if options[key] != OPTIONS[key][1]]
+    flags = simulate_flags(config)
     objectives = ", ".join(f"{k} {float(row[k]):.4g}" for k in study.objectives)
     header = (f"# shc optimize {study.name}: Pareto trial {row['trial']} ({objectives}; mean over seeds "
               f"{', '.join(map(str, study.seeds))}).\n"

@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from shc_cli.domain.sweeps.options import check_sweep, option
 from shc_cli.errors import Issue, ShcError, SpecError
 from shc_cli.spec.sweep import Point, Sweep
 
@@ -31,8 +32,9 @@ def is_adjustable(robot: Any, dotted: str) -> bool:
 
 
 def check_points(sweep: Sweep) -> None:
-    """Fail early, with the sweep file's line, on robot-file paths that do not exist and robots/gaits that do not
-    load — before any simulation starts."""
+    """Fail early, with the sweep file's line, on simulation options ``shc simulate`` does not take, robot-file
+    paths that do not exist and robots/gaits that do not load — before any simulation starts."""
+    check_sweep(sweep)
     check_runs(sweep.path, sweep.points, key_lines(sweep))
 
 
@@ -42,7 +44,7 @@ def check_runs(path: Path, points: list[Point], document_lines: dict[str, int | 
     from shc_cli.spec.checks import load_checked
     from shc_cli.spec.loading import load_robot, resolve
 
-    robots = {str(p.options["robot"]) for p in points}
+    robots = {str(option(p, "robot")) for p in points}
     for name in sorted(robots):
         try:
             robot = load_robot(resolve("robots", name)).robot
@@ -56,7 +58,7 @@ def check_runs(path: Path, points: list[Point], document_lines: dict[str, int | 
                                        "use a dotted path of `shc validate --show ROBOT`")])
     seen: set[tuple[str, str]] = set()
     for point in points:
-        key = (str(point.options["robot"]), str(point.options["gait"]))
+        key = (str(option(point, "robot")), str(option(point, "gait") or ""))
         if key in seen:
             continue
         seen.add(key)

@@ -14,6 +14,7 @@ import traceback
 from pathlib import Path
 
 from shc_cli.domain.sweeps.checks import is_adjustable
+from shc_cli.domain.sweeps.options import option, point_config
 from shc_cli.domain.sweeps.results import METRICS, RUN_KEYS, WARNINGS, Row
 from shc_cli.errors import ShcError, SpecError
 from shc_cli.spec.sweep import Point, variant_text
@@ -118,22 +119,10 @@ def one_line(error: BaseException) -> str:
 
 def simulate_point(point: Point, out: Path, directory: Path) -> None:
     """Simulate the point into ``directory`` (its robot a variant file under ``out/variants`` if it changes
-    robot-file values)."""
-    from shc_cli.domain.config import SimulationConfig
+    robot-file values): its :class:`~shc_cli.domain.config.SimulationConfig`, passed down whole."""
     from shc_cli.domain.simulate import simulate
 
-    options = point.options
-    robot = robot_for(point, out)
-    velocity = options["velocity"]
-    if options["stride_percent"] is not None:
-        velocity = f"{float(options['stride_percent']) / 100.0:g},0,0"
-    simulate(SimulationConfig(robot=robot, gait=options["gait"] or None, velocity=velocity,
-                              duration=float(options["duration"]), out=directory, plots=False,
-                              terrain=options["terrain"], scenario=options["scenario"],
-                              physics_rate=float(options["physics_rate"]), friction=float(options["friction"]),
-                              restitution=float(options["restitution"]), seed=int(options["seed"]),
-                              imu_noise=float(options["imu_noise"]), start=options["start"], stand=options["stand"],
-                              engine=options["engine"]))
+    simulate(point_config(point, robot=robot_for(point, out), out=directory, plots=False))
 
 
 def robot_for(point: Point, out: Path) -> str:
@@ -141,7 +130,7 @@ def robot_for(point: Point, out: Path) -> str:
     overrides."""
     from shc_cli.spec.loading import load_robot, resolve
 
-    name = str(point.options["robot"])
+    name = str(option(point, "robot"))
     if not point.overrides:
         return name
     base = resolve("robots", name)
