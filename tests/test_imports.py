@@ -104,6 +104,13 @@ def test_sweeps_and_optimize_import_nothing_above_the_domain() -> None:
     assert {name: targets for name, targets in upward.items() if targets} == {}
 
 
+def test_the_api_imports_nothing_from_the_commands() -> None:
+    """api.py is a facade over the domain: the commands print, the API returns results."""
+    graph = import_graph()
+    assert {"shc_cli.domain.sweeps.run", "shc_cli.domain.optimize.loop"} <= graph["shc_cli.api"]
+    assert {t for t in graph["shc_cli.api"] if t.startswith(("shc_cli.commands", "shc_cli.cli"))} == set()
+
+
 def test_sweep_and_optimize_commands_only_parse_call_and_print() -> None:
     for name in ("sweep", "optimize"):
         path = PACKAGE / "commands" / f"{name}.py"
