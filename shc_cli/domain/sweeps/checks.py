@@ -4,19 +4,22 @@ executor that exists — one line with the file's line (exit 2) instead of a tab
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING
 
 from shc_cli.domain.sweeps.options import check_sweep, option
 from shc_cli.errors import Issue, ShcError, SpecError
 from shc_cli.spec.sweep import Point, Sweep
 
+if TYPE_CHECKING:
+    from shc_cli.spec.robot import Robot
+
 EXECUTORS = ("local", "dask")
 """Where runs execute: this machine's worker processes, or a Dask cluster."""
 
 
-def field(robot: Any, dotted: str) -> Any:
+def field(robot: Robot | None, dotted: str) -> object:
     """The robot's value at a dotted robot-file path (tables and leg/joint maps alike), or ``None``."""
-    node = robot
+    node: object = robot
     for part in dotted.split("."):
         node = node.get(part) if isinstance(node, dict) else getattr(node, part, None)
         if node is None:
@@ -24,7 +27,7 @@ def field(robot: Any, dotted: str) -> Any:
     return node
 
 
-def is_adjustable(robot: Any, dotted: str) -> bool:
+def is_adjustable(robot: Robot | None, dotted: str) -> bool:
     """Whether the robot-file path ``dotted`` is an adjustable parameter (``{ default, min, max, step }``)."""
     from shc_cli.spec.robot import Adjustable
 
