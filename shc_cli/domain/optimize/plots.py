@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     import optuna
 
+    from shc_cli.domain.sweeps.results import Row
     from shc_cli.spec.study import Study
 
 
@@ -40,7 +41,7 @@ def _label(study: Study, key: str) -> str:
     return f"{key}{arrow}"
 
 
-def plot_pareto_pairs(study: Study, rows: list[dict[str, Any]], front: list[dict[str, Any]], out: Path) -> list[Path]:
+def plot_pareto_pairs(study: Study, rows: list[Row], front: list[Row], out: Path) -> list[Path]:
     """``pareto_A__B.png`` for each pair of objectives: feasible trials, infeasible ones, the front (joined in
     order of A); one objective: ``history.png``, its value per trial. Returns the files written."""
     plt = _pyplot()
@@ -76,7 +77,7 @@ def plot_pareto_pairs(study: Study, rows: list[dict[str, Any]], front: list[dict
     return written
 
 
-def _axis_values(study: Study, rows: list[dict[str, Any]], key: str) -> tuple[list[float | None], list[str] | None]:
+def _axis_values(study: Study, rows: list[Row], key: str) -> tuple[list[float | None], list[str] | None]:
     """Values of one axis scaled to 0–1 and the tick labels of a categorical axis (``None`` for numeric ones)."""
     dimension = next((d for d in study.space if d.key == key), None)
     if dimension is not None and dimension.kind == "categorical":
@@ -94,7 +95,7 @@ def _axis_values(study: Study, rows: list[dict[str, Any]], key: str) -> tuple[li
     return [None if v is None else (v - low) / width for v in values], None
 
 
-def plot_parallel(study: Study, rows: list[dict[str, Any]], front: list[dict[str, Any]], path: Path) -> None:
+def plot_parallel(study: Study, rows: list[Row], front: list[Row], path: Path) -> None:
     """Parallel coordinates: one axis per searched parameter (its search range) and per objective (its observed
     range); a line per complete feasible trial coloured by the first objective, the Pareto trials in red."""
     plt = _pyplot()
