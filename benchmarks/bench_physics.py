@@ -23,8 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
+from shc_cli.backends.engine import EngineOptions
 from shc_cli.backends.pybullet_ import world as world_module
-from shc_cli.backends.simulated import WorldOptions, open_world
+from shc_cli.backends.simulated import open_world
 from shc_cli.backends.terrain import parse_terrain
 from shc_cli.control.controller import Command, Controller, RobotState
 from shc_cli.domain.config import SimulationConfig
@@ -39,7 +40,7 @@ class _Started:
 
     def __init__(self, rate: float) -> None:
         self.robot, self.gait, _ = load_checked("bullet", "tripod")
-        self.world = open_world(self.robot, WorldOptions(parse_terrain("flat"), round(rate * self.robot.time_delta)))
+        self.world = open_world(self.robot, EngineOptions(parse_terrain("flat"), round(rate * self.robot.time_delta)))
         self.controller = Controller(self.robot, self.gait, joints=self.world.read().joints)
 
 

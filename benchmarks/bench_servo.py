@@ -16,6 +16,7 @@ import time
 
 import numpy as np
 
+from shc_cli.backends.engine import EngineOptions
 from shc_cli.backends.pybullet_.world import World
 from shc_cli.backends.terrain import TerrainSpec
 from shc_cli.spec.loading import load_robot
@@ -26,7 +27,7 @@ def run(control: str, periods: int) -> tuple[float, float]:
     assert robot is not None
     robot = robot.model_copy(update={"servo": robot.servo.model_copy(update={"control": control})})
     base = np.tile([0.0, 0.0, 1.088, -0.765, -1.212], (6, 1))
-    world = World(robot, TerrainSpec(kind="flat"), robot.time_delta, 4, True, base)
+    world = World(robot, EngineOptions(TerrainSpec(kind="flat"), 4, True), base)
     try:
         started = time.perf_counter()
         for k in range(periods):

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shc_cli.backends.engine import rpy_from_matrix
+from shc_cli.backends.engine import EngineOptions, rpy_from_matrix
 from shc_cli.backends.engine_registry import ENGINES, open_engine
 from shc_cli.backends.terrain import FEATURE_END_X, HALF_WIDTH, LANDING_END_X, Terrain, parse_terrain
 from shc_cli.errors import BackendError
@@ -60,7 +60,7 @@ def test_feet_follow_the_dh_chains_in_both_engines(engine: str, name: str) -> No
     rng = np.random.default_rng(11)
     for _ in range(5):
         q = random_joints(chains, rng)
-        world = open_engine(engine, robot, parse_terrain("flat"), robot.time_delta, 4, True, q)
+        world = open_engine(robot, EngineOptions(parse_terrain("flat"), 4, True, engine=engine), q)
         try:
             base = world.read().position
             frames = foot_frames(world, robot)
@@ -75,7 +75,7 @@ def test_feet_follow_the_dh_chains_in_both_engines(engine: str, name: str) -> No
 def test_mjcf_masses_are_the_urdf_masses(name: str) -> None:
     robot = robot_named(name)
     chains = Chains.from_robot(robot)
-    world = open_engine("mujoco", robot, parse_terrain("flat"), robot.time_delta, 4, False, chains.default_joints())
+    world = open_engine(robot, EngineOptions(parse_terrain("flat"), 4, engine="mujoco"), chains.default_joints())
     assert float(world.model.body_mass.sum()) == pytest.approx(model.body_mass(robot), abs=1e-9)
 
 
@@ -99,7 +99,7 @@ def test_mujoco_rays_hit_height_at(text: str, field_csv: Path) -> None:
     spec = parse_terrain(f"heightfield:{field_csv}" if text == "heightfield" else text)
     robot = robot_named("bullet")
     chains = Chains.from_robot(robot)
-    world = open_engine("mujoco", robot, spec, robot.time_delta, 4, True, chains.default_joints(), seed=5)
+    world = open_engine(robot, EngineOptions(spec, 4, True, seed=5, engine="mujoco"), chains.default_joints())
     terrain = world.terrain
     rng = np.random.default_rng(1)
     if spec.kind == "heightfield":
@@ -131,7 +131,8 @@ def test_mujoco_rays_hit_height_at(text: str, field_csv: Path) -> None:
 def test_unknown_engine_is_one_line() -> None:
     robot = robot_named("bullet")
     with pytest.raises(BackendError, match="unknown physics engine 'ode'"):
-        open_engine("ode", robot, parse_terrain("flat"), 0.01, 4, True, Chains.from_robot(robot).default_joints())
+        open_engine(robot, EngineOptions(parse_terrain("flat"), 4, True, engine="ode"),  # type: ignore[arg-type]
+                    Chains.from_robot(robot).default_joints())
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -143,7 +144,7 @@ def test_standing_readings_agree_between_engines(engine: str) -> None:
     robot = robot_named("bullet")
     chains = Chains.from_robot(robot)
     stance = plan_direct_startup(robot, chains, chains.default_joints())
-    world = open_engine(engine, robot, parse_terrain("flat"), robot.time_delta, 4, False, stance)
+    world = open_engine(robot, EngineOptions(parse_terrain("flat"), 4, engine=engine), stance)
     try:
         for _ in range(150):
             world.command(stance)
@@ -183,7 +184,7 @@ def test_mujoco_dynamixel_servo_is_the_servo_models_torque() -> None:
     assert servo.control == "dynamixel"
     chains = Chains.from_robot(robot)
     joints = chains.default_joints()
-    world = open_engine("mujoco", robot, parse_terrain("flat"), robot.time_delta, 1, True, joints)
+    world = open_engine(robot, EngineOptions(parse_terrain("flat"), 1, True, engine="mujoco"), joints)
     try:
         assert world.xml.count('<motor ') == len(world.qvel_index)
         goals = joints + 0.5  # every servo pushes towards +0.5 rad while the joints move the other way at 3 rad/s

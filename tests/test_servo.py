@@ -68,13 +68,14 @@ def test_the_default_servo_keeps_the_old_power_formula() -> None:
 def test_pybullet_applies_the_model_torque_and_the_rotor_inertia() -> None:
     """A leg held in the air settles where the servo model's torque holds it: mean torque = stiffness × error − damping
     × speed at every joint (the engine's torque is the model's), and the rotor links carry the armature."""
+    from shc_cli.backends.engine import EngineOptions
     from shc_cli.backends.pybullet_.world import World
     from shc_cli.backends.terrain import TerrainSpec
     from shc_cli.model.chains import Chains
 
     robot = load_robot(ROOT / "robots" / "bullet_insectoid_b.toml").robot
     joints = np.tile([0.0, 0.0, 1.088, -0.765, -1.212], (6, 1))
-    world = World(robot, TerrainSpec(kind="flat"), robot.time_delta, 4, True, joints)
+    world = World(robot, EngineOptions(TerrainSpec(kind="flat"), 4, True), joints)
     try:
         p = world.p
         inertias = [p.getDynamicsInfo(world.body, j, physicsClientId=world.client)[2]
@@ -136,6 +137,7 @@ def test_the_integral_stops_growing_at_the_pwm_limit() -> None:
 def test_integral_action_removes_the_sag_a_p_servo_leaves(engine: str) -> None:
     """A leg held in the air under gravity: with P only the loaded joints sit a load/stiffness error off their goals;
     with an I gain the same servo settles on them (both engines run the same torque law)."""
+    from shc_cli.backends.engine import EngineOptions
     from shc_cli.backends.engine_registry import open_engine
     from shc_cli.backends.terrain import TerrainSpec
 
@@ -144,7 +146,7 @@ def test_integral_action_removes_the_sag_a_p_servo_leaves(engine: str) -> None:
     errors = {}
     for i_gain in (0.0, 2000.0):
         robot = base.model_copy(update={"servo": base.servo.model_copy(update={"position_i_gain": i_gain})})
-        world = open_engine(engine, robot, TerrainSpec(kind="flat"), robot.time_delta, 4, True, joints)
+        world = open_engine(robot, EngineOptions(TerrainSpec(kind="flat"), 4, True, engine=engine), joints)
         try:
             for _ in range(300):  # 3 s
                 world.command(joints)
@@ -206,12 +208,13 @@ def test_a_light_robot_with_a_stiff_servo_law_is_warned_and_the_suggested_rate_w
 @pytest.mark.parametrize("name", ["bullet_insectoid_a", "bullet_insectoid_b", "bullet_mammalian_a",
                                   "bullet_mammalian_b"])
 def test_the_paper_robots_are_within_the_explicit_stability_limit(name: str) -> None:
+    from shc_cli.backends.engine import EngineOptions
     from shc_cli.backends.pybullet_.world import World
     from shc_cli.backends.terrain import TerrainSpec
 
     robot = load_robot(name).robot
     joints = np.array([[joint.unpacked for joint in leg.joints.values()] for leg in robot.legs.values()])
-    world = World(robot, TerrainSpec(kind="flat"), robot.time_delta, 4, False, joints)
+    world = World(robot, EngineOptions(TerrainSpec(kind="flat"), 4), joints)
     try:
         assert world.warnings == []
     finally:

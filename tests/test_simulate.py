@@ -125,13 +125,14 @@ def test_readings_are_those_after_the_last_physics_step(substeps: int) -> None:
     asking PyBullet again: they must equal a fresh read."""
     import numpy as np
 
-    from shc_cli.backends.simulated import WorldOptions, open_world
+    from shc_cli.backends.engine import EngineOptions
+    from shc_cli.backends.simulated import open_world
     from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.controller import Command, Controller, RobotState
     from shc_cli.spec.checks import load_checked
 
     robot, gait, _ = load_checked("bullet", "tripod")
-    world = open_world(robot, WorldOptions(parse_terrain("flat"), substeps))
+    world = open_world(robot, EngineOptions(parse_terrain("flat"), substeps))
     controller = Controller(robot, gait, joints=world.read().joints)
     try:
         for _ in range(5):
@@ -151,14 +152,15 @@ def test_mean_joint_speed_from_the_displacement_equals_the_mean_of_every_physics
     speeds PyBullet reports after each sub-step and compare."""
     import numpy as np
 
+    from shc_cli.backends.engine import EngineOptions
     from shc_cli.backends.power import servo_power
-    from shc_cli.backends.simulated import WorldOptions, open_world
+    from shc_cli.backends.simulated import open_world
     from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.controller import Command, Controller, RobotState
     from shc_cli.spec.checks import load_checked
 
     robot, gait, _ = load_checked("bullet", "tripod")
-    world = open_world(robot, WorldOptions(parse_terrain("flat"), 4))
+    world = open_world(robot, EngineOptions(parse_terrain("flat"), 4))
     controller = Controller(robot, gait, joints=world.read().joints)
     recorded: list[list[tuple[float, float]]] = []
 
@@ -199,6 +201,7 @@ def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(engine: s
     position motor, and its femurs' steady errors halve when the stiffness doubles (a proportional servo)."""
     import numpy as np
 
+    from shc_cli.backends.engine import EngineOptions
     from shc_cli.backends.engine_registry import open_engine
     from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.startup import plan_direct_startup
@@ -217,7 +220,7 @@ def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(engine: s
         assert robot is not None
         chains = Chains.from_robot(robot)
         stance = plan_direct_startup(robot, chains, chains.default_joints())
-        world = open_engine(engine, robot, parse_terrain("flat"), robot.time_delta, 4, False, stance)
+        world = open_engine(robot, EngineOptions(parse_terrain("flat"), 4, engine=engine), stance)
         try:
             for _ in range(300):  # 3 s: settled
                 world.command(stance)

@@ -22,7 +22,8 @@ from typing import TYPE_CHECKING, Protocol
 import numpy as np
 
 if TYPE_CHECKING:
-    from shc_cli.backends.terrain import Terrain
+    from shc_cli.backends.engine_registry import EngineName
+    from shc_cli.backends.terrain import Terrain, TerrainSpec
     from shc_cli.spec.robot import Robot
 
 GRAVITY = 9.81
@@ -31,6 +32,40 @@ SPAWN_GAP = 0.01
 """Height of the lowest foot above the ground when the robot is spawned [m]."""
 AIR_LIFT = 0.3
 """In the air scenarios the body is held this far above its standing height, so no foot reaches the ground [m]."""
+
+
+@dataclass(frozen=True)
+class EngineOptions:
+    """How a physics world is built: the engine, the terrain, the physics step and the spawn (``shc simulate``'s
+    physics options, made by :meth:`shc_cli.domain.config.SimulationConfig.engine_options`).
+
+    Attributes:
+        terrain: the terrain (:func:`shc_cli.backends.terrain.parse_terrain`).
+        substeps: physics steps per control period (physics rate = substeps / the robot's ``time_delta``).
+        fixed_base: hold the body in the air, :data:`AIR_LIFT` above its standing height (scenarios SA, WA).
+        friction: friction of feet and terrain, as PyBullet's ``lateralFriction`` of both: the coefficient
+            between them is ``friction²`` in both engines (docs/physics-model.md).
+        restitution: restitution of feet and terrain, as PyBullet's ``restitution`` of both (docs/physics-model.md).
+        seed: seed of every random thing (terrain blocks, IMU noise).
+        imu_noise: standard deviation of IMU noise (rad/s, m/s² alike); 0 = none.
+        start_pose: spawn pose, ``"unpacked"`` or ``"packed"`` (:func:`shc_cli.backends.simulated.open_world`).
+        gui: open the engine's viewer (PyBullet only).
+        stand: spawn the body at its standing height held by a removable support (:meth:`Engine.release_stand`)
+            instead of on its feet just above the ground (ignored with ``fixed_base``).
+        engine: the physics engine (:data:`shc_cli.backends.engine_registry.ENGINES`).
+    """
+
+    terrain: TerrainSpec
+    substeps: int
+    fixed_base: bool = False
+    friction: float = 0.9
+    restitution: float = 0.0
+    seed: int = 0
+    imu_noise: float = 0.0
+    start_pose: str = "unpacked"
+    gui: bool = False
+    stand: bool = False
+    engine: EngineName = "pybullet"
 
 
 @dataclass(frozen=True)

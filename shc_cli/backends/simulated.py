@@ -7,51 +7,21 @@ The engine object has the interface of :class:`shc_cli.backends.pybullet_.world.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from shc_cli.backends.engine import servo_slots
 from shc_cli.control.sensing import Sensors
-from shc_cli.loop.runlog import joint_slots
 
 if TYPE_CHECKING:
+    from shc_cli.backends.engine import Engine, EngineOptions, Reading
     from shc_cli.control.controller import CycleOutput
     from shc_cli.spec.robot import Robot
 
-@dataclass(frozen=True)
-class WorldOptions:
-    """How the simulated world is built (``shc simulate`` options).
 
-    Attributes:
-        terrain: the terrain spec (:func:`shc_cli.backends.terrain.parse_terrain`).
-        substeps: physics steps per control period.
-        airborne: hold the body in the air (scenarios SA, WA).
-        friction: lateral friction of feet and terrain.
-        restitution: restitution of feet and terrain.
-        seed: seed of every random thing.
-        imu_noise: IMU noise standard deviation (rad/s, m/s²).
-        start_pose: ``"unpacked"`` or ``"packed"``.
-        gui: open the engine's GUI.
-        stand: start up held on a removable stand.
-        engine: the physics engine (:data:`shc_cli.backends.engine.ENGINES`).
-    """
-
-    terrain: Any
-    substeps: int
-    airborne: bool = False
-    friction: float = 0.9
-    restitution: float = 0.0
-    seed: int = 0
-    imu_noise: float = 0.0
-    start_pose: str = "unpacked"
-    gui: bool = False
-    stand: bool = False
-    engine: str = "pybullet"
-
-
-def open_world(robot: Robot, options: WorldOptions) -> Any:
-    """The physics world of a run, its robot spawned in the start pose (the one place an engine is built)."""
+def open_world(robot: Robot, options: EngineOptions) -> Engine:
+    """The physics world of a run, its robot spawned in ``options.start_pose`` (the one place an engine is built)."""
     from shc_cli.backends.engine_registry import open_engine
     from shc_cli.control.sequence import joint_configurations
     from shc_cli.model.chains import Chains
@@ -60,9 +30,7 @@ def open_world(robot: Robot, options: WorldOptions) -> Any:
     packed, unpacked = joint_configurations(robot, chains.joints)
     initial = np.clip(packed[-1] if options.start_pose == "packed" and len(packed) else unpacked, chains.lower,
                       chains.upper)
-    return open_engine(options.engine, robot, options.terrain, robot.time_delta, options.substeps, options.airborne,
-                       initial, options.friction, options.restitution, options.seed, options.imu_noise, options.gui,
-                       options.stand)
+    return open_engine(robot, options, initial)
 
 
 class SimulatedBackend:
@@ -75,10 +43,10 @@ class SimulatedBackend:
 
     kind = "simulate"
 
-    def __init__(self, robot: Robot, world: Any) -> None:
+    def __init__(self, robot: Robot, world: Engine) -> None:
         self.robot, self.world = robot, world
-        self.rows, self.cols = joint_slots(robot)
-        self.reading: Any = None
+        self.rows, self.cols, _ = servo_slots(robot)
+        self.reading: Reading | None = None
         self.total_power = 0.0
         """Total servo power of the last reading [W]."""
         self._running = False
@@ -107,7 +75,7 @@ class SimulatedBackend:
     def advance(self) -> None:
         self.world.step()
 
-    def read(self) -> Any:
+    def read(self) -> Reading:
         world = self.world
         self.reading = reading = world.read()
         self._first = False
@@ -115,7 +83,7 @@ class SimulatedBackend:
             world.release_stand()  # started up on the stand: now on its own feet
         return reading
 
-    def measured_row(self, reading: Any) -> np.ndarray:
+    def measured_row(self, reading: Reading) -> np.ndarray:
         rows, cols = self.rows, self.cols
         power = reading.servo_power[rows, cols]
         self.total_power = total = float(power.sum())

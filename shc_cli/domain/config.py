@@ -17,7 +17,7 @@ from shc_cli.backends.engine_registry import DEFAULT_ENGINE, ENGINES, EngineName
 from shc_cli.errors import Issue, SpecError
 
 if TYPE_CHECKING:
-    from shc_cli.backends.simulated import WorldOptions
+    from shc_cli.backends.engine import EngineOptions
     from shc_cli.backends.terrain import TerrainSpec
     from shc_cli.spec.robot import Robot
 
@@ -218,12 +218,12 @@ class SimulationConfig(BaseModel):
             admittance = admittance.model_copy(update={"enabled": self.admittance})
         return robot.model_copy(update={"pose": pose, "posture": posture, "admittance": admittance})
 
-    def world_options(self, robot: Robot) -> WorldOptions:
+    def engine_options(self, robot: Robot) -> EngineOptions:
         """What the physics engine needs for ``robot`` (the robot after :meth:`apply_switches`)."""
-        from shc_cli.backends.simulated import WorldOptions
+        from shc_cli.backends.engine import EngineOptions
 
-        return WorldOptions(self.terrain_spec, self.substeps(robot), self.airborne, self.friction, self.restitution,
-                            self.seed, self.imu_noise, self.start, self.gui, self.stand_start(robot), self.engine)
+        return EngineOptions(self.terrain_spec, self.substeps(robot), self.airborne, self.friction, self.restitution,
+                             self.seed, self.imu_noise, self.start, self.gui, self.stand_start(robot), self.engine)
 
 
 def parse_posture(text: str) -> dict[str, Any]:

@@ -50,7 +50,7 @@ def simulate(config: SimulationConfig | None = None) -> RunResult:
     inputs = load_inputs(o.robot, o.gait, o.velocity, o.duration, o.commands, default_s=20.0, walking=o.walking,
                          robot_change=o.apply_switches)
     robot = inputs.robot
-    options = o.world_options(robot)
+    options = o.engine_options(robot)
     directory = o.out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-simulate"
     with RunDirectory(directory, o.overwrite) as run:  # refuses an existing --out before the physics opens
         world = open_world(robot, options)

@@ -30,12 +30,12 @@ from typing import Any
 
 import numpy as np
 
-from shc_cli.backends.engine import Reading, rpy_from_matrix, servo_slots, spawn_height
+from shc_cli.backends.engine import EngineOptions, Reading, rpy_from_matrix, servo_slots, spawn_height
 from shc_cli.backends.imu import Imu
 from shc_cli.backends.mujoco_.mjcf import Options, robot_mjcf, velocity_stiffness
 from shc_cli.backends.power import servo_power
 from shc_cli.backends.servo import ServoModel
-from shc_cli.backends.terrain import Terrain, TerrainSpec
+from shc_cli.backends.terrain import Terrain
 from shc_cli.errors import BackendError
 from shc_cli.model.body import leg_names
 from shc_cli.spec.robot import Robot
@@ -48,23 +48,18 @@ class MujocoWorld:
     """A MuJoCo model and data holding one robot on one terrain.
 
     Args:
-        robot: the robot.
-        terrain: the terrain.
-        control_period: the controller's period [s].
-        substeps: physics steps per control period.
-        fixed_base: hold the body in the air (no free joint), :data:`~shc_cli.backends.engine.AIR_LIFT` above its
-            standing height.
+        robot: the robot; its ``time_delta`` is the control period.
+        options: terrain, physics steps per control period, fixed base (no free joint,
+            :data:`~shc_cli.backends.engine.AIR_LIFT` above its standing height), PyBullet-style friction and
+            restitution of feet and terrain (docs/physics-model.md), seed, IMU noise and the stand (spawn at standing
+            height held by a weld, :meth:`release_stand`); ``gui`` is not used.
         initial_joints: joint positions to spawn with ``(L, n)`` [rad].
-        friction: PyBullet-style friction of feet and terrain (docs/physics-model.md).
-        restitution: PyBullet-style restitution of feet and terrain.
-        seed: seed of every random thing (terrain blocks, IMU noise).
-        imu_noise: standard deviation of IMU noise; 0 = none.
-        stand: spawn at standing height held by a weld (:meth:`release_stand`).
     """
 
-    def __init__(self, robot: Robot, terrain: TerrainSpec, control_period: float, substeps: int, fixed_base: bool,
-                 initial_joints: np.ndarray, friction: float = 0.9, restitution: float = 0.0, seed: int = 0,
-                 imu_noise: float = 0.0, stand: bool = False) -> None:
+    def __init__(self, robot: Robot, options: EngineOptions, initial_joints: np.ndarray) -> None:
+        o = options
+        terrain, control_period, substeps, fixed_base = o.terrain, robot.time_delta, o.substeps, o.fixed_base
+        friction, restitution, seed, imu_noise, stand = o.friction, o.restitution, o.seed, o.imu_noise, o.stand
         mujoco = import_mujoco()
         WARNINGS.clear()
         self.mujoco = mujoco

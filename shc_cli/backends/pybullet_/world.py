@@ -17,13 +17,12 @@ from typing import Any
 
 import numpy as np
 
-from shc_cli.backends.engine import GRAVITY, Reading, spawn_height, tilt
+from shc_cli.backends.engine import GRAVITY, EngineOptions, Reading, spawn_height, tilt
 from shc_cli.backends.imu import Imu
 from shc_cli.backends.pybullet_.quiet import quiet_stdout
 from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
 from shc_cli.backends.pybullet_.urdf import robot_urdf
 from shc_cli.backends.servo import ServoModel
-from shc_cli.backends.terrain import TerrainSpec
 from shc_cli.errors import BackendError
 from shc_cli.spec.robot import Robot
 
@@ -68,24 +67,19 @@ class World:
     """A PyBullet client holding one robot on one terrain: the PyBullet :class:`~shc_cli.backends.engine.Engine`.
 
     Args:
-        robot: the robot.
-        terrain: the terrain.
-        control_period: the controller's period [s].
-        substeps: physics steps per control period (physics rate = substeps / control_period).
-        fixed_base: hold the body in the air, :data:`AIR_LIFT` above its standing height (scenarios SA, WA).
-        stand: spawn the body at its standing height held by a removable support (:meth:`release_stand`),
-            like the stand box of OpenSHC's Gazebo launch, instead of on its feet just above the ground.
+        robot: the robot; its ``time_delta`` is the control period.
+        options: terrain, physics steps per control period, fixed base (held :data:`AIR_LIFT` above its standing
+            height), friction and restitution of terrain and feet, seed, IMU noise, GUI, and the stand (spawn at
+            standing height held by a removable support, :meth:`release_stand`, like the stand box of OpenSHC's
+            Gazebo launch).
         initial_joints: joint positions to spawn with ``(L, n)`` [rad].
-        friction: lateral friction of terrain and feet.
-        restitution: restitution of terrain and feet.
-        seed: seed of every random thing (terrain blocks, IMU noise).
-        imu_noise: standard deviation of IMU noise (rad, rad/s, m/s² alike); 0 = none.
-        gui: open the PyBullet GUI.
     """
 
-    def __init__(self, robot: Robot, terrain: TerrainSpec, control_period: float, substeps: int,
-                 fixed_base: bool, initial_joints: np.ndarray, friction: float = 0.9, restitution: float = 0.0,
-                 seed: int = 0, imu_noise: float = 0.0, gui: bool = False, stand: bool = False) -> None:
+    def __init__(self, robot: Robot, options: EngineOptions, initial_joints: np.ndarray) -> None:
+        o = options
+        terrain, control_period, substeps, fixed_base = o.terrain, robot.time_delta, o.substeps, o.fixed_base
+        friction, restitution, seed, imu_noise, gui, stand = (o.friction, o.restitution, o.seed, o.imu_noise, o.gui,
+                                                              o.stand)
         with quiet_stdout():  # importing pybullet prints its build time
             import pybullet
 
