@@ -24,7 +24,6 @@ def main() -> None:
     args = parser.parse_args()
     robot = load_robot("bullet").robot
     gait = load_gait("tripod").gait
-    assert robot is not None and gait is not None
     controller = Controller(robot, gait)
     while controller.state != RobotState.RUNNING:
         controller.step(Command(state_request=RobotState.RUNNING))

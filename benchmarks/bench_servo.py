@@ -24,7 +24,6 @@ from shc_cli.spec.loading import load_robot
 
 def run(control: str, periods: int) -> tuple[float, float]:
     robot = load_robot("bullet_insectoid_b").robot
-    assert robot is not None
     robot = robot.model_copy(update={"servo": robot.servo.model_copy(update={"control": control})})
     base = np.tile([0.0, 0.0, 1.088, -0.765, -1.212], (6, 1))
     world = World(robot, EngineOptions(TerrainSpec(kind="flat"), 4, True), base)

@@ -42,7 +42,6 @@ def main() -> None:
     args = parser.parse_args()
     robot = load_robot("bullet").robot
     gait = load_gait("tripod").gait
-    assert robot is not None and gait is not None
     chains = Chains.from_robot(robot)
     defaults = plan_direct_startup(robot, chains, chains.default_joints())
     identity = [[leg.stance.x, leg.stance.y, -robot.walker.body_clearance] for leg in robot.legs.values()]

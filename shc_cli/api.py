@@ -112,7 +112,6 @@ def load_gait(gait: str | Path) -> Gait:
     from shc_cli.spec.loading import load_gait as load
 
     loaded = load(str(gait)).gait
-    assert loaded is not None  # load_gait raises a SpecError on a bad file
     return loaded
 
 

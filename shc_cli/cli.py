@@ -401,7 +401,6 @@ def export_urdf(
     from shc_cli.spec.loading import load_robot
 
     loaded = load_robot(robot)
-    assert loaded.robot is not None
     text = robot_urdf(loaded.robot)
     if out is None:
         typer.echo(text)

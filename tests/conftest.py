@@ -38,7 +38,6 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
 @pytest.fixture(scope="session")
 def bullet() -> Robot:
     robot = load_robot(ROOT / "robots" / "bullet.toml").robot
-    assert robot is not None
     return robot
 
 

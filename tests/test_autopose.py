@@ -47,7 +47,6 @@ FALL = {5: 0.75**3 * 1.75, 6: 0.5**3 * 2.5, 7: 0.25**3 * 3.25, 8: 0.0}  # (1−t
 @pytest.fixture(scope="module")
 def gait() -> Gait:
     loaded = load_gait("tripod").gait
-    assert loaded is not None
     return loaded
 
 
@@ -60,7 +59,6 @@ def cycle(gait: Gait) -> StepCycle:
 
 def bullet_tripod() -> AutoPoseSet:
     pose_set = load_pose_set("tripod").pose_set
-    assert pose_set is not None
     return pose_set
 
 
@@ -252,9 +250,7 @@ def test_reference_leg_is_the_last_with_offset_multiplier_zero() -> None:
     expected = {"tripod": "BL", "wave": "BL", "ripple": "BR", "amble": "AL", "bipod": "CL"}
     for name, leg in expected.items():
         gait = load_gait(name).gait
-        assert gait is not None
         pose_set = load_pose_set(name).pose_set
-        assert pose_set is not None
         poser = AutoPoser(pose_set, gait, step_cycle(gait, 1.0, DT), LEGS, DT)
         assert LEGS[poser.reference_leg] == leg
 
@@ -283,7 +279,6 @@ def _yaml_sets(name: str) -> dict:  # type: ignore[type-arg]
 def test_shipped_sets_equal_the_yaml_sources(yaml_name: str, prefix: str) -> None:
     for key, expected in _yaml_sets(yaml_name).items():
         pose_set = load_pose_set(prefix + key.removesuffix("_gait_pose")).pose_set
-        assert pose_set is not None
         assert pose_set.pose_frequency == expected["pose_frequency"]
         assert pose_set.pose_phase_length == expected["pose_phase_length"]
         assert [p.start for p in pose_set.poser] == expected["pose_phase_starts"]
@@ -302,11 +297,9 @@ def test_every_shipped_set_loads_and_fits_its_gait(tmp_path: Path, monkeypatch: 
     assert {"wave", "tripod", "ripple", "amble", "bipod", "quad_wave", "openshc_tripod"} <= set(names)
     for name in names:
         loaded = load_pose_set(name)
-        assert loaded.pose_set is not None
         if name == "quad_wave":
             continue
         gait = load_gait(name.removeprefix("openshc_")).gait
-        assert gait is not None
         assert compatibility_issues(loaded, gait, LEGS) == []
 
 
@@ -319,7 +312,6 @@ def test_auto_pose_type_auto_names_the_set_after_the_gait(gait: Gait) -> None:
 
 def test_bullet_quad_wave_set_does_not_fit_this_repositorys_quad_wave_gait() -> None:
     gait = load_gait("quad_wave").gait
-    assert gait is not None
     issues = compatibility_issues(load_pose_set("quad_wave"), gait, ["AR", "BR", "BL", "AL"])
     fields = [issue.field for issue in issues]
     assert fields == ["pose_phase_length", "negation.CR", "negation.CL"]

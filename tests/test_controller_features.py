@@ -17,7 +17,6 @@ from shc_cli.spec.loading import load_gait, load_robot
 def running() -> Controller:
     robot = load_robot("bullet").robot
     gait = load_gait("tripod").gait
-    assert robot is not None and gait is not None
     controller = Controller(robot, gait)
     while controller.state != RobotState.RUNNING:
         controller.step(Command(state_request=RobotState.RUNNING))
@@ -26,7 +25,6 @@ def running() -> Controller:
 
 def _gait(name: str):  # type: ignore[no-untyped-def]
     gait = load_gait(name).gait
-    assert gait is not None
     return gait
 
 
@@ -154,9 +152,7 @@ def test_auto_posing_moves_the_body_with_the_gait_and_lets_it_stop(tmp_path) -> 
     robot_file.write_text('extends = "bullet"\nname = "bullet_posing"\n[pose]\nauto = true\n')
     robot = load_robot(robot_file).robot
     gait = _gait("tripod")
-    assert robot is not None
     pose_set = load_auto_pose_set("auto", gait).pose_set
-    assert pose_set is not None
     controller = Controller(robot, gait, pose_sets={"tripod": pose_set})
     while controller.state != RobotState.RUNNING:
         controller.step(Command(state_request=RobotState.RUNNING))

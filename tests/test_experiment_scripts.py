@@ -20,7 +20,6 @@ def test_vertical_load_torque_is_the_virtual_work_of_the_foot_force(name: str) -
     """τ_i = F · ∂tip/∂q_i with the tip and F in base_link (finite differences of the forward kinematics). The
     B legs' frames have their z axis along the coxa, not up: a torque taken in the leg frame fails this for them."""
     robot = load_robot(name).robot
-    assert robot is not None
     chains = Chains.from_robot(robot)
     rng = np.random.default_rng(3)
     force = np.array([0.0, 0.0, 18.2])

@@ -26,7 +26,6 @@ def test_reference_step_cycles(config: tuple[float, float], name: str, k: int, p
                                stance: int, window: tuple[int, int]) -> None:
     dt, frequency = config
     gait = load_gait(name).gait
-    assert gait is not None
     cycle = step_cycle(gait, frequency, dt)
     assert (cycle.normaliser, cycle.period, cycle.swing_period, cycle.stance_period) == (k, period, swing, stance)
     assert (cycle.swing_start, cycle.swing_end) == window
@@ -35,14 +34,12 @@ def test_reference_step_cycles(config: tuple[float, float], name: str, k: int, p
 
 def test_tripod_offsets_and_swing_order() -> None:
     gait = load_gait("tripod").gait
-    assert gait is not None
     cycle = step_cycle(gait, 1.1, 0.01)
     assert cycle.offsets == {"AR": 0, "BR": 92, "CR": 0, "CL": 92, "BL": 0, "AL": 92}
 
 
 def test_wave_swings_one_leg_at_a_time_in_the_documented_order() -> None:
     gait = load_gait("wave").gait
-    assert gait is not None
     cycle = step_cycle(gait, 1.1, 0.01)
     # A leg with offset o starts swinging (swing_start − o) mod P iterations after the start.
     starts = {leg: (cycle.swing_start - o) % cycle.period for leg, o in cycle.offsets.items()}

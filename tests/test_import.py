@@ -50,7 +50,6 @@ def test_legs_share_a_template_and_list_only_their_differences(tmp_path: Path) -
     assert "base" not in data["legs"]["AR"]
     loaded = load_robot(robot_file).robot
     ours = load_robot("bullet").robot
-    assert loaded is not None and ours is not None
     for leg_id, leg in ours.legs.items():  # every kinematic value as in our file
         mine = loaded.legs[leg_id]
         assert (mine.base, mine.stance) == (leg.base, leg.stance)

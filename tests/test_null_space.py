@@ -55,7 +55,6 @@ def test_our_ik_settles_standing_legs_at_the_limit_cost_minimum(name: str) -> No
     """Our IK step, from the unpacked pose moved to the stance in 2 s and then held for 38 s (100 Hz), ends at the
     same minimum within 0.005 rad for every leg — OpenSHC's own Bullet and two of the paper's robots."""
     robot = load_robot(name).robot
-    assert robot is not None
     chains = Chains.from_robot(robot)
     q = np.array([[joint.unpacked for joint in leg.joints.values()] for leg in robot.legs.values()])
     height = robot.walker.body_clearance

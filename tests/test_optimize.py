@@ -185,7 +185,6 @@ def test_small_study_end_to_end(tmp_path: Path, capsys, monkeypatch) -> None:  #
 
     first = pareto[0]
     robot = load_robot(files[0]).robot
-    assert robot is not None
     assert robot.walker.gait == first["gait"]
     assert robot.walker.step_frequency.default == pytest.approx(float(first["walker.step_frequency"]), rel=1e-5)
     assert robot.walker.swing_height.default == pytest.approx(float(first["walker.swing_height"]), rel=1e-5)

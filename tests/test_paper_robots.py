@@ -22,7 +22,6 @@ TABLE_III = {"bullet_mammalian_a": (0.12, 0.30), "bullet_mammalian_b": (0.08, 0.
 
 def _robot(name: str) -> Robot:
     robot = load_robot(ROOT / "robots" / f"{name}.toml").robot
-    assert robot is not None
     return robot
 
 

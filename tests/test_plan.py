@@ -112,9 +112,7 @@ def running_controllers() -> dict[str, Controller]:
     out = {}
     for name in ("openshc_default", "bullet_mammalian"):
         robot = load_robot(name).robot
-        assert robot is not None
         gait = load_gait(robot.walker.gait).gait
-        assert gait is not None
         controller = Controller(robot, gait)
         while controller.state != RobotState.RUNNING:
             controller.step(Command(state_request=RobotState.RUNNING))

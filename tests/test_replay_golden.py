@@ -41,9 +41,7 @@ def result(recording: Recorded, bullet: Robot, tripod: Gait) -> Replay:
 @pytest.fixture(scope="module")
 def mammalian() -> tuple[Robot, Gait, Recorded]:
     robot = load_robot(ROOT / "robots" / "bullet_mammalian.toml").robot
-    assert robot is not None
     gait = load_gait("bipod").gait
-    assert gait is not None
     return robot, gait, open_source(RUNS / "mammalian_excerpt")
 
 

@@ -65,7 +65,6 @@ def sequence_robot(tmp_path_factory: pytest.TempPathFactory) -> Robot:
     robot_file = tmp_path_factory.mktemp("robot") / "sequence.toml"
     robot_file.write_text('extends = "bullet"\nname = "bullet_sequence"\n[start_up]\nsequence = true\n')
     robot = load_robot(robot_file).robot
-    assert robot is not None
     return robot
 
 

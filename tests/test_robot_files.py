@@ -27,7 +27,6 @@ def _yaml(name: str) -> dict:  # type: ignore[type-arg]
 def test_every_leg_parameter_matches_openshc(robot_name: str, yaml_name: str) -> None:
     params = _yaml(yaml_name)
     robot = load_robot(robot_name).robot
-    assert robot is not None
     assert list(robot.legs) == params["leg_id"]
     assert robot.time_delta == params["time_delta"]
     assert robot.walker.body_clearance == params["body_clearance"]
@@ -55,7 +54,6 @@ def test_every_leg_parameter_matches_openshc(robot_name: str, yaml_name: str) ->
 def test_walker_parameters_match_openshc(robot_name: str, yaml_name: str) -> None:
     params = _yaml(yaml_name)
     robot = load_robot(robot_name).robot
-    assert robot is not None
     walker = robot.walker
     for name in ("step_frequency", "swing_height", "swing_width", "step_depth", "stance_span_modifier"):
         expected = params[name]
@@ -72,7 +70,6 @@ def test_gaits_match_openshc_gait_file() -> None:
     gaits = YAML(typ="safe").load((GOLDEN / "openshc" / "gait.yaml").read_text())["syropod"]["gait_parameters"]
     for key, expected in gaits.items():
         gait = load_gait(key.removesuffix("_gait")).gait
-        assert gait is not None
         assert (gait.stance_phase, gait.swing_phase, gait.phase_offset) == (
             expected["stance_phase"], expected["swing_phase"], expected["phase_offset"])
         assert gait.offset_multiplier == expected["offset_multiplier"]
@@ -91,7 +88,6 @@ def test_every_bundled_robot_and_gait_loads_from_any_directory(tmp_path: Path, m
 def test_mammalian_extends_bullet_and_overrides_only_what_it_says() -> None:
     bullet = load_robot("bullet").robot
     mammal = load_robot("bullet_mammalian").robot
-    assert bullet is not None and mammal is not None
     assert mammal.walker.gait == "bipod" and bullet.walker.gait == "tripod"
     assert mammal.legs["CL"].joints["coxat"].min == 0.0 and mammal.legs["CL"].joints["coxat"].max == 3.142
     assert mammal.legs["AL"].joints["tarsus"].min == -3.142
@@ -108,7 +104,6 @@ def test_no_robot_spawns_with_its_feet_in_the_floor(path: Path) -> None:
     from shc_cli.model.chains import Chains
 
     robot = load_robot(path).robot
-    assert robot is not None
     chains = Chains.from_robot(robot)
     _, unpacked = joint_configurations(robot, chains.joints)
     heights = robot.walker.body_clearance + chains.tips(unpacked)[:, 2]

@@ -18,7 +18,6 @@ def _controller(tmp_path: Path, double: bool = False) -> Controller:
     robot_file.write_text('extends = "bullet"\nname = "bullet_sequence"\n[start_up]\nsequence = true\n')
     robot = load_robot(robot_file).robot
     gait = load_gait("tripod").gait
-    assert robot is not None and gait is not None
     packed, _ = joint_configurations(robot)
     return Controller(robot, gait, joints=packed[-1].copy(), openshc_double_shutdown=double)
 

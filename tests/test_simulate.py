@@ -217,7 +217,6 @@ def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(engine: s
     heights, errors = [], []
     for name in names:
         robot = load_robot(name).robot
-        assert robot is not None
         chains = Chains.from_robot(robot)
         stance = plan_direct_startup(robot, chains, chains.default_joints())
         world = open_engine(robot, EngineOptions(parse_terrain("flat"), 4, engine=engine), stance)

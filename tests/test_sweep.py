@@ -127,7 +127,6 @@ def test_a_variant_changes_only_the_swept_default(tmp_path: Path) -> None:
     sweep = load_sweep(_write(tmp_path, '[grid]\n"walker.step_frequency" = [0.6]\n"walker.body_clearance" = [0.2]\n'))
     variant = load_robot(robot_for(sweep.points[0], tmp_path)).robot
     base = load_robot("bullet").robot
-    assert variant is not None and base is not None
     assert variant.walker.step_frequency.default == 0.6
     assert (variant.walker.step_frequency.min, variant.walker.step_frequency.max) == (
         base.walker.step_frequency.min, base.walker.step_frequency.max)

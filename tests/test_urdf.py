@@ -25,7 +25,6 @@ ROBOTS = bundled("robots")
 
 def robot_named(name: str) -> Robot:
     robot = load_robot(name).robot
-    assert robot is not None
     return robot
 
 

@@ -121,9 +121,7 @@ def test_every_bundled_robot_has_a_nonempty_symmetric_walkspace() -> None:
 
     for name in ("bullet_mammalian", "openshc_default", "athena", "quadruped", "octopod"):
         robot = load_robot(name).robot
-        assert robot is not None
         gait = load_gait(robot.walker.gait).gait
-        assert gait is not None
         result = analyse_workspace(robot, gait)
         assert all(r > 0.0 for r in result.walkspace.values()), name
         assert result.walkspace[360] == result.walkspace[0]
@@ -168,7 +166,6 @@ def test_mammalian_workspace_matches_the_study(robot_name: str, leg: str) -> Non
 
     robot = load_robot(robot_name).robot
     gait = load_gait("bipod").gait
-    assert robot is not None and gait is not None
     plane = analyse_workspace(robot, gait).planes[leg]
     for bearing, expected in zip(range(0, 360, 45), STUDY_RADII[(robot_name, leg)], strict=True):
         assert plane[bearing] == pytest.approx(expected, abs=6e-4), bearing
@@ -182,7 +179,6 @@ def test_forward_limits_match_the_study(robot_name: str, gait_name: str, radius:
 
     robot = load_robot(robot_name).robot
     gait = load_gait(gait_name).gait
-    assert robot is not None and gait is not None
     limit = analyse_workspace(robot, gait).limits.bearings[0]
     assert limit.walkspace_radius == pytest.approx(radius, abs=6e-4)
     assert limit.linear_speed == pytest.approx(speed, abs=6e-4)

@@ -17,7 +17,7 @@ controller's own tables (``joints.csv``, ``tips.csv``, ``body.csv``).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, TypeVar, runtime_checkable
 
 if TYPE_CHECKING:
     import numpy as np
@@ -25,9 +25,22 @@ if TYPE_CHECKING:
     from shc_cli.control.controller import Command, CycleOutput
     from shc_cli.control.sensing import Sensors
 
+MEASURED_BODY_COLUMNS = ["x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz", "wx", "wy", "wz", "imu_qx",
+                         "imu_qy", "imu_qz", "imu_qw", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z",
+                         "height", "power_w"]
+"""The body and IMU quantities a measuring backend reports (:meth:`MeasuringBackend.measured_row`), as
+columns of ``log.csv`` after the per-leg ones: ground-truth position [m], roll/pitch/yaw [rad],
+world linear [m/s] and angular [rad/s] velocity, IMU quaternion (x, y, z, w, body → world), gyro [rad/s],
+specific force [m/s²], body height above the terrain [m], total servo power [W]."""
+ReadingT = TypeVar("ReadingT")
+"""What a backend's :meth:`Backend.read` returns: the physics engine's
+:class:`~shc_cli.backends.engine.Reading`, the servo bus's :class:`~shc_cli.hardware.bus.BusState`, or ``None``
+(the kinematic backend measures nothing)."""
+ReadingT_co = TypeVar("ReadingT_co", covariant=True)
+
 
 @runtime_checkable
-class Backend(Protocol):
+class Backend(Protocol[ReadingT_co]):
     """One robot, real or not, advanced one control period at a time.
 
     ``kind`` names the run kind (``"plan"``, ``"simulate"``, ``"hardware"``): it becomes the summary's scenario
@@ -57,8 +70,8 @@ class Backend(Protocol):
         """One control period."""
         ...
 
-    def read(self) -> Any:
-        """The reading at the end of the period (backend-specific; ``None`` when nothing is measured)."""
+    def read(self) -> ReadingT_co:
+        """The reading at the end of the period (its type is the backend's; ``None`` when nothing is measured)."""
         ...
 
     def fault(self) -> str | None:
@@ -70,10 +83,10 @@ class Backend(Protocol):
         ...
 
 
-class MeasuringBackend(Backend, Protocol):
+class MeasuringBackend(Backend[ReadingT], Protocol[ReadingT]):
     """A backend whose reading fills the measured columns of ``log.csv``."""
 
-    def measured_row(self, reading: Any) -> np.ndarray:
+    def measured_row(self, reading: ReadingT) -> np.ndarray:
         """The measured ``log.csv`` values of ``reading`` in :func:`shc_cli.loop.runlog.log_columns` order (from the
         measured joints to ``power_w``)."""
         ...

@@ -15,8 +15,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from shc_cli.backends.base import MEASURED_BODY_COLUMNS
+from shc_cli.backends.engine import servo_slots
 from shc_cli.control.sensing import Sensors
-from shc_cli.loop.runlog import MEASURED_BODY_COLUMNS, joint_slots
 
 if TYPE_CHECKING:
     from shc_cli.control.controller import CycleOutput
@@ -56,7 +57,7 @@ class DynamixelBackend:
         chains = Chains.from_robot(robot)
         self.lower, self.upper = chains.lower, chains.upper
         self.max_step = chains.max_vel * self.dt * 1.5  # rate limit: 1.5 × the joint speed limit per cycle
-        self.rows, self.cols = joint_slots(robot)
+        self.rows, self.cols, _ = servo_slots(robot)
         self.zeros = np.zeros(len(self.rows) + 2 * len(robot.legs) + len(MEASURED_BODY_COLUMNS))
         self.timing = run.table("timing.csv", ["cycle_time_ms", "overrun"], ["%.4f", "%d"]) if run else None
         self.state: BusState | None = None

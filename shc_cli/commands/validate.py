@@ -52,17 +52,15 @@ def run_validate(files: list[str], *, show: bool) -> None:
         except NotFoundError as error:
             issues.append(Issue(None, None, "", str(error)))
     for gait in gaits:
-        issues += _check_gait_against(gait, [r.robot for r in robots if r.robot is not None])
+        issues += _check_gait_against(gait, [r.robot for r in robots])
     if issues:
         raise SpecError(issues)
     for loaded in robots:
-        assert loaded.robot is not None
         if show:  # the TOML alone on stdout, so `--show > expanded.toml` gives a valid robot file
             typer.echo(f"# {loaded.path}, expanded by shc validate --show")
             typer.echo(dump_toml(loaded.robot.model_dump(mode="json")))
         typer.echo(summary(loaded.robot, [g for g in gaits if g.gait], _own_gait(loaded)), err=show)
     for gait in gaits:
-        assert gait.gait is not None
         typer.echo(f"{gait.path}: gait '{gait.gait.name}' ok (duty factor {gait.gait.duty_factor:.3f})", err=show)
 
 
@@ -72,7 +70,6 @@ def _check_gait_against(gait: LoadedGait, robots: list[Robot]) -> list[Issue]:
 
     if not robots:
         return check_gait_pattern(gait)
-    assert gait.gait is not None
     fitting = [robot for robot in robots if set(robot.legs) == set(gait.gait.offset_multiplier)]
     if not fitting:
         return check_gait(gait, robots[0]) if len(robots) == 1 else [gait.issue(
@@ -90,7 +87,6 @@ def _check_own_gait(loaded: LoadedRobot) -> list[Issue]:
     """
     from shc_cli.spec.checks import check_gait
 
-    assert loaded.robot is not None
     file, _ = loaded.where(("walker", "gait"))
     try:
         gait = load_gait(loaded.robot.walker.gait, relative_to=file.parent)
@@ -101,7 +97,6 @@ def _check_own_gait(loaded: LoadedRobot) -> list[Issue]:
 
 def _own_gait(loaded: LoadedRobot) -> LoadedGait | None:
     """The robot's walker.gait, loaded as the validator found it (None if it cannot be loaded)."""
-    assert loaded.robot is not None
     try:
         return load_gait(loaded.robot.walker.gait, relative_to=loaded.where(("walker", "gait"))[0].parent)
     except ShcError:
@@ -127,10 +122,10 @@ def summary(robot: Robot, extra_gaits: list[LoadedGait], own: LoadedGait | None 
             gait = load_gait(name).gait
         except ShcError:
             continue
-        if gait is not None and set(gait.offset_multiplier) == set(robot.legs):
+        if set(gait.offset_multiplier) == set(robot.legs):
             gaits[gait.name] = gait
     for loaded in [*extra_gaits, *([own] if own else [])]:
-        if loaded.gait is not None and set(loaded.gait.offset_multiplier) == set(robot.legs):
+        if set(loaded.gait.offset_multiplier) == set(robot.legs):
             gaits[loaded.gait.name] = loaded.gait
     frequency = robot.walker.step_frequency.default
     lines.append(f"  {'gait':<18}{'duty':>6}{'period':>9}{'period':>9}   (step frequency {frequency:g} Hz)")

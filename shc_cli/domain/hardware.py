@@ -215,7 +215,6 @@ def _source(kind: str, argument: str, robot: Robot, gait: Gait, commands: Sequen
 
     def gait_of(name: str) -> Gait:
         found = load_gait(name).gait
-        assert found is not None  # load_gait raises a SpecError on a bad file
         if set(found.offset_multiplier) != set(robot.legs):
             legs = ", ".join(found.offset_multiplier)
             raise SpecError([Issue(None, None, "gait", f"gait '{name}' is for legs {legs}",
@@ -226,7 +225,7 @@ def _source(kind: str, argument: str, robot: Robot, gait: Gait, commands: Sequen
         return StdinInput(watchdog_s=watchdog, load_gait=gait_of)
     if kind in ("keyboard", "gamepad"):
         gaits = [g for g in (load_gait(name).gait for name in bundled("gaits"))
-                 if g is not None and set(g.offset_multiplier) == set(robot.legs)]
+                 if set(g.offset_multiplier) == set(robot.legs)]
         source: KeyboardInput | GamepadInput = KeyboardInput(gaits) if kind == "keyboard" else GamepadInput(
             argument or None, gaits)
         names = [g.name for g in gaits]

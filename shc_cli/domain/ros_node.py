@@ -155,7 +155,7 @@ def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets:
     writer.write_robot(robot)
     record = PlanRecord(controller)
     clock = WallClock(robot.time_delta)
-    holder: dict[str, RunLoop] = {}
+    holder: dict[str, RunLoop[None]] = {}
     remote = RemoteInput(node, robot, gaits, stopped=lambda: "loop" in holder and holder["loop"].requested)
     outputs = NodeOutputs(node, robot, config.individual, config.combined, walkspace=lambda: controller.walkspace,
                           after=remote.latch)
@@ -164,7 +164,7 @@ def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets:
     def deadline(cycle: int, command: object, out: object, reading: object) -> str | None:
         return "end" if limit is not None and time.monotonic() >= limit else None
 
-    observers: list[Observer] = [record, outputs, clock, deadline]
+    observers: list[Observer[None]] = [record, outputs, clock, deadline]
     loop = RunLoop(controller, KinematicBackend(), remote, writer, None, observers=observers, flush_every=100)
     holder["loop"] = loop
     started = time.perf_counter()

@@ -11,6 +11,7 @@ from shc_cli.domain.config import SimulationConfig
 from shc_cli.domain.result import RunResult
 
 if TYPE_CHECKING:
+    from shc_cli.backends.engine import Reading
     from shc_cli.control.controller import Command, CycleOutput
     from shc_cli.loop.summary import RunSummary
     from shc_cli.progress import ProgressBar
@@ -59,7 +60,7 @@ def simulate(config: SimulationConfig | None = None) -> RunResult:
             run.write_robot(robot)
             record = PhysicsRecord(robot, backend, o.airborne)
             progress = _progress(inputs.cycles)
-            observers: list[Observer] = [record] if progress is None else [record, progress]
+            observers: list[Observer[Reading]] = [record] if progress is None else [record, progress]
             loop = RunLoop(controller, backend, TimelineInput(inputs.timeline.commands(inputs.cycles)),
                            LogRecorder(run, robot, backend),
                            StartUp(round((robot.start_up.time_to_start + START_UP_MARGIN_S) / robot.time_delta)),

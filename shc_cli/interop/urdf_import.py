@@ -748,7 +748,6 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
         problems = check_robot(loaded)
         if problems:
             raise SpecError(problems)
-    assert loaded.robot is not None
     error = fk_error(model, imported.legs, imported.base_frame, loaded.robot)
     unsnapped = error
     if source.snap > 0.0:

@@ -19,7 +19,9 @@ from shc_cli.control.controller import RobotState
 from shc_cli.loop.summary import RunSummary
 
 if TYPE_CHECKING:
-    from shc_cli.control.controller import Command, CycleOutput
+    from shc_cli.backends.engine import Reading
+    from shc_cli.backends.simulated import SimulatedBackend
+    from shc_cli.control.controller import Command, Controller, CycleOutput
     from shc_cli.spec.robot import Robot
 
 FALL_TILT = 0.8
@@ -37,7 +39,7 @@ class PhysicsRecord:
         airborne: the body is held in the air (no height check).
     """
 
-    def __init__(self, robot: Robot, backend: Any, airborne: bool) -> None:
+    def __init__(self, robot: Robot, backend: SimulatedBackend, airborne: bool) -> None:
         self.robot, self.backend, self.airborne = robot, backend, airborne
         self.series: dict[str, list[Any]] = {"t": [], "position": [], "power": [], "contact": [], "running": [],
                                              "desired": []}
@@ -48,7 +50,7 @@ class PhysicsRecord:
         self.started = time.perf_counter()
         self._running_since: tuple[float, float] | None = None
 
-    def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: Any) -> str | None:
+    def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: Reading) -> str | None:
         series = self.series
         running = out.robot_state == RobotState.RUNNING
         series["t"].append(cycle * self.robot.time_delta)
@@ -68,7 +70,7 @@ class PhysicsRecord:
                 return "fell"
         return None
 
-    def summary(self, scenario: str, gait: str, controller: Any) -> RunSummary:
+    def summary(self, scenario: str, gait: str, controller: Controller) -> RunSummary:
         """Paper eq. 22 cost of transport over the RUNNING window: mean power / (m·g·v) (WG only)."""
         world = self.backend.world
         wall = time.perf_counter() - self.started

@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import itertools
 import math
-from typing import Any
 
 import numpy as np
 
 from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
 from shc_cli.control.walk import WalkState
 from shc_cli.loop.summary import RunSummary
+from shc_cli.spec.robot import Robot
 
 
 class PlanRecord:
@@ -29,7 +29,7 @@ class PlanRecord:
         self.outputs: list[CycleOutput] = []
         self.predicted: list[float] = []
 
-    def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: Any) -> str | None:
+    def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: object) -> str | None:
         if self.outputs and out.walk_state == WalkState.MOVING:
             self.predicted.append(eq16_speed(self.controller, command.velocity[:2]))
         self.outputs.append(out)
@@ -53,7 +53,7 @@ def eq16_speed(controller: Controller, linear_input: tuple[float, float]) -> flo
     return stride * cycle.frequency / cycle.duty_factor
 
 
-def plan_summary(robot: Any, controller: Controller, record: PlanRecord, seconds: float) -> RunSummary:
+def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, seconds: float) -> RunSummary:
     """Cycles, speeds (achieved by the stance feet vs paper eq. 16), odometry, IK statistics."""
     dt = robot.time_delta
     outputs = record.outputs

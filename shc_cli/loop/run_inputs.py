@@ -90,7 +90,6 @@ def pose_sets_for(robot: Robot, gait: Gait, timeline: Timeline, folder: Path) ->
         problems = compatibility_issues(loaded, used, list(robot.legs))
         if problems:
             raise SpecError(problems)
-        assert loaded.pose_set is not None
         sets[used.name] = loaded.pose_set
     return sets
 

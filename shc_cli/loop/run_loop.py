@@ -13,7 +13,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Generic, Protocol, TypeVar
+
+import numpy as np
 
 from shc_cli.backends.base import Backend, InputSource
 from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
@@ -23,15 +25,20 @@ from shc_cli.errors import ShcError
 START_UP_MARGIN_S = 2.0
 """Extra time allowed for reaching RUNNING beyond the robot's start-up duration [s] (plan, simulate)."""
 
-Observer = Callable[[int, Command, CycleOutput, Any], "str | None"]
+ReadingT = TypeVar("ReadingT")
+"""The backend's reading type (:data:`shc_cli.backends.base.ReadingT`)."""
+ReadingT_contra = TypeVar("ReadingT_contra", contravariant=True)
+
+Observer = Callable[[int, Command, CycleOutput, ReadingT], "str | None"]
 """Called after every logged cycle with (cycle, command, output, reading); a returned text stops the run with that
 reason (e.g. ``"fell"``)."""
 
 
-class Recorder(Protocol):
-    """Writes one logged cycle (the run's tables)."""
+class Recorder(Protocol[ReadingT_contra]):
+    """Writes one logged cycle (the run's tables): the joint targets as applied ``(L, n)`` [rad] and the reading."""
 
-    def record(self, cycle: int, command: Command, out: CycleOutput, applied: Any, reading: Any) -> None:
+    def record(self, cycle: int, command: Command, out: CycleOutput, applied: np.ndarray,
+               reading: ReadingT_contra) -> None:
         ...
 
     def flush(self) -> None:
@@ -41,7 +48,7 @@ class Recorder(Protocol):
 class NullRecorder:
     """Writes nothing (a replay compares instead of logging)."""
 
-    def record(self, cycle: int, command: Command, out: CycleOutput, applied: Any, reading: Any) -> None:
+    def record(self, cycle: int, command: Command, out: CycleOutput, applied: np.ndarray, reading: object) -> None:
         """Nothing to write."""
 
     def flush(self) -> None:
@@ -110,7 +117,7 @@ class LoopResult:
         return self.stop_reason == "end"
 
 
-class RunLoop:
+class RunLoop(Generic[ReadingT]):
     """Drives a controller on a backend.
 
     Args:
@@ -125,9 +132,10 @@ class RunLoop:
         on_fault: told each fault's text as it happens (e.g. to print it).
     """
 
-    def __init__(self, controller: Controller, backend: Backend, source: InputSource, recorder: Recorder,
+    def __init__(self, controller: Controller, backend: Backend[ReadingT], source: InputSource,
+                 recorder: Recorder[ReadingT],
                  start_up: StartUp | None, controlled_stop: ControlledStop | None = None,
-                 observers: Sequence[Observer] = (), flush_every: int = 200,
+                 observers: Sequence[Observer[ReadingT]] = (), flush_every: int = 200,
                  on_fault: Callable[[str], None] | None = None) -> None:
         self.controller, self.backend, self.source, self.recorder = controller, backend, source, recorder
         self.start_up, self.controlled_stop = start_up, controlled_stop

@@ -30,18 +30,22 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import IO, TYPE_CHECKING, Generic, TypeVar
 
 import numpy as np
 
+from shc_cli.backends.base import MEASURED_BODY_COLUMNS
 from shc_cli.errors import OutputError
 from shc_cli.loop.stop_signals import StopSignals
 from shc_cli.spec.robot import Robot
 
 if TYPE_CHECKING:  # the controller (and numba) only for the annotation: readers of runs stay light
-    from shc_cli.control.controller import CycleOutput
+    from shc_cli.backends.base import MeasuringBackend
+    from shc_cli.control.controller import Command, CycleOutput
     from shc_cli.loop.summary import RunSummary
 
+ReadingT = TypeVar("ReadingT")
+"""The measuring backend's reading type (:data:`shc_cli.backends.base.ReadingT`)."""
 PARTIAL_SUFFIX = ".partial"
 ROBOT_FILE = "robot.toml"
 
@@ -181,12 +185,6 @@ def joint_slots(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
     return (np.array([i for i, _ in pairs], dtype=np.intp), np.array([k for _, k in pairs], dtype=np.intp))
 
 
-MEASURED_BODY_COLUMNS = ["x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz", "wx", "wy", "wz", "imu_qx",
-                         "imu_qy", "imu_qz", "imu_qw", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z",
-                         "height", "power_w"]
-"""Body and IMU columns of ``log.csv`` after the per-leg ones: ground-truth position [m], roll/pitch/yaw [rad],
-world linear [m/s] and angular [rad/s] velocity, IMU quaternion (x, y, z, w, body → world), gyro [rad/s],
-specific force [m/s²], body height above the terrain [m], total servo power [W]."""
 
 
 def log_columns(robot: Robot) -> list[str]:
@@ -203,7 +201,7 @@ def measured_width(robot: Robot) -> int:
     return len(log_columns(robot)) - len(joint_columns(robot)) - 8
 
 
-class LogRecorder:
+class LogRecorder(Generic[ReadingT]):
     """Streams cycles of a measuring backend into ``log.csv`` (:func:`log_columns`).
 
     Args:
@@ -212,7 +210,7 @@ class LogRecorder:
         backend: gives each reading's measured values.
     """
 
-    def __init__(self, run: RunDirectory, robot: Robot, backend: Any) -> None:
+    def __init__(self, run: RunDirectory, robot: Robot, backend: MeasuringBackend[ReadingT]) -> None:
         self.run = run
         columns = log_columns(robot)
         self.handle, self.row = run.table("log.csv", columns, ["%.6g"] * (len(columns) - 2) + ["%s", "%s"])
@@ -220,7 +218,8 @@ class LogRecorder:
         self.dt = robot.time_delta
         self.measured_row = backend.measured_row
 
-    def record(self, cycle: int, command: Any, out: CycleOutput, applied: np.ndarray, reading: Any) -> None:
+    def record(self, cycle: int, command: Command, out: CycleOutput, applied: np.ndarray,
+               reading: ReadingT) -> None:
         values = np.concatenate((applied[self.rows, self.cols], self.measured_row(reading), command.velocity,
                                  out.velocity))
         self.handle.write(self.row % (cycle, cycle * self.dt, *values.tolist(), out.robot_state.name,
@@ -262,7 +261,8 @@ class RunWriter(RunDirectory):
         self._tips = self.table("tips.csv", tips, ["%.9g"] * len(tips))
         self._body = self.table("body.csv", body, ["%.9g"] * 12 + ["%s", "%s"])
 
-    def record(self, cycle: int, command: Any, out: CycleOutput, applied: np.ndarray, reading: Any) -> None:
+    def record(self, cycle: int, command: Command, out: CycleOutput, applied: np.ndarray,
+               reading: object) -> None:
         """The loop's recorder interface: one cycle of the controller's tables."""
         self.write(cycle, cycle * self.robot.time_delta, command.velocity, out)
 

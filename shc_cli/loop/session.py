@@ -12,12 +12,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-from shc_cli.loop.run_loop import LoopResult, RunLoop
+from shc_cli.loop.run_loop import LoopResult, ReadingT, RunLoop
 from shc_cli.loop.runlog import RunDirectory
 from shc_cli.loop.summary import RunSummary
 
 
-def execute(loop: RunLoop, run: RunDirectory, summarise: Callable[[LoopResult], RunSummary],
+def execute(loop: RunLoop[ReadingT], run: RunDirectory, summarise: Callable[[LoopResult], RunSummary],
             plot: Callable[[Path], None] | None = None, after_loop: Callable[[LoopResult], None] | None = None
             ) -> tuple[Path, RunSummary, LoopResult]:
     """Run the loop, then finish the run directory (summary, plots, final name), interrupted or not.

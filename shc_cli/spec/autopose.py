@@ -25,7 +25,7 @@ A leg without a ``[negation.LEG]`` table is never negated (OpenSHC's ``LegPoser`
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from pydantic import Field, field_validator
@@ -101,10 +101,12 @@ class AutoPoseSet(Strict):
 
 @dataclass
 class LoadedPoseSet(Located):
-    pose_set: AutoPoseSet | None = None
+    """An auto-pose file, loaded: the pose set and where each of its fields was written."""
+
+    pose_set: AutoPoseSet = field(kw_only=True)
 
 
-def _window_issues(loaded: LoadedPoseSet, pose_set: AutoPoseSet) -> list[Issue]:
+def _window_issues(loaded: Located, pose_set: AutoPoseSet) -> list[Issue]:
     """Windows inside the cycle; a poser window that OpenSHC could never close is refused."""
     issues = []
     length = pose_set.pose_phase_length
@@ -138,13 +140,12 @@ def load_pose_set(name_or_path: str | Path, relative_to: Path | None = None) -> 
     path = resolve("poses", name_or_path, relative_to)
     document = Document(path)
     data = document.sourced()
-    loaded = LoadedPoseSet(path=path, origin_map=origins(data), documents={path: document})
-    pose_set: AutoPoseSet = _validate(AutoPoseSet, unwrap(data), loaded)
-    issues = _window_issues(loaded, pose_set)
+    located = Located(path=path, origin_map=origins(data), documents={path: document})
+    pose_set = _validate(AutoPoseSet, unwrap(data), located)
+    issues = _window_issues(located, pose_set)
     if issues:
         raise SpecError(issues)
-    loaded.pose_set = pose_set
-    return loaded
+    return LoadedPoseSet(path=path, origin_map=located.origin_map, documents=located.documents, pose_set=pose_set)
 
 
 def pose_set_name(auto_pose_type: str, gait: Gait) -> str:
@@ -165,7 +166,6 @@ def compatibility_issues(loaded: LoadedPoseSet, gait: Gait, leg_ids: Sequence[st
     the maps and throws on a missing one; here a missing leg is simply never negated).
     """
     pose_set = loaded.pose_set
-    assert pose_set is not None
     issues = []
     if pose_set.synchronised and pose_set.pose_phase_length != gait.base_length:
         issues.append(loaded.issue(

@@ -25,7 +25,6 @@ MIN_LEGS_IN_STANCE = 2
 def check_robot(loaded: LoadedRobot) -> list[Issue]:
     """Every semantic check of a robot file, cheapest first; each mistake reported once."""
     robot = loaded.robot
-    assert robot is not None
     issues = _joint_positions(loaded, robot) + _stance_overlap(loaded, robot)
     if not issues:
         issues = _mirrors(loaded, robot)
@@ -194,7 +193,6 @@ def check_gait(loaded_gait: LoadedGait, robot: Robot) -> list[Issue]:
     from shc_cli.control.gait import step_cycle
 
     gait = loaded_gait.gait
-    assert gait is not None
     missing = [leg for leg in robot.legs if leg not in gait.offset_multiplier]
     extra = [leg for leg in gait.offset_multiplier if leg not in robot.legs]
     if missing or extra:
@@ -240,7 +238,6 @@ def _fewest_in_stance(period: int, swing_start: int, swing_end: int,
 def check_gait_pattern(loaded_gait: LoadedGait) -> list[Issue]:
     """A gait on its own: enough legs on the ground at every phase (robot-independent, normaliser 2)."""
     gait = loaded_gait.gait
-    assert gait is not None
     normaliser = 2
     period = gait.base_length * normaliser
     swing_start = (gait.stance_phase // 2) * normaliser
@@ -266,7 +263,6 @@ def load_checked(robot_name: str, gait_name: str | None) -> tuple[Robot, Gait, L
 
     loaded = load_robot(robot_name)
     robot = loaded.robot
-    assert robot is not None
     problems = check_robot(loaded)
     if problems:
         raise SpecError(problems)
@@ -275,5 +271,4 @@ def load_checked(robot_name: str, gait_name: str | None) -> tuple[Robot, Gait, L
     problems = check_gait(gait_loaded, robot)
     if problems:
         raise SpecError(problems)
-    assert gait_loaded.gait is not None
     return robot, gait_loaded.gait, loaded

@@ -14,7 +14,7 @@ import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from pydantic import BaseModel, ValidationError
 
@@ -22,6 +22,8 @@ from shc_cli.errors import Issue, NotFoundError, SpecError
 from shc_cli.spec.gait import Gait
 from shc_cli.spec.robot import DH, Joint, Leg, Robot
 from shc_cli.spec.source import Document, KeyPath, Origin, Sourced, deep_merge, origins, unwrap
+
+ModelT = TypeVar("ModelT", bound=BaseModel)
 
 FILE_KEYS = ("extends", "templates", "mirror")
 DH_ANGLES = ("theta", "alpha")
@@ -113,14 +115,18 @@ class Located:
 
 @dataclass
 class LoadedRobot(Located):
-    robot: Robot | None = None
+    """A robot file, loaded: the robot and where each of its fields was written."""
+
+    robot: Robot = field(kw_only=True)
     mirrors: dict[str, tuple[str, set[str]]] = field(default_factory=dict)
     """Mirrored leg id → (source leg id, names of the joints whose angles are negated)."""
 
 
 @dataclass
 class LoadedGait(Located):
-    gait: Gait | None = None
+    """A gait file, loaded: the gait and where each of its fields was written."""
+
+    gait: Gait = field(kw_only=True)
 
 
 def _read_with_extends(path: Path, seen: tuple[Path, ...] = ()) -> tuple[dict[str, Any], dict[Path, Document]]:
@@ -389,7 +395,10 @@ def _describe(error: dict[str, Any], model: type[BaseModel]) -> tuple[str, str]:
     return str(error["msg"]), ""
 
 
-def _validate(model: type[BaseModel], data: dict[str, Any], located: Located) -> Any:
+def _validate(model: type[ModelT], data: dict[str, Any], located: Located,
+              mirrors: Mapping[str, tuple[str, set[str]]] | None = None) -> ModelT:
+    """``model`` from ``data``, or a SpecError with every mistake at its file and line (``mirrors``: a robot's
+    mirrored legs, whose issues repeat their source leg's)."""
     try:
         return model.model_validate(data)
     except ValidationError as error:
@@ -410,8 +419,7 @@ def _validate(model: type[BaseModel], data: dict[str, Any], located: Located) ->
                 loc = loc[:-1]  # a short fixed-length list: one issue at the list, not one per absent item
             problem, fix = _describe(item, model)
             issues.append(located.issue(loc, problem, fix))
-        mirrors = located.mirrors if isinstance(located, LoadedRobot) else {}
-        raise SpecError(one_per_mistake(issues, mirrors)) from None
+        raise SpecError(one_per_mistake(issues, mirrors or {})) from None
 
 
 def one_per_mistake(issues: list[Issue], mirrors: Mapping[str, tuple[str, set[str]]]) -> list[Issue]:
@@ -446,13 +454,14 @@ def load_robot(name_or_path: str | Path) -> LoadedRobot:
     """Read, expand and validate a robot file (schema only; see :mod:`shc_cli.spec.checks`)."""
     path = resolve("robots", name_or_path)
     data, documents = _read_with_extends(path)
-    loaded = LoadedRobot(path=path, origin_map=origins(data), documents=documents)
-    _check_mirror_table(data, loaded)
-    data = _expand_legs(data, documents, loaded.mirrors)
-    loaded.origin_map = origins(data)
+    located = Located(path=path, origin_map=origins(data), documents=documents)
+    _check_mirror_table(data, located)
+    mirrors: dict[str, tuple[str, set[str]]] = {}
+    data = _expand_legs(data, documents, mirrors)
+    located.origin_map = origins(data)
     plain = {k: v for k, v in unwrap(data).items() if k not in FILE_KEYS}
-    loaded.robot = _validate(Robot, plain, loaded)
-    return loaded
+    robot = _validate(Robot, plain, located, mirrors)
+    return LoadedRobot(path=path, origin_map=located.origin_map, documents=documents, robot=robot, mirrors=mirrors)
 
 
 def _check_mirror_table(data: dict[str, Any], loaded: Located) -> None:
@@ -484,9 +493,9 @@ def load_gait(name_or_path: str | Path, relative_to: Path | None = None) -> Load
     path = resolve("gaits", name_or_path, relative_to)
     document = Document(path)
     data = document.sourced()
-    loaded = LoadedGait(path=path, origin_map=origins(data), documents={path: document})
-    loaded.gait = _validate(Gait, unwrap(data), loaded)
-    return loaded
+    located = Located(path=path, origin_map=origins(data), documents={path: document})
+    gait = _validate(Gait, unwrap(data), located)
+    return LoadedGait(path=path, origin_map=located.origin_map, documents=located.documents, gait=gait)
 
 
 def robot_file_schema() -> dict[str, Any]:

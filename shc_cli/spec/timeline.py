@@ -235,7 +235,6 @@ def _gait(name: str, path: Path, located: Located, index: int) -> Gait:
     except NotFoundError as error:
         raise SpecError([located.issue(("step", index, "gait"), str(error),
                                        "name a bundled gait or a gait file")]) from None
-    assert loaded.gait is not None
     return loaded.gait
 
 

@@ -203,7 +203,6 @@ class RobotPage:
         robot = base.model_copy(update={"legs": legs, "walker": walker})
         try:
             gait = load_gait(robot.walker.gait).gait
-            assert gait is not None
             report = analyse_workspace(robot, gait)
         except Exception as error:  # an unreachable stance: say so on the page, keep the last good one
             self.message.content = f"Stance not computed: {type(error).__name__}: {error}"
