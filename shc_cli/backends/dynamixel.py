@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -138,7 +138,7 @@ class DynamixelBackend:
             self.bus.torque(False)
             self.torque_on = False
 
-    def statistics(self) -> dict[str, Any]:
+    def statistics(self) -> dict[str, float | int]:
         """Cycle-time statistics [ms] and overruns for the summary."""
         times = np.array(self.cycle_times) * 1e3 if self.cycle_times else np.zeros(1)
         return {"cycle_time_mean_ms": float(times.mean()), "cycle_time_p99_ms": float(np.percentile(times, 99)),
