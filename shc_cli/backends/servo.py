@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -129,22 +130,21 @@ class ServoModel:
                 integration, e.g. for a one-off evaluation).
         """
         s = self.servo
+        kernels = _kernels()
+        goal, position, speed = (np.asarray(a, dtype=float) for a in (goal, position, speed))
+        out = np.empty(goal.shape)
         if s.control == "pd":
-            return np.asarray(np.clip(s.stiffness * (goal - position) - s.damping * speed, -s.stall_torque,
-                                      s.stall_torque), dtype=float)
-        error = goal - position
-        voltage = self.volts_per_rad * error
-        if self.volts_per_rad_s > 0.0:
-            if self._integral is None:
-                self._integral = np.zeros_like(error, dtype=float)
-            bound = self.max_voltage / self.volts_per_rad_s
-            self._integral = np.clip(self._integral + error * step, -bound, bound)
-            voltage = voltage + self.volts_per_rad_s * self._integral
-        if self.volts_per_rad_per_s > 0.0:
-            voltage = voltage - self.volts_per_rad_per_s * speed
-        voltage = np.clip(voltage, -self.max_voltage, self.max_voltage)
-        current = np.clip((voltage - self.back_emf * speed) / s.winding_resistance, -s.current_limit, s.current_limit)
-        return np.asarray(s.torque_constant * current - s.viscous_friction * speed, dtype=float)
+            kernels.pd_torque(goal.ravel(), position.ravel(), speed.ravel(), float(s.stiffness), float(s.damping),
+                              float(s.stall_torque), out.ravel())
+            return out
+        if self.volts_per_rad_s > 0.0 and self._integral is None:
+            self._integral = np.zeros(goal.shape, dtype=float)
+        integral = self._integral if self._integral is not None else out  # (unused without an I term)
+        kernels.firmware_torque(goal.ravel(), position.ravel(), speed.ravel(), float(step), integral.ravel(),
+                                self.volts_per_rad, self.volts_per_rad_s, self.volts_per_rad_per_s, self.max_voltage,
+                                self.back_emf, float(s.winding_resistance), float(s.current_limit),
+                                float(s.torque_constant), float(s.viscous_friction), out.ravel())
+        return out
 
     def electrical(self, torque: np.ndarray, speed: np.ndarray, friction_in_engine: bool = False) -> Electrical:
         """Motor torque, current and supply power from the output torque and joint speed the engine reports.
@@ -159,16 +159,24 @@ class ServoModel:
         torque = np.asarray(torque, float)
         speed = np.asarray(speed, float)
         friction = 0.0 if friction_in_engine else s.coulomb_friction
-        moving = torque + np.sign(speed) * friction + s.viscous_friction * speed  # the engine's torque is net of it
-        holding = s.holding_ratio * torque
-        blend = np.minimum(np.abs(speed) / s.static_speed, 1.0)
-        motor = (1.0 - blend) * holding + blend * moving
-        current = np.clip(motor / s.torque_constant, -s.current_limit, s.current_limit)
-        mechanical = motor * speed
-        power = (s.idle_power + current * current * s.winding_resistance + np.maximum(mechanical, 0.0)
-                 + s.regenerative_efficiency * np.minimum(mechanical, 0.0))
-        return Electrical(motor_torque=motor, current=current, power=np.asarray(power))
+        if torque.shape != speed.shape:
+            torque, speed = (np.ascontiguousarray(a) for a in np.broadcast_arrays(torque, speed))
+        motor, current, power = np.empty(torque.shape), np.empty(torque.shape), np.empty(torque.shape)
+        _kernels().supply_power(torque.ravel(), speed.ravel(),
+                                float(friction), float(s.viscous_friction), float(s.holding_ratio),
+                                float(s.static_speed), float(s.torque_constant), float(s.current_limit),
+                                float(s.idle_power), float(s.winding_resistance), float(s.regenerative_efficiency),
+                                motor.ravel(), current.ravel(), power.ravel())
+        return Electrical(motor_torque=motor, current=current, power=power)
 
     def power(self, torque: np.ndarray, speed: np.ndarray, friction_in_engine: bool = False) -> np.ndarray:
         """Supply power of each servo [W] (:meth:`electrical`'s ``power``)."""
         return self.electrical(torque, speed, friction_in_engine).power
+
+
+def _kernels() -> Any:
+    """The compiled servo laws (:mod:`shc_cli.backends.servo_kernels`), imported on first use: numba loads only
+    when a servo is simulated."""
+    from shc_cli.backends import servo_kernels
+
+    return servo_kernels

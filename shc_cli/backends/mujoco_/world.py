@@ -18,7 +18,7 @@ behave as PyBullet's (docs/physics-model.md):
   current limit), exactly PyBullet's explicit law; the servo's ``armature`` as joint armature.
 
 Torque and speed are averaged over each control period's physics steps and turned into electrical power by the
-engine-independent :func:`~shc_cli.backends.power.servo_power`, exactly as in PyBullet. ``mujoco`` is imported
+engine-independent :meth:`~shc_cli.backends.servo.ServoModel.power`, exactly as in PyBullet. ``mujoco`` is imported
 here only; it needs no GL to simulate.
 """
 
@@ -30,10 +30,10 @@ from typing import Any
 
 import numpy as np
 
+from shc_cli.backends import servo_kernels
 from shc_cli.backends.engine import EngineOptions, Reading, rpy_from_matrix, servo_slots, spawn_height
 from shc_cli.backends.imu import Imu
 from shc_cli.backends.mujoco_.mjcf import Options, robot_mjcf, velocity_stiffness
-from shc_cli.backends.power import servo_power
 from shc_cli.backends.servo import ServoModel
 from shc_cli.backends.terrain import Terrain
 from shc_cli.errors import BackendError
@@ -98,7 +98,9 @@ class MujocoWorld:
         servo = robot.servo
         self.compliant = servo.control == "pd"
         """A position actuator of the servo model's stiffness and damping (no per-step servo loop in Python)."""
-        self.explicit = ServoModel(servo) if servo.control == "dynamixel" else None
+        self.servo_model = ServoModel(servo)
+        """The servo's electrical model (power), built once."""
+        self.explicit = self.servo_model if servo.control == "dynamixel" else None
         """The servo model whose torque (:meth:`ServoModel.torque`) drives a motor actuator every physics step."""
         self._gain = servo.position_gain / timestep
         self._keep = 1.0 - servo.velocity_gain
@@ -137,40 +139,33 @@ class MujocoWorld:
     def step(self) -> None:
         """Advance one control period; torque and speed averaged over its physics steps give the power."""
         mujoco, model, data = self.mujoco, self.model, self.data
-        q, v, ctrl, goals, work = self._q, self._v, data.ctrl, self._goals, self._work
+        q, v, ctrl, goals = self._q, self._v, data.ctrl, self._goals
         gain, keep, speed, kv, stall = self._gain, self._keep, self._speed, self._kv, self._stall
         clock = time.perf_counter
         total = np.zeros(len(goals))
         physics = 0.0
         explicit, step = self.explicit, self.timestep
+        motor, motor_force = servo_kernels.velocity_motor, servo_kernels.velocity_motor_force
+        velocity_motor = not self.compliant and explicit is None
         for _ in range(self.substeps):
             if explicit is not None:  # the servo model's torque from the state before the step, as in PyBullet
                 ctrl[:] = explicit.torque(goals, q, v, step)
-            elif not self.compliant:  # PyBullet's velocity motor: the speed that closes position_gain of the error
-                np.subtract(goals, q, out=work)
-                work *= gain
-                if keep != 0.0:
-                    work += keep * v
-                np.minimum(work, speed, out=work)
-                np.maximum(work, -speed, out=ctrl)
+            elif velocity_motor:  # PyBullet's velocity motor: the speed that closes position_gain of the error
+                motor(goals, q, v, gain, keep, speed, ctrl)
             started = clock()
             mujoco.mj_step(model, data)
             physics += clock() - started
-            if self.compliant or explicit is not None:
+            if not velocity_motor:
                 total += data.actuator_force
             else:  # the implicit step applied kv·(ctrl − v_new); a clamped one (explicit) the stall torque
-                np.subtract(ctrl, v, out=work)
-                work *= kv
-                np.minimum(work, stall, out=work)
-                np.maximum(work, -stall, out=work)
-                total += work
+                motor_force(ctrl, v, kv, stall, total)
         self.physics_time += physics
         positions = np.array(q)
         # mj_step integrates q += v·h with the new v (semi-implicit Euler): the displacement is the mean speed.
         mean_speed = (positions - self._positions) / self.control_period
         self._positions = positions
         self._mean_torque = total / self.substeps
-        self._mean_power = servo_power(self.robot.servo, self._mean_torque, mean_speed)
+        self._mean_power = self.servo_model.power(self._mean_torque, mean_speed)
 
     def read(self) -> Reading:
         """Sensor readings now."""
