@@ -32,6 +32,7 @@ def test_vertical_load_torque_is_the_virtual_work_of_the_foot_force(name: str) -
         np.testing.assert_allclose(vertical_load._leg_torque(chain, q, force), expected, atol=1e-5)
 
 
+@pytest.mark.slow  # the experiment scripts as subprocesses
 def test_scripts_answer_bad_arguments_with_one_line(tmp_path: object) -> None:
     script = str(EXPERIMENTS / "vertical_load.py")
     usage = subprocess.run([sys.executable, script], capture_output=True, text=True, check=False)

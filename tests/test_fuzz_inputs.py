@@ -32,6 +32,8 @@ from shc_cli.cli import main
 
 from .conftest import ROOT
 
+pytestmark = pytest.mark.slow  # the full fuzz: hundreds of mutated files through the CLI
+
 CASES = int(os.environ.get("SHC_FUZZ_CASES", "200"))
 """Mutated files tried per kind."""
 

@@ -58,6 +58,7 @@ def _check_readers(run: Path, tmp_path: Path) -> None:
     assert "a partial run" in bag.stderr and (tmp_path / "run.mcap").exists()
 
 
+@pytest.mark.slow  # signals sent to shc subprocesses mid-run
 def test_interrupted_plan_is_a_finished_partial_run(tmp_path: Path) -> None:
     run = tmp_path / "plan"
     result = _interrupt(["plan", "--duration", "3000", "--no-plots", "--out", str(run)],
@@ -74,6 +75,7 @@ def test_interrupted_plan_is_a_finished_partial_run(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("twice", [False, True])
+@pytest.mark.slow  # signals sent to shc subprocesses mid-run
 def test_interrupted_simulate_is_a_finished_partial_run(twice: bool, tmp_path: Path) -> None:
     """SIGTERM: the run directory is finished (summary, plots unless a second signal skipped them); a second signal
     while finishing still leaves every logged row."""
@@ -92,6 +94,7 @@ def test_interrupted_simulate_is_a_finished_partial_run(twice: bool, tmp_path: P
     _check_readers(run, tmp_path)
 
 
+@pytest.mark.slow  # signals sent to shc subprocesses mid-run
 def test_interrupted_run_hw_is_marked_partial(tmp_path: Path) -> None:
     """On the emulated bus: Ctrl-C stops walking and shuts down (exit 0, the normal end of an open-ended run); the
     summary says the run did not play its input to the end, and analyze and export bag say so."""
@@ -114,6 +117,7 @@ def test_interrupted_run_hw_is_marked_partial(tmp_path: Path) -> None:
     _check_readers(run, tmp_path)
 
 
+@pytest.mark.slow  # signals sent to shc subprocesses mid-run
 def test_simulate_fail_on_fall_exit_code(tmp_path: Path) -> None:
     """A robot whose servos cannot hold it (0.3 N·m stall torque) collapses: the run stops as fallen and exits 4
     with --fail-on-fall, 0 without."""
@@ -148,6 +152,7 @@ def _peak_rss_mb(pid: int) -> float:
 
 
 @pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads the peak memory from /proc (Linux)")
+@pytest.mark.slow  # signals sent to shc subprocesses mid-run
 def test_a_ten_hour_simulate_holds_no_memory_for_its_duration_and_a_sigterm_finishes_it(tmp_path: Path) -> None:
     """``--duration 36000`` once built 3.6 million commands (1.7 GB) before its first step, and a SIGTERM then left
     ``.partial/`` with only ``robot.toml``: memory must not depend on the requested duration, and the signal

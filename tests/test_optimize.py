@@ -199,6 +199,7 @@ def _study_params(out: Path) -> list[tuple[str, ...]]:
     return [tuple(r[k] for k in keys) for r in _rows(out / "trials.csv")]
 
 
+@pytest.mark.slow  # whole studies of simulated trials
 def test_same_seed_and_sampler_give_the_same_trials(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """NSGA-II with population 2: trials 2–4 are bred from told trials, so the whole loop must be deterministic."""
     path = _write(tmp_path, SMALL.format(duration=0.3, seeds="[0]"))
@@ -212,6 +213,7 @@ def test_same_seed_and_sampler_give_the_same_trials(tmp_path: Path, capsys, monk
     assert len(set(tables[0])) > 1
 
 
+@pytest.mark.slow  # whole studies of simulated trials
 def test_interrupted_study_resumes_without_losing_or_rerunning_trials(tmp_path: Path) -> None:
     """SIGINT after two finished trials: they stay in the storage and trials.csv; --resume finishes the study
     without simulating them again (their run directories are untouched)."""
@@ -357,6 +359,7 @@ def test_ctrl_c_inside_a_run_stops_the_study_instead_of_failing_the_run(tmp_path
     assert row["status"] == "failed" and "terrain file is missing" in row["error"]
 
 
+@pytest.mark.slow  # whole studies of simulated trials
 def test_dask_and_local_workers_give_the_same_trials(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """Batches of --workers trials told in number order: the trials do not depend on which runs finish first, so a
     Dask LocalCluster and local worker processes (2 each) give the same study."""
@@ -372,6 +375,7 @@ def test_dask_and_local_workers_give_the_same_trials(tmp_path: Path, capsys, mon
     assert tables[0] == tables[1]
 
 
+@pytest.mark.slow  # whole studies of simulated trials
 def test_a_study_on_mujoco_runs_its_trials_in_mujoco(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """``engine = "mujoco"`` reaches every run of every trial (summary.json names the engine)."""
     import json

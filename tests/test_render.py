@@ -13,6 +13,8 @@ import pytest
 from .conftest import ROOT, unless_missing
 from .test_cli import run
 
+pytestmark = pytest.mark.slow  # offscreen OpenGL rendering of runs (and subprocesses)
+
 FPS = 5.0
 
 

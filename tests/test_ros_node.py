@@ -16,6 +16,8 @@ from tests.ros_master import ros, ros_env
 
 __all__ = ["ros_env"]
 
+pytestmark = pytest.mark.slow  # Debian's roscore, rostopic and rosparam as subprocesses
+
 GOLDEN_MSG = Path(__file__).parents[1] / "golden" / "openshc" / "msg"
 GENMSG_MD5 = """
 import sys, genmsg, genmsg.msg_loader, genmsg.gentools

@@ -21,6 +21,8 @@ from shc_cli.hardware.emulator import BusEmulator
 from shc_cli.loop.runread import read_run
 from shc_cli.spec.loading import load_robot
 
+pytestmark = pytest.mark.slow  # real-time runs of shc run-hw (subprocesses) on the emulated bus
+
 SHC = [sys.executable, "-m", "shc_cli.cli"]
 
 

@@ -20,6 +20,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+import pytest
+
 from tests.emanual_emulator import (
     ACCESS_ERROR,
     ACTION,
@@ -389,6 +391,7 @@ def goal_writes(bus: EManualBus, start: int = 0) -> int:
                if index >= start and (p.params[0] | p.params[1] << 8) in (112, 116))
 
 
+@pytest.mark.slow  # real-time runs of shc run-hw
 def test_run_hw_walks_on_the_emanual_bus_with_the_default_return_delay(tmp_path: Path) -> None:
     out = tmp_path / "run"
     with bullet_bus() as bus:
@@ -425,6 +428,7 @@ def test_run_hw_walks_on_the_emanual_bus_with_the_default_return_delay(tmp_path:
         assert abs(commanded - measured) < 0.01, joint  # [rad]
 
 
+@pytest.mark.slow  # real-time runs of shc run-hw
 def test_run_hw_stops_commanding_within_two_cycles_of_an_overload(tmp_path: Path) -> None:
     out = tmp_path / "run"
     with bullet_bus(return_delay=0) as bus:

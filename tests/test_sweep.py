@@ -168,6 +168,7 @@ gait = "tripod"
 """
 
 
+@pytest.mark.slow  # whole sweeps of simulations
 def test_local_and_dask_give_the_same_results_and_a_failure_is_a_row(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """A point whose terrain file is missing fails without stopping the sweep; a Dask LocalCluster gives the same
     table as the local worker processes (timings aside)."""
@@ -249,6 +250,7 @@ def test_ci_smoke_sweep_matches_its_golden_results(tmp_path: Path, capsys, monke
     assert _rows(out / "results.csv") == _rows(tmp_path / "first.csv")
 
 
+@pytest.mark.slow  # whole sweeps of simulations
 def test_ci_table4_sweep_matches_its_golden_results(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """The paper's Table IV cells in short runs (sweeps/ci_table4.toml): the reviewed power of every cell within ±5 %
     (golden/sweeps/ci_table4.csv), no falls, and the paper's ordering walk air > stance air in every row."""

@@ -154,6 +154,7 @@ def _open(browser: Any, url: str, text: str) -> Any:
 
 
 @needs_chromium
+@pytest.mark.slow  # a real browser (Chromium) on shc view
 def test_view_robot_draws_it_and_a_joint_slider_moves_it(browser: Any) -> None:
     with served(str(ROOT / "robots" / "bullet.toml")) as url:
         page = _open(browser, url, "AR coxa")
@@ -178,6 +179,7 @@ def plan_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @needs_chromium
+@pytest.mark.slow  # a real browser (Chromium) on shc view
 def test_view_run_replays_and_the_timeline_moves_the_robot(plan_run: Path, browser: Any) -> None:
     with served(str(plan_run)) as url:
         page = _open(browser, url, "time [s]")
@@ -195,6 +197,7 @@ def test_view_run_replays_and_the_timeline_moves_the_robot(plan_run: Path, brows
 
 
 @needs_chromium
+@pytest.mark.slow  # a real browser (Chromium) on shc view
 def test_view_robot_reload_shows_the_edited_file(tmp_path: Path, browser: Any) -> None:
     robot = tmp_path / "mine.toml"
     text = (ROOT / "robots" / "bullet.toml").read_text(encoding="utf-8")
@@ -227,6 +230,7 @@ def test_view_of_something_unreadable_is_one_line(tmp_path: Path, capsys, monkey
         assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
 
 
+@pytest.mark.slow  # shc view and a plan as subprocesses
 def test_view_says_an_interrupted_run_is_partial(plan_run: Path, tmp_path: Path) -> None:
     """A run finished after Ctrl-C (``"complete": false``) opens in ``shc view`` with a note that it is partial."""
     import json
@@ -258,6 +262,7 @@ def test_view_says_an_interrupted_run_is_partial(plan_run: Path, tmp_path: Path)
     assert "a partial run (stopped by SIGINT" in text, text
 
 
+@pytest.mark.slow  # shc view and a plan as subprocesses
 def test_view_leaves_at_once_on_ctrl_c_while_a_page_is_being_built() -> None:
     """Ctrl-C while a browser's robot page is still being built (its workspace search runs in viser's worker
     threads, seconds on a loaded machine): ``shc view`` exits 0 within a second or so, not when the page is done."""
