@@ -7,8 +7,8 @@ machine (≈ 5× a short simulation; docs/performance.md), so the README's set-u
 ``shc simulate`` of a new install then starts as fast as the second.
 
 The kernels are compiled by running what calls them, with the types the commands pass (numba compiles one version
-per argument-type signature): a short simulation — start-up, the workspace search, walking — with and without
-admittance control, into a throwaway run directory.
+per argument-type signature): the servo laws of every ``[servo] control``, then a short simulation — start-up, the
+workspace search, walking — with and without admittance control, into a throwaway run directory.
 """
 
 from __future__ import annotations
@@ -27,9 +27,29 @@ def warm_up() -> float:
     from shc_cli.domain.simulate import simulate
 
     started = time.perf_counter()
+    _servo_laws()
     with tempfile.TemporaryDirectory(prefix="shc-warmup-") as folder:
         for admittance in (False, True):
             out = Path(folder) / f"admittance-{admittance}"
             simulate(SimulationConfig(duration=0.2, out=out, plots=False, admittance=admittance))
             log.debug("warm-up run %s done", out.name)
     return time.perf_counter() - started
+
+
+def _servo_laws() -> None:
+    """The servo kernels of every ``[servo] control`` (the default robot's simulation uses one of them)."""
+    import numpy as np
+
+    from shc_cli.backends import servo_kernels
+    from shc_cli.backends.servo import ServoModel
+    from shc_cli.spec.loading import load_robot
+
+    robot = load_robot("bullet").robot
+    assert robot is not None
+    zeros = np.zeros(len(robot.legs) * 3)
+    for control in ("position", "pd", "dynamixel"):
+        model = ServoModel(robot.servo.model_copy(update={"control": control}))
+        model.torque(zeros, zeros, zeros, 0.001)
+        model.power(zeros, zeros)
+    servo_kernels.velocity_motor(zeros, zeros, zeros, 1.0, 0.5, 1.0, zeros.copy())
+    servo_kernels.velocity_motor_force(zeros, zeros, 1.0, 1.0, zeros.copy())
