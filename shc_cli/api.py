@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
     from typing import Unpack
 
     from shc_cli.domain.config import SimulationConfig, SimulationOptions
@@ -213,8 +214,8 @@ def warm_up() -> float:
     return compile_kernels()
 
 
-def ros_node(config: NodeConfig) -> RunResult:
+def ros_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) -> RunResult:
     """``shc ros``: OpenSHC's ROS 1 node until its duration, a signal or ``rosnode kill``; the finished run."""
     from shc_cli.domain.ros_node import run_node
 
-    return run_node(config)
+    return run_node(config, on_ready)

@@ -267,6 +267,7 @@ def ros(
     = True,
     combined: Annotated[bool, typer.Option(help="Publish /desired_joint_states.")] = True,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-ros).")] = None,
+    namespace: Annotated[str, typer.Option(help="Parameter tree read for the robot 'server'.")] = "/syropod",
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run as OpenSHC's ROS 1 node: its topics, messages and parameters, driven by syropod_remote."""
@@ -276,7 +277,7 @@ def ros(
     if backend not in ("none",):
         raise ShcError(f"--backend: '{backend}' is not a backend here (use none)")
     run_ros(NodeConfig(robot=robot, backend="none", name=name, master_uri=master, duration=duration, out=out,
-                       individual=individual, combined=combined, overwrite=overwrite))
+                       individual=individual, combined=combined, overwrite=overwrite, namespace=namespace))
 
 
 @app.command()

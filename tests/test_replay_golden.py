@@ -127,3 +127,25 @@ def test_cli_replay_agrees_within_a_milliradian_and_a_tenth_of_a_millimetre(
     assert set(report["at_cycle"]) >= {"joints_rad", "model_tip_m", "walker_tip_m", "poser_tip_m", "velocity",
                                        "progress"}
     assert report["skipped"]["poser_tip_m"] > 0 and report["skipped"]["joints_rad"] == 0
+
+
+@pytest.mark.parametrize("shift", [-1, 1])
+def test_a_velocity_change_recorded_a_cycle_off_is_placed_by_the_joints(recording: Recorded, bullet: Robot,
+                                                                      tripod: Gait, shift: int) -> None:
+    """A recorder that saw the 0 → 0.5 input a cycle early or late (a second subscriber on the other side of a
+    cycle's output) still replays exactly: the change is moved back to where the real binary's joints show it."""
+    import numpy as np
+
+    head = recording.head(1500)
+    assert head.command is not None
+    command = head.command.copy()
+    change = int(np.flatnonzero(np.abs(np.diff(command[:, 0])) > 0)[0]) + 1  # first cycle the recorder saw 0.5
+    if shift < 0:
+        command[change - 1] = command[change]
+    else:
+        command[change] = command[change - 1]
+    head.command = command
+    moved = replay(head, bullet, tripod)
+    assert moved.comparison.worst["joints_rad"] < 1e-6
+    assert [s for _, s in moved.retimed] == [-shift]
+    assert replay(recording.head(1500), bullet, tripod).retimed == []

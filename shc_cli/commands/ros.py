@@ -12,9 +12,7 @@ def run_ros(config: NodeConfig) -> None:
     open-ended node ends)."""
     from shc_cli.api import ros_node
 
-    typer.echo(f"shc ros: node {config.name} on {config.master_uri or 'ROS_MASTER_URI'}, backend {config.backend}; "
-               "Ctrl-C stops it", err=True)
-    result = ros_node(config)
+    result = ros_node(config, on_ready=lambda line: typer.echo(line, err=True))
     s = result.summary
     timing = (f" at {s.rate_hz:.1f} Hz (period p50 {s.cycle_time_p50_ms:.2f} ms, p99 {s.cycle_time_p99_ms:.2f} ms, max "
               f"{s.cycle_time_max_ms:.2f} ms)" if s.rate_hz and s.cycle_time_p50_ms is not None

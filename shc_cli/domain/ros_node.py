@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
@@ -61,8 +62,9 @@ class NodeConfig:
     namespace: str = "/syropod"
 
 
-def run_node(config: NodeConfig) -> RunResult:
+def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) -> RunResult:
     """Run the node until its duration passes, a signal, or ``rosnode kill``; returns the finished run directory.
+    ``on_ready`` is told one line when the node is registered and waits for the remote.
 
     Raises:
         ShcError: bad input, or no ROS master (one line), before anything is written.
@@ -74,7 +76,7 @@ def run_node(config: NodeConfig) -> RunResult:
     node = RosNode(config.name, MessageTypes(), config.master_uri)
     try:
         robot, gait, pose_sets, gaits = _robot(node, config, directory)
-        return _run(node, config, robot, gait, pose_sets, gaits, directory)
+        return _run(node, config, robot, gait, pose_sets, gaits, directory, on_ready)
     finally:
         node.close()
 
@@ -134,7 +136,7 @@ def _robot_from_server(node: RosNode, namespace: str, folder: Path) -> Path:
 
 
 def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: Any, gaits: dict[str, Gait],
-         directory: Path) -> RunResult:
+         directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     from shc_cli.backends.kinematic import KinematicBackend
     from shc_cli.control.controller import Controller
     from shc_cli.loop.pacing import WallClock
@@ -156,10 +158,15 @@ def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets:
     record = PlanRecord(controller)
     clock = WallClock(robot.time_delta)
     holder: dict[str, RunLoop[None]] = {}
-    remote = RemoteInput(node, robot, gaits, stopped=lambda: "loop" in holder and holder["loop"].requested)
+    limit = None if config.duration is None else time.monotonic() + config.duration
+
+    def stopped() -> bool:
+        """A stop was requested, or the duration passed (also while waiting for OPERATIONAL)."""
+        return ("loop" in holder and holder["loop"].requested) or (limit is not None and time.monotonic() >= limit)
+
+    remote = RemoteInput(node, robot, gaits, stopped=stopped)
     outputs = NodeOutputs(node, robot, config.individual, config.combined, walkspace=lambda: controller.walkspace,
                           after=remote.latch)
-    limit = None if config.duration is None else time.monotonic() + config.duration
 
     def deadline(cycle: int, command: object, out: object, reading: object) -> str | None:
         return "end" if limit is not None and time.monotonic() >= limit else None
@@ -167,6 +174,9 @@ def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets:
     observers: list[Observer[None]] = [record, outputs, clock, deadline]
     loop = RunLoop(controller, KinematicBackend(), remote, writer, None, observers=observers, flush_every=100)
     holder["loop"] = loop
+    if on_ready is not None:
+        on_ready(f"shc ros: {robot.name} / {gait.name} as node {node.name} on {node.master_uri} (backend "
+                 f"{config.backend}); waiting for /syropod_remote/system_state OPERATIONAL; Ctrl-C stops")
     started = time.perf_counter()
 
     def summarise(_: object) -> RunSummary:

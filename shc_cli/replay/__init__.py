@@ -22,7 +22,7 @@ import numpy as np
 from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
 from shc_cli.control.walk import WalkState
 from shc_cli.replay.compare import Comparer, Comparison
-from shc_cli.replay.recorded_inputs import ReplayInputs
+from shc_cli.replay.recorded_inputs import ReplayInputs, retime_changes
 from shc_cli.replay.source import Recorded, usable
 from shc_cli.replay.states import StatePlan, infer_states
 from shc_cli.spec.autopose import AutoPoseSet
@@ -39,6 +39,8 @@ class Replay:
     comparison: Comparison
     robot_states: list[RobotState]
     walk_states: list[WalkState]
+    retimed: list[tuple[int, int]]
+    """Velocity changes moved from the latency's cycle to the one the data shows: (cycle, shift)."""
 
 
 def initial_joints(recorded: Recorded, comparer: Comparer, robot: Robot) -> np.ndarray | None:
@@ -57,7 +59,9 @@ def replay(recorded: Recorded, robot: Robot, gait: Gait, pose_sets: dict[str, Au
     comparer = Comparer(recorded, robot)
     plan = plan or infer_states(recorded, robot)
     inputs = ReplayInputs(recorded, plan)
-    controller = Controller(robot, gait, joints=initial_joints(recorded, comparer, robot), pose_sets=pose_sets)
+    start = initial_joints(recorded, comparer, robot)
+    retime_changes(inputs, Controller(robot, gait, joints=start, pose_sets=pose_sets), comparer.joints)
+    controller = Controller(robot, gait, joints=start, pose_sets=pose_sets)
     robot_states: list[RobotState] = []
     walk_states: list[WalkState] = []
 
@@ -72,4 +76,4 @@ def replay(recorded: Recorded, robot: Robot, gait: Gait, pose_sets: dict[str, Au
 
     commands = SequenceInput(inputs.command(cycle) for cycle in range(recorded.cycles))
     RunLoop(controller, KinematicBackend(), commands, NullRecorder(), start_up=None, observers=[observe]).run()
-    return Replay(recorded, plan, comparer.result(), robot_states, walk_states)
+    return Replay(recorded, plan, comparer.result(), robot_states, walk_states, inputs.retimed)

@@ -39,6 +39,7 @@ def summary(result: Replay, robot: str, gait: str) -> dict[str, Any]:
         "not_replayed": result.recorded.not_replayed,
         "states": {"first_motion": plan.first_motion, "running": plan.running, "evidence": plan.evidence,
                    "later": [[cycle, state.name] for cycle, state in plan.later]},
+        "retimed_inputs": [[cycle, shift] for cycle, shift in result.retimed],
     }
 
 
@@ -54,6 +55,9 @@ def text(result: Replay, robot: str, gait: str) -> str:
     if recorded.not_replayed:
         lines.append(f"inputs not replayed (expect differences where they act): {', '.join(recorded.not_replayed)}")
     lines.append(result.plan.describe())
+    if result.retimed:
+        moved = ", ".join(f"cycle {cycle} {shift:+d}" for cycle, shift in result.retimed)
+        lines.append(f"velocity changes placed by the joints (arrived on a cycle's edge): {moved}")
     worst, at = comparison.worst, comparison.at_cycle
     rows = [(LABELS[q][0], f"{worst[q]:.3g}", LABELS[q][1], str(at[q])) for q in comparison.quantities if q in worst]
     lines.append("worst difference:")
