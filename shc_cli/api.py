@@ -112,8 +112,7 @@ def load_gait(gait: str | Path) -> Gait:
     """A gait file or bundled name."""
     from shc_cli.spec.loading import load_gait as load
 
-    loaded = load(str(gait)).gait
-    return loaded
+    return load(str(gait)).gait
 
 
 def _velocity(value: Velocity) -> str:

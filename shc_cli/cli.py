@@ -26,8 +26,6 @@ app = typer.Typer(
     rich_markup_mode=None,
 )
 
-_state = {"debug": False}
-
 # Options several commands share (one definition each: the same name, help and type everywhere).
 RobotArgument = Annotated[str, typer.Argument(help="Robot file or bundled robot name.")]
 GaitOption = Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")]
@@ -52,8 +50,7 @@ def _main(
         bool, typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit.")
     ] = False,
 ) -> None:
-    """OpenSHC's multilegged gait controller in Python."""
-    _state["debug"] = debug
+    """OpenSHC's multilegged gait controller in Python (``--debug`` is read by :func:`main`)."""
 
 
 @app.command()
@@ -105,10 +102,10 @@ def plan(
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
     from shc_cli.commands.plan import run_plan
+    from shc_cli.commands.run_outputs import check_outputs, finish_outputs
 
-    _bag_check(bag)
-    _video_check(video)
-    run_plan(robot, gait, velocity, duration, commands, out, plots, after=lambda run: _finish_outputs(run, bag, video),
+    check_outputs(bag, video)
+    run_plan(robot, gait, velocity, duration, commands, out, plots, after=lambda run: finish_outputs(run, bag, video),
              overwrite=overwrite)
 
 
@@ -160,59 +157,18 @@ def simulate(
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
     """Run the controller on the robot in physics (PyBullet or MuJoCo): terrains, servos, sensors, power, CoT."""
+    from shc_cli.commands.run_outputs import check_outputs, finish_outputs
     from shc_cli.commands.simulate import run_simulate
     from shc_cli.domain.config import SimulationConfig
 
-    _bag_check(bag)
-    _video_check(video)
+    check_outputs(bag, video)
     options = SimulationConfig(robot=robot, gait=gait, velocity=velocity, duration=duration, commands=commands,
                                out=out, plots=plots, terrain=terrain, scenario=scenario, physics_rate=physics_rate,
                                friction=friction, restitution=restitution, seed=seed, imu_noise=imu_noise,
                                start=start, gui=gui, stand=stand, posture=posture, imu_posing=imu_posing,
                                inclination=inclination, admittance=admittance, fail_on_fall=fail_on_fall,
                                overwrite=overwrite, engine=engine)
-    run_simulate(options, after=lambda run: _finish_outputs(run, bag, video))
-
-
-def _finish_outputs(run: Path, bag: str | None, video: Path | None) -> None:
-    """``--bag`` and ``--video`` of a finished run (also an interrupted one, before its exit code)."""
-    _write_bag(run, bag)
-    _write_video(run, video)
-
-
-def _bag_check(fmt: str | None) -> None:
-    """Refuse a bad --bag format before the run, not after it."""
-    if fmt is not None and fmt not in ("mcap", "sqlite3", "ros1"):
-        from shc_cli.errors import Issue, SpecError
-
-        raise SpecError([Issue(None, None, "--bag", f"'{fmt}' is not a bag format", "use mcap, sqlite3 or ros1")])
-
-
-def _video_check(video: Path | None) -> None:
-    """Refuse a bad --video name before the run."""
-    if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
-        from shc_cli.errors import Issue, SpecError
-
-        raise SpecError([Issue(None, None, "--video", f"'{video}' is neither .mp4 nor .gif", "e.g. --video walk.mp4")])
-
-
-def _write_video(run: Path, video: Path | None) -> None:
-    """``--video``: the finished run rendered as ``shc render RUN --out FILE`` would."""
-    if video is not None:
-        from shc_cli.commands.render import render_video
-
-        render_video(run, video)
-
-
-def _write_bag(run: Path, fmt: str | None) -> None:
-    """``--bag``: the finished run as a bag inside its directory (``bag/``, or ``run.bag`` for ros1)."""
-    if fmt is None:
-        return
-    from shc_cli.interop.bag import export_bag
-    from shc_cli.loop.opening import open_run
-
-    path = export_bag(open_run(run), run / ("run.bag" if fmt == "ros1" else "bag"), fmt)
-    typer.echo(f"wrote {path}")
+    run_simulate(options, after=lambda run: finish_outputs(run, bag, video))
 
 
 @app.command("run-hw")
@@ -397,36 +353,21 @@ def export_urdf(
     out: Annotated[Path | None, typer.Option(help="Write the URDF here (default: print it).")] = None,
 ) -> None:
     """The physics model generated from the robot file, as URDF (what `simulate` loads)."""
-    from shc_cli.backends.pybullet_.urdf import robot_urdf
-    from shc_cli.outputs import write_text
-    from shc_cli.spec.loading import load_robot
+    from shc_cli.commands.export import export_urdf as run
 
-    loaded = load_robot(robot)
-    text = robot_urdf(loaded.robot)
-    if out is None:
-        typer.echo(text)
-    else:
-        write_text(out, text)
-        typer.echo(f"wrote {out}")
+    run(robot, out)
 
 
 @export_app.command("bag")
 def export_bag(
-    run: Annotated[Path, typer.Argument(help="Run directory from plan or simulate.")],
+    run_dir: Annotated[Path, typer.Argument(help="Run directory from plan or simulate.", metavar="RUN")],
     format: Annotated[str, typer.Option("--format", help="mcap, sqlite3 (ROS 2) or ros1.")] = "mcap",
     out: Annotated[Path | None, typer.Option(help="Bag path (default: RUN_bag, or RUN.bag for ros1).")] = None,
 ) -> None:
     """Write a run as a ROS bag: joint states, tf, URDF, IMU, odometry, foot forces, OpenSHC LegState."""
-    from shc_cli.interop.bag import export_bag as write_bag
-    from shc_cli.loop.opening import open_run
+    from shc_cli.commands.export import export_bag as run
 
-    target = out or run.with_name(run.name + (".bag" if format == "ros1" else "_bag"))
-    log = open_run(run)
-    note = log.partial_note()
-    if note is not None:
-        typer.echo(f"note: {note}", err=True)
-    path = write_bag(log, target, format)
-    typer.echo(f"wrote {path}")
+    run(run_dir, format, out)
 
 
 import_app = typer.Typer(help="Import files of other tools.", no_args_is_help=True)
@@ -441,10 +382,9 @@ def import_openshc(
     out: Annotated[Path, typer.Option(help="Folder for robots/, gaits/ and poses/.")] = Path("imported"),
 ) -> None:
     """Turn OpenSHC YAML parameter files into shc robot, gait and auto-pose TOML files."""
-    from shc_cli.interop.openshc import import_openshc as convert
+    from shc_cli.commands.importing import import_openshc as run
 
-    for path in convert(robot, gait, auto_pose, out):
-        typer.echo(f"wrote {path}")
+    run(robot, gait, auto_pose, out)
 
 
 @import_app.command("urdf")
@@ -465,23 +405,9 @@ def import_urdf(
     arg: Annotated[list[str] | None, typer.Option(help="xacro argument NAME=VALUE. Repeatable.")] = None,
 ) -> None:
     """Turn a legged robot's URDF or xacro into an shc robot file and a joint map (URDF joint → leg, joint)."""
-    from shc_cli.errors import Issue, SpecError
-    from shc_cli.interop.urdf_import import import_urdf as convert
+    from shc_cli.commands.importing import import_urdf as run
 
-    mappings = {}
-    for item in arg or []:
-        key, sep, value = item.partition("=")
-        if not sep:
-            raise SpecError([Issue(None, None, "--arg", f"'{item}' is not NAME=VALUE", "e.g. --arg prefix=robot_")])
-        mappings[key] = value
-    result = convert(file, out, name, legs, tip, clearance, reach, snap, mappings)
-    for note in result.notes:
-        typer.echo(f"note: {note}")
-    typer.echo(f"forward kinematics: largest tip difference to the URDF {result.fk_error:.2g} m at 200 random joint "
-               "vectors per leg" + (f" ({result.fk_error_unsnapped:.2g} m to the URDF before snapping rpy values, "
-                                    f"largest snap {result.snap:.2g} rad)" if result.snap > 0 else ""))
-    typer.echo(f"wrote {result.robot_path}")
-    typer.echo(f"wrote {result.joint_map_path}")
+    run(file, out, name, legs, tip, clearance, reach, snap, arg)
 
 
 @app.command()
@@ -489,22 +415,9 @@ def schema(
     kind: Annotated[str, typer.Argument(help="'robot', 'gait' or 'summary'.")],
 ) -> None:
     """Print the JSON Schema of robot or gait files (for editor completion) or of a run's summary.json."""
-    import json
+    from shc_cli.commands.schema import print_schema
 
-    from shc_cli.errors import NotFoundError
-    from shc_cli.loop.summary import summary_schema
-    from shc_cli.spec.gait import Gait
-    from shc_cli.spec.loading import robot_file_schema
-
-    if kind == "robot":
-        document = robot_file_schema()
-    elif kind == "gait":
-        document = Gait.model_json_schema()
-    elif kind == "summary":
-        document = summary_schema()
-    else:
-        raise NotFoundError(f"schema: unknown kind '{kind}' (use 'robot', 'gait' or 'summary')")
-    typer.echo(json.dumps(document, indent=2))
+    print_schema(kind)
 
 
 @app.command()

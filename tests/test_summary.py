@@ -85,9 +85,9 @@ def test_unknown_keys_of_other_versions_are_left_out(plan_dir: Path, tmp_path: P
 
 @pytest.fixture(scope="module")
 def plan_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    from shc_cli.commands.plan import plan_to
+    from shc_cli.domain.plan import plan
 
-    path, summary = plan_to("bullet", None, "1,0,0", 0.5, None, tmp_path_factory.mktemp("plan") / "run", False)
+    path, summary = plan("bullet", None, "1,0,0", 0.5, None, tmp_path_factory.mktemp("plan") / "run", False).pair
     assert json.loads((path / "summary.json").read_text(encoding="utf-8")) == summary.model_dump(
         mode="json", exclude_unset=True)
     return path

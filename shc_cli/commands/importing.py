@@ -1,0 +1,38 @@
+"""``shc import``: OpenSHC parameter files and a legged robot's URDF or xacro as shc files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import typer
+
+from shc_cli.errors import Issue, SpecError
+
+
+def import_openshc(robot: Path, gait: Path | None, auto_pose: Path | None, out: Path) -> None:
+    """OpenSHC YAML parameter files → shc robot, gait and auto-pose TOML files under ``out``."""
+    from shc_cli.interop.openshc import import_openshc as convert
+
+    for path in convert(robot, gait, auto_pose, out):
+        typer.echo(f"wrote {path}")
+
+
+def import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tip: list[str] | None,
+                clearance: float | None, reach: float | None, snap: float, arguments: list[str] | None) -> None:
+    """A URDF or xacro → an shc robot file and a joint map; ``arguments`` are xacro's ``NAME=VALUE``."""
+    from shc_cli.interop.urdf_import import import_urdf as convert
+
+    mappings = {}
+    for item in arguments or []:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise SpecError([Issue(None, None, "--arg", f"'{item}' is not NAME=VALUE", "e.g. --arg prefix=robot_")])
+        mappings[key] = value
+    result = convert(file, out, name, legs, tip, clearance, reach, snap, mappings)
+    for note in result.notes:
+        typer.echo(f"note: {note}")
+    typer.echo(f"forward kinematics: largest tip difference to the URDF {result.fk_error:.2g} m at 200 random joint "
+               "vectors per leg" + (f" ({result.fk_error_unsnapped:.2g} m to the URDF before snapping rpy values, "
+                                    f"largest snap {result.snap:.2g} rad)" if result.snap > 0 else ""))
+    typer.echo(f"wrote {result.robot_path}")
+    typer.echo(f"wrote {result.joint_map_path}")
