@@ -41,13 +41,7 @@ ReadingT_co = TypeVar("ReadingT_co", covariant=True)
 
 @runtime_checkable
 class Backend(Protocol[ReadingT_co]):
-    """One robot, real or not, advanced one control period at a time.
-
-    ``kind`` names the run kind (``"plan"``, ``"simulate"``, ``"hardware"``): it becomes the summary's scenario
-    family and tells readers which log format the run has.
-    """
-
-    kind: str
+    """One robot, real or not, advanced one control period at a time (its readings of type ``ReadingT_co``)."""
 
     def start(self) -> np.ndarray | None:
         """Open the robot; returns the joint positions ``(L, n)`` [rad] it starts from (``None``: the controller's

@@ -43,8 +43,6 @@ class DynamixelBackend:
         sleep: the wait [s] (injectable for tests).
     """
 
-    kind = "hardware"
-
     def __init__(self, robot: Robot, bus: ServoBus, dry_run: bool, run: RunDirectory | None = None,
                  on_fault: str = "torque-off", on_stop: str = "torque-off",
                  clock: Callable[[], float] = time.perf_counter, sleep: Callable[[float], None] = time.sleep) -> None:

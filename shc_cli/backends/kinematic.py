@@ -14,8 +14,6 @@ if TYPE_CHECKING:
 class KinematicBackend:
     """An ideal robot: every target is reached within the cycle; no sensors, no clock."""
 
-    kind = "plan"
-
     def start(self) -> np.ndarray | None:
         return None  # the controller's own start
 

@@ -41,8 +41,6 @@ class SimulatedBackend:
         world: the engine world (:func:`open_world`).
     """
 
-    kind = "simulate"
-
     def __init__(self, robot: Robot, world: Engine) -> None:
         self.robot, self.world = robot, world
         self.rows, self.cols, _ = servo_slots(robot)
