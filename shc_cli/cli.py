@@ -46,11 +46,19 @@ def _version(value: bool) -> None:
 @app.callback()
 def _main(
     debug: Annotated[bool, typer.Option("--debug", help="Show tracebacks instead of one-line errors.")] = False,
+    verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Also show info messages (state changes, "
+                                                                   "set-up steps) on stderr.")] = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="Show only errors on stderr (no notices or "
+                                                               "warnings).")] = False,
     version: Annotated[
         bool, typer.Option("--version", callback=_version, is_eager=True, help="Print the version and exit.")
     ] = False,
 ) -> None:
     """OpenSHC's multilegged gait controller in Python (``--debug`` is read by :func:`main`)."""
+    from shc_cli.events import configure_terminal
+
+    del debug  # read by main() before the command runs (tracebacks are its business)
+    configure_terminal("quiet" if quiet else "verbose" if verbose else "normal")
 
 
 @app.command()

@@ -132,7 +132,8 @@ def test_cost_of_transport_is_eq_22(bullet) -> None:  # type: ignore[no-untyped-
     result = analyze_run(_synthetic(bullet))
     speed = 0.2 * (399 * bullet.time_delta) / (400 * bullet.time_delta)  # the first row has no row before it
     assert result["mean_speed_mps"] == pytest.approx(speed)
-    assert result["cot"] == pytest.approx(150.0 / (bullet.total_mass() * 9.81 * speed))
+    mass = bullet.total_mass() + len(bullet.legs) * 0.001  # what is simulated: the file's masses and 1 g feet
+    assert result["cot"] == pytest.approx(150.0 / (mass * 9.81 * speed))
     assert result["speed_ratio"] == pytest.approx(speed / 0.25)
     assert result["duty_factor"] == 1.0
     assert result["foot_slip_m"] == pytest.approx(399 * 0.2 * bullet.time_delta)  # feet carried with the body
@@ -218,10 +219,12 @@ def test_json_of_a_simulated_run(walked: Path, capsys, monkeypatch) -> None:  # 
     result = json.loads(out)
     assert set(result) >= REQUIRED
     summary = json.loads((walked / "summary.json").read_text())
-    # the same eq. 22 over the same RUNNING window as simulate's summary (the log holds 6 significant digits)
-    assert result["cot"] == pytest.approx(summary["cot"], rel=1e-5)
-    assert result["mean_power_w"] == pytest.approx(summary["mean_power_w"], rel=1e-5)
-    assert result["mean_speed_mps"] == pytest.approx(summary["mean_speed_mps"], rel=1e-5)
+    # the summary is the analysis of the finished log over the same RUNNING window: the very same numbers
+    for key in ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps",
+                "commanded_speed_mps", "distance_m"):
+        assert result[key] == summary[key], key
+    assert summary["cot"] == pytest.approx(summary["mean_power_w"] / (summary["mass_kg"] * 9.81
+                                                                      * summary["mean_speed_mps"]), rel=1e-12)
     assert 0.1 < result["stability_margin_median_m"] < 0.3  # CoM well inside the tripod
     assert 0.4 < result["duty_factor"] < 0.8
     assert result["height_median_m"] == pytest.approx(0.25, abs=0.03)
@@ -243,6 +246,9 @@ def test_several_runs_make_a_table_and_plots(walked: Path, planned: Path, tmp_pa
     # the plan's ideal body path at its steady speed is the speed its stance feet achieve (plan's own summary)
     assert data[1]["cot"] is None and data[1]["steady_speed_mps"] == pytest.approx(
         read_run(planned).summary.eq16_speed_mps, rel=1e-3)
+    plan_summary = read_run(planned).summary  # the plan's summary is the analysis of its tables too
+    assert (data[1]["path_speed_mps"], data[1]["displacement_speed_mps"], data[1]["commanded_speed_mps"]) == (
+        plan_summary.path_speed_mps, plan_summary.displacement_speed_mps, plan_summary.commanded_speed_mps)
 
 
 @pytest.mark.parametrize(("make", "message"), [
@@ -268,3 +274,35 @@ def test_atomic_outputs_get_the_usual_permissions(tmp_path: Path) -> None:
     finally:
         os.umask(mask)
     assert (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644
+
+
+@pytest.mark.parametrize("name", ["openshc_default", "bullet"])
+def test_cot_divides_by_the_simulated_mass(name: str) -> None:
+    """The cost of transport's mass is what PyBullet simulates (the links without a ``mass`` at 0.1 kg, 1 g foot
+    spheres): for ``openshc_default`` 2.806 kg, not the file's 1.0 kg (its 18 links give no mass)."""
+    import os
+    import tempfile
+
+    from shc_cli.backends.pybullet_.urdf import robot_urdf
+    from shc_cli.backends.pybullet_.world import quiet_stdout
+    from shc_cli.model.body import body_mass
+    from shc_cli.spec.loading import load_robot
+
+    robot = load_robot(name).robot
+    assert robot is not None
+    with quiet_stdout():
+        import pybullet as p
+    client = p.connect(p.DIRECT)
+    try:
+        with tempfile.NamedTemporaryFile("w", suffix=".urdf", delete=False) as handle:
+            handle.write(robot_urdf(robot))
+        with quiet_stdout():
+            body = p.loadURDF(handle.name, flags=p.URDF_USE_INERTIA_FROM_FILE, physicsClientId=client)
+        os.unlink(handle.name)
+        simulated = sum(p.getDynamicsInfo(body, link, physicsClientId=client)[0]
+                        for link in range(-1, p.getNumJoints(body, physicsClientId=client)))
+    finally:
+        p.disconnect(client)
+    assert body_mass(robot) == pytest.approx(simulated, rel=1e-9)
+    if name == "openshc_default":
+        assert robot.total_mass() == pytest.approx(1.0) and simulated == pytest.approx(1.0 + 18 * 0.1 + 6 * 0.001)

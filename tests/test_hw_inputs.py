@@ -156,7 +156,7 @@ class _Keyboard(_FakeGamepad):
 
 
 def test_gamepad_is_found_read_and_its_loss_stops_the_robot(monkeypatch: pytest.MonkeyPatch,
-                                                            capsys: pytest.CaptureFixture[str]) -> None:
+                                                            caplog: pytest.LogCaptureFixture) -> None:
     import evdev
 
     from shc_cli.loop.input_sources import GamepadInput, InputError
@@ -173,7 +173,7 @@ def test_gamepad_is_found_read_and_its_loss_stops_the_robot(monkeypatch: pytest.
     while not pad.finished and time.monotonic() < deadline:
         time.sleep(0.01)
     assert pad.next() is None  # unplugged: the input is over, run-hw stops and shuts down
-    assert "the gamepad is gone" in capsys.readouterr().err
+    assert "the gamepad is gone" in caplog.text  # logged: stderr and the run's events.log
     pad.close()
     monkeypatch.setattr(evdev, "list_devices", lambda: ["/dev/input/event3"])
     with pytest.raises(InputError, match="no gamepad found"):

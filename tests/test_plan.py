@@ -30,7 +30,7 @@ def test_plan_writes_the_run_directory(tmp_path: Path, capsys, monkeypatch) -> N
     assert (code, err) == (0, "")
     assert "bullet / tripod" in stdout and str(out) in stdout
     assert {p.name for p in out.iterdir()} == {"joints.csv", "tips.csv", "body.csv", "summary.json", "gait.png",
-                                                "tips.png", "joints.png", "robot.toml"}
+                                                "tips.png", "joints.png", "robot.toml", "events.log"}
     from shc_cli.spec.loading import load_robot
 
     assert load_robot(out / "robot.toml").robot == load_robot("bullet").robot  # the expanded robot, loadable

@@ -31,7 +31,7 @@ def test_the_documented_example_runs(tmp_path: Path, monkeypatch: pytest.MonkeyP
     assert run.summary.model_dump(mode="json", exclude_unset=True) == summary  # type: ignore[attr-defined]
     assert run.complete and run.summary.fell is False and summary["fell"] is False  # type: ignore[attr-defined]
     assert run.log.position.shape == (round(summary["sim_time_s"] / 0.01), 3)  # type: ignore[attr-defined]
-    assert names["result"]["cot"] == pytest.approx(summary["cot"], rel=0.2)  # type: ignore[index]
+    assert names["result"]["cot"] == summary["cot"]  # type: ignore[index]  # the summary is the log's analysis
     assert planned.summary.eq16_speed_mps == pytest.approx(0.231884058, rel=1e-6)  # type: ignore[attr-defined]
     assert [row["status"] for row in table.rows] == ["ok", "ok"]  # type: ignore[attr-defined]
     out = capsys.readouterr().out

@@ -136,6 +136,10 @@ def test_a_fault_mid_run_stops_commanding_within_two_cycles(fault: str, tmp_path
         assert f"fault: {reason}" in stderr
         summary = json.loads((tmp_path / "run" / "summary.json").read_text())
         assert "CL_coxat" in summary["fault"]
+        events = [json.loads(line) for line in (tmp_path / "run" / "events.log").read_text().splitlines()]
+        [fault_event] = [e for e in events if e["event"] == "fault"]  # the run directory keeps the fault too
+        assert reason in fault_event["message"] and fault_event["level"] == "error"
+        assert isinstance(fault_event["cycle"], int) and fault_event["cycle"] >= summary["cycles"] - 1
         assert _goal_writes_after(bus, marker) <= 2
         assert bus.servos[13].table[64] == 1  # --on-fault hold: the others keep their torque
 
@@ -188,6 +192,9 @@ def test_stdin_commands_and_the_watchdog(tmp_path: Path) -> None:
         assert "ignored line 'not json'" in stderr and "velocity needs 3 numbers" in stderr
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert summary["watchdog_trips"] == 1 and summary["fault"] is None
+    events = [json.loads(line) for line in (tmp_path / "run" / "events.log").read_text().splitlines()]
+    assert any("ignored line 'not json'" in e["message"] for e in events)  # the input thread's warnings
+    assert [e["event"] for e in events].count("watchdog") == 1
     assert summary["gait"] == "wave" and summary["final_state"] == "READY"
     log = read_run(tmp_path / "run")
     walked = log.command[:, 0] == 1.0

@@ -46,13 +46,61 @@ def body_speeds(xy: np.ndarray, span_s: float) -> tuple[float, float]:
     return path / span_s, displacement / span_s
 
 
-def window_speeds(xy: np.ndarray, rows: np.ndarray, dt: float) -> tuple[float, float]:
-    """:func:`body_speeds` over the window ``rows`` (ascending row indices) of a logged path ``xy`` ``(N, 2)`` [m]
-    whose rows are positions after each cycle: the path starts where the row before the window ended."""
+def window_path(xy: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """The horizontal body path over the window ``rows`` (ascending row indices) of a logged path ``xy`` ``(N, 2)``
+    [m] whose rows are positions after each cycle: it starts where the row before the window ended."""
+    if len(rows) == 0:
+        return np.zeros((0, 2))
+    return np.vstack([xy[max(rows[0] - 1, 0)], xy[rows[0]:rows[-1] + 1]])
+
+
+@dataclass(frozen=True)
+class WalkFigures:
+    """Speeds, power and cost of transport of a run over a window of its rows: what its ``summary.json`` and
+    ``shc analyze`` report, computed once (:func:`walk_figures`).
+
+    Attributes:
+        span_s: the window's duration [s].
+        distance_m: straight-line horizontal distance from where the window began to where it ended [m].
+        forward_distance_m: the same along the world x axis [m].
+        displacement_speed_mps: ``distance_m`` / ``span_s`` [m/s] (paper eq. 22's speed).
+        path_speed_mps: length of the body's path / ``span_s`` [m/s].
+        commanded_speed_mps: mean horizontal desired velocity after the limits [m/s].
+        mean_power_w: mean total servo power [W]; ``None`` for a run without power (a plan).
+        mass_kg: the simulated body's mass (:func:`shc_cli.model.body.body_mass`) [kg].
+        cot: paper eq. 22 ``P̄ / (m·g·v)``; ``None`` when not walking on the ground, without power, or the body
+            hardly moved.
+    """
+
+    span_s: float
+    distance_m: float
+    forward_distance_m: float
+    displacement_speed_mps: float
+    path_speed_mps: float
+    commanded_speed_mps: float
+    mean_power_w: float | None
+    mass_kg: float
+    cot: float | None
+
+
+def walk_figures(run: RunLog, rows: np.ndarray, walking: bool) -> WalkFigures:
+    """:class:`WalkFigures` of ``run`` over ``rows`` (ascending row indices; the cost of transport only when
+    ``walking``: scenario WG). Fewer than two rows are no walk: distances and speeds 0 (a robot thrown off the
+    floor at start-up, caught by the fall check in its first RUNNING cycle, once had 7 m/s)."""
+    from shc_cli.model.body import body_mass
+
+    dt = run.dt
+    mass = body_mass(run.robot)
+    commanded = float(np.linalg.norm(run.desired[rows, :2], axis=1).mean()) if len(rows) else 0.0
+    power = float(run.power[rows].mean()) if run.power is not None and len(rows) else None
     if len(rows) < 2:
-        return 0.0, 0.0
-    path = np.vstack([xy[max(rows[0] - 1, 0)], xy[rows[0]:rows[-1] + 1]])
-    return body_speeds(path, (rows[-1] - rows[0] + 1) * dt)
+        return WalkFigures(len(rows) * dt, 0.0, 0.0, 0.0, 0.0, commanded, power, mass, None)
+    span = (rows[-1] - rows[0] + 1) * dt
+    path = window_path(run.position[:, :2], rows)
+    path_speed, speed = body_speeds(path, span)
+    cot = cost_of_transport(power, mass, speed) if walking and power is not None else None  # eq. 22
+    return WalkFigures(span, speed * span, float(path[-1, 0] - path[0, 0]), speed, path_speed, commanded, power,
+                       mass, cot)
 
 
 def window_mask(run: RunLog, window: Window) -> np.ndarray:
@@ -236,23 +284,19 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
     out.update(dict.fromkeys(keys))
     if len(rows) < 2:
         return out
-    mass = run.robot.total_mass()
-    span = (rows[-1] - rows[0] + 1) * dt
-    path_speed, speed = window_speeds(run.position[:, :2], rows, dt)
-    distance = speed * span
-    commanded = float(np.linalg.norm(run.desired[rows, :2], axis=1).mean())
+    walking = (summary.scenario or "WG") == "WG"
+    figures = walk_figures(run, rows, walking)
+    speed, commanded = figures.displacement_speed_mps, figures.commanded_speed_mps
     # mean_speed_mps: the displacement speed under its first name (sweep tables and older readers use it)
-    out.update(distance_m=distance, displacement_speed_mps=speed, path_speed_mps=path_speed, mean_speed_mps=speed,
-               commanded_speed_mps=commanded, speed_ratio=float(speed / commanded) if commanded > 1e-9 else None)
+    out.update(distance_m=figures.distance_m, displacement_speed_mps=speed, path_speed_mps=figures.path_speed_mps,
+               mean_speed_mps=speed, commanded_speed_mps=commanded,
+               speed_ratio=float(speed / commanded) if commanded > 1e-9 else None)
     steady = rows if window.steady else np.flatnonzero(window_mask(run, Window(window.skip_s, steady=True)))
     if len(steady) >= 2:
         moved = np.linalg.norm(run.position[steady[-1], :2] - _before(run, steady[0]))
         out["steady_speed_mps"] = float(moved / ((steady[-1] - steady[0] + 1) * dt))
     if run.power is not None:
-        power = float(run.power[rows].mean())
-        out["mean_power_w"] = power
-        walking = (summary.scenario or "WG") == "WG"
-        out["cot"] = cost_of_transport(power, mass, speed) if walking else None  # eq. 22
+        out["mean_power_w"], out["cot"] = figures.mean_power_w, figures.cot
     from shc_cli.analysis.joint_limits import joint_limit_fraction
 
     out["joint_limit_fraction"] = joint_limit_fraction(run, rows)

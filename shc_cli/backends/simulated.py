@@ -45,8 +45,6 @@ class SimulatedBackend:
         self.robot, self.world = robot, world
         self.rows, self.cols, _ = servo_slots(robot)
         self.reading: Reading | None = None
-        self.total_power = 0.0
-        """Total servo power of the last reading [W]."""
         self._running = False
         self._first = True  # the spawn reading is not fed to the controller (it starts from its joints)
 
@@ -84,7 +82,7 @@ class SimulatedBackend:
     def measured_row(self, reading: Reading) -> np.ndarray:
         rows, cols = self.rows, self.cols
         power = reading.servo_power[rows, cols]
-        self.total_power = total = float(power.sum())
+        total = float(power.sum())
         return np.concatenate((reading.joints[rows, cols], reading.joint_efforts[rows, cols], power,
                                reading.foot_forces, reading.foot_contact, reading.position, reading.rpy,
                                reading.linear_velocity, reading.angular_velocity, reading.orientation,

@@ -53,6 +53,6 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
         plot_plan(model, record.outputs, folder, gait=inputs.gait.name)
 
     path, summary, _ = execute(loop, writer, lambda _: plan_summary(model, controller, record,
-                                                                     time.perf_counter() - started),
+                                                                     time.perf_counter() - started, writer.partial),
                                plot if plots else None)
     return RunResult(path, summary)

@@ -180,7 +180,7 @@ def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets:
     started = time.perf_counter()
 
     def summarise(_: object) -> RunSummary:
-        summary = plan_summary(robot, controller, record, time.perf_counter() - started)
+        summary = plan_summary(robot, controller, record, time.perf_counter() - started, writer.partial)
         return summary.updated(backend=config.backend, ros_master=node.master_uri, node=node.name,
                                **clock.statistics())
 

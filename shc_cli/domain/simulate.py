@@ -66,12 +66,12 @@ def simulate(config: SimulationConfig | None = None) -> RunResult:
                            StartUp(round((robot.start_up.time_to_start + START_UP_MARGIN_S) / robot.time_delta)),
                            observers=observers, flush_every=200)
 
-            def summarise(_: Any) -> RunSummary:
+            def summarise(_: Any) -> RunSummary:  # from the finished log (run.partial)
                 import numpy as np
 
                 if progress is not None:
                     progress.stop()
-                return record.summary(o.scenario, controller.gait.name, controller).updated(
+                return record.summary(run.partial, o.scenario, controller.gait.name, controller).updated(
                     seed=o.seed, terrain=str(world.terrain.spec), engine=world.name, engine_version=world.version,
                     engine_warnings=world.warnings,
                     versions={"shc": __version__, world.name: world.version, "numpy": np.__version__})
@@ -79,7 +79,7 @@ def simulate(config: SimulationConfig | None = None) -> RunResult:
             def plot(folder: Path) -> None:
                 from shc_cli.plots import plot_simulation
 
-                plot_simulation(robot, record.series, folder, gait=controller.gait.name)
+                plot_simulation(robot, record.plot_series(folder), folder, gait=controller.gait.name)
 
             path, summary, _ = execute(loop, run, summarise, plot if o.plots else None)
     return RunResult(path, summary)

@@ -9,7 +9,7 @@ pose velocity and a requested robot state (``running`` at first) hold until chan
   ``{"pose_velocity": [x, y, z, roll, pitch, yaw]}``, ``{"state": "packed" | "ready" | "running"}``,
   ``{"gait": "wave"}`` (a bundled name or a gait file), ``{"stop": true}``. A **watchdog** sets the velocities to
   zero when no line has come for ``watchdog_s`` seconds (a lost link must not leave the robot walking); a malformed
-  line is ignored with a warning on stderr.
+  line is ignored with a warning (logged: on stderr and in the run's ``events.log``).
 * **keyboard** — the terminal in cbreak mode (Ctrl-C still stops): ``w``/``s`` forward/back, ``a``/``d`` left/right,
   ``q``/``e`` turn left/right, each press ±0.1 of full input (terminals send no key releases, so the input holds);
   ``r``/``f`` body up/down (pose velocity ±0.5 per press); space zeroes both; ``1`` packed, ``2`` ready,
@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import logging
 import os
 import sys
 import threading
@@ -33,7 +34,11 @@ from typing import IO, Any
 
 from shc_cli.control.controller import Command, RobotState
 from shc_cli.errors import ShcError, install_hint
+from shc_cli.events import NOTICE
+from shc_cli.events import event as log_event
 from shc_cli.spec.gait import Gait
+
+log = logging.getLogger(__name__)
 
 STATES = {"packed": RobotState.PACKED, "ready": RobotState.READY, "running": RobotState.RUNNING}
 KEY_STEP = 0.1
@@ -111,6 +116,8 @@ class HeldInput:
             if idle and (any(self.velocity) or any(self.pose_velocity)):
                 self.zero()
                 self.watchdog_trips += 1
+                log_event(log, logging.WARNING, "watchdog", "warning: no input for %g s: velocities set to zero",
+                      self.watchdog_s)
             gait, self.gait = self.gait, None
             return Command(velocity=tuple(self.velocity), pose_velocity=tuple(self.pose_velocity),  # type: ignore[arg-type]
                            state_request=self.state, gait=gait)
@@ -145,11 +152,11 @@ class StdinInput(HeldInput):
                 try:
                     self.update(self._parse(text))
                 except (ValueError, TypeError, KeyError, ShcError) as error:
-                    print(f"warning: stdin: ignored line {text[:60]!r} ({error})", file=sys.stderr, flush=True)
+                    log_event(log, logging.WARNING, "input", "warning: stdin: ignored line %r (%s)", text[:60], error)
                 if self.finished:
                     return
         except (OSError, ValueError) as error:  # an unreadable or closed stream ends the input like EOF
-            print(f"warning: stdin: {error}: stopping", file=sys.stderr, flush=True)
+            log_event(log, logging.WARNING, "input", "warning: stdin: %s: stopping", error)
         self.finished = True  # end of input
 
     def _parse(self, text: str) -> Callable[[HeldInput], None]:
@@ -226,7 +233,7 @@ class KeyboardInput(HeldInput):
             raise InputError("--input keyboard: standard input is not a terminal (use stdin for piped JSON lines)")
         self._saved = termios.tcgetattr(self.fd)
         tty.setcbreak(self.fd)  # keys arrive one by one, unechoed; Ctrl-C still sends SIGINT
-        print(KEY_HELP, file=sys.stderr, flush=True)
+        log_event(log, NOTICE, "input", "%s", KEY_HELP)
         self._thread = threading.Thread(target=self._read, name="run-hw-keyboard", daemon=True)
         self._thread.start()
 
@@ -267,7 +274,7 @@ class GamepadInput(HeldInput):
             raise InputError(f"--input gamepad needs the evdev package (Linux only): {install_hint()}") from None
         self.device = _open_gamepad(evdev, device)
         self.mapping = GamepadMapping(self.device.capabilities(absinfo=True))
-        print(f"gamepad: {self.device.name} ({self.device.path})", file=sys.stderr, flush=True)
+        log_event(log, NOTICE, "input", "gamepad: %s (%s)", self.device.name, self.device.path)
         self._thread = threading.Thread(target=self._read, name="run-hw-gamepad", daemon=True)
         self._thread.start()
 
@@ -280,7 +287,7 @@ class GamepadInput(HeldInput):
                 if self.finished:
                     return
         except OSError:
-            print("warning: the gamepad is gone: stopping", file=sys.stderr, flush=True)
+            log_event(log, logging.WARNING, "input", "warning: the gamepad is gone: stopping")
         self.finished = True
 
     def close(self) -> None:

@@ -1,28 +1,34 @@
-"""Fall detection and the physics run's series and summary (engine-independent: they read a backend's reading).
+"""Fall detection and the physics run's summary (engine-independent: they read a backend's reading and the log).
 
-:class:`PhysicsRecord` is an observer of the run loop: it keeps the series the summary and the plots need (time,
-body position, total power, contacts, RUNNING), finds the analysed window (the RUNNING cycles) and stops the run
-when the robot has fallen: body tilt above :data:`FALL_TILT`, or (on the ground) the body lower than
-:data:`FALL_HEIGHT_SHARE` of the body clearance.
+:class:`PhysicsRecord` is an observer of the run loop: it stops the run when the robot has fallen — body tilt
+above :data:`FALL_TILT`, or (on the ground) the body lower than :data:`FALL_HEIGHT_SHARE` of the body clearance —
+and times the RUNNING part. Its summary is made from the finished log (``log.csv``, read back): the speeds, power
+and cost of transport are :func:`shc_cli.analysis.metrics.walk_figures` over the RUNNING rows, the numbers
+``shc analyze`` gives for the same window.
 """
 
 from __future__ import annotations
 
+import logging
 import time
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from shc_cli.analysis.cot import cost_of_transport
 from shc_cli.backends.engine import tilt
 from shc_cli.control.controller import RobotState
+from shc_cli.events import event
 from shc_cli.loop.summary import RunSummary
 
 if TYPE_CHECKING:
     from shc_cli.backends.engine import Reading
     from shc_cli.backends.simulated import SimulatedBackend
     from shc_cli.control.controller import Command, Controller, CycleOutput
+    from shc_cli.loop.runread import RunLog
     from shc_cli.spec.robot import Robot
+
+log = logging.getLogger(__name__)
 
 FALL_TILT = 0.8
 """Body tilt above which the robot has fallen [rad] (≈ 46°)."""
@@ -31,89 +37,85 @@ FALL_HEIGHT_SHARE = 0.3
 
 
 class PhysicsRecord:
-    """Series, fall detection and summary of a physics run (an observer of :class:`~shc_cli.loop.run_loop.RunLoop`).
+    """Fall detection and summary of a physics run (an observer of :class:`~shc_cli.loop.run_loop.RunLoop`).
 
     Args:
         robot: the robot.
-        backend: the physics backend (its world's physics time; its last total power).
+        backend: the physics backend (its world's physics time and rate).
         airborne: the body is held in the air (no height check).
     """
 
     def __init__(self, robot: Robot, backend: SimulatedBackend, airborne: bool) -> None:
         self.robot, self.backend, self.airborne = robot, backend, airborne
-        self.series: dict[str, list[Any]] = {"t": [], "position": [], "power": [], "contact": [], "running": [],
-                                             "desired": []}
-        self.window_start: np.ndarray | None = None
+        self.cycles = 0
         self.max_tilt = 0.0
         self.fell = False
         self.low_height = FALL_HEIGHT_SHARE * robot.walker.body_clearance
         self.started = time.perf_counter()
+        self.log: RunLog | None = None
+        """The finished log, once :meth:`summary` has read it."""
         self._running_since: tuple[float, float] | None = None
 
     def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: Reading) -> str | None:
-        series = self.series
-        running = out.robot_state == RobotState.RUNNING
-        series["t"].append(cycle * self.robot.time_delta)
-        series["position"].append(reading.position)
-        series["power"].append(self.backend.total_power)
-        series["contact"].append(reading.foot_contact)
-        series["running"].append(running)
-        series["desired"].append(out.velocity)
-        if running:
-            if self.window_start is None:  # where the body was when the first RUNNING cycle began
-                self.window_start = series["position"][-2] if len(series["position"]) > 1 else reading.position
+        self.cycles += 1
+        if out.robot_state == RobotState.RUNNING:
+            if self._running_since is None:
                 self._running_since = (time.perf_counter(), self.backend.world.physics_time)
             self.max_tilt = max(self.max_tilt, tilt(reading.rpy))
             low = reading.body_height < self.low_height
             if self.max_tilt > FALL_TILT or (low and not self.airborne):
                 self.fell = True
+                event(log, logging.WARNING, "fell", "fell: body tilt %.3f rad (limit %.3f), height %.3f m (limit %.3f)",
+                      self.max_tilt, FALL_TILT, reading.body_height, self.low_height, cycle=cycle, terminal=False)
                 return "fell"
         return None
 
-    def summary(self, scenario: str, gait: str, controller: Controller) -> RunSummary:
-        """Paper eq. 22 cost of transport over the RUNNING window: mean power / (m·g·v) (WG only)."""
-        world = self.backend.world
-        wall = time.perf_counter() - self.started
-        since_wall, since_physics = self._running_since or (time.perf_counter(), world.physics_time)
-        robot, dt, series = self.robot, self.robot.time_delta, self.series
-        running = np.array(series["running"], dtype=bool)
-        power = np.array(series["power"])
-        window = float(running.sum()) * dt
-        end = series["position"][-1] if series["position"] else np.zeros(3)
-        start = self.window_start if self.window_start is not None else end
-        distance = float(np.linalg.norm((end - start)[:2]))
-        speed = distance / window if running.sum() >= 2 else 0.0  # as path speed: one cycle is no walk (a robot
-        # thrown off the floor at start-up, caught by the fall check in its first RUNNING cycle, once had 7 m/s)
-        from shc_cli.analysis.metrics import window_speeds
-        from shc_cli.analysis.progress import cycle_path_length, progress_fields
+    def summary(self, directory: Path, scenario: str, gait: str, controller: Controller) -> RunSummary:
+        """The summary from the finished log in ``directory`` (the run directory, still ``.partial``); paper eq. 22
+        cost of transport over the RUNNING window: mean power / (m·g·v) (WG only)."""
+        from shc_cli.analysis.metrics import walk_figures
+        from shc_cli.loop.runread import read_tables
 
-        xy = np.array(series["position"])[:, :2] if series["position"] else np.zeros((0, 2))
-        path_speed, _ = window_speeds(xy, np.flatnonzero(running), dt)
-        desired = np.array(series["desired"]).reshape(-1, 3)[running[:len(series["desired"])], :2]
-        commanded = float(np.linalg.norm(desired, axis=1).mean()) if len(desired) else 0.0
-        mean_power = float(power[running].mean()) if running.any() else 0.0
-        mass = robot.total_mass()
-        cot = cost_of_transport(mean_power, mass, speed) if scenario == "WG" else None
+        world = self.backend.world
+        now = time.perf_counter()  # the timings are the run's, not the reading of its log
+        for warning in world.warnings:  # the command prints them as notes
+            event(log, logging.WARNING, "engine_warning", "%s: %s", world.name, warning, terminal=False)
+        since_wall, since_physics = self._running_since or (now, world.physics_time)
+        robot, dt = self.robot, self.robot.time_delta
+        finished = self.log = read_tables(directory, robot) if self.cycles else None
+        rows = np.flatnonzero(finished.running) if finished is not None else np.zeros(0, dtype=np.intp)
+        if finished is not None:
+            figures = walk_figures(finished, rows, scenario == "WG")
+            progress = window_progress(finished, rows, controller.cycle.period, figures.commanded_speed_mps)
+            distance, forward, speed = figures.distance_m, figures.forward_distance_m, figures.displacement_speed_mps
+            path_speed, commanded, power = figures.path_speed_mps, figures.commanded_speed_mps, figures.mean_power_w
+            mass, cot = figures.mass_kg, figures.cot
+        else:  # stopped before its first cycle: nothing was walked
+            from shc_cli.analysis.progress import progress_fields
+            from shc_cli.model.body import body_mass
+
+            progress = progress_fields(0.0, 0.0, 0.0)
+            distance = forward = speed = path_speed = commanded = 0.0
+            power, mass, cot = None, body_mass(robot), None
         return RunSummary.model_validate({
             "robot": robot.name,
             "gait": gait,
             "scenario": scenario,
-            "sim_time_s": len(series["t"]) * dt,
-            "analysed_time_s": window,
-            "wall_time_s": wall,
-            "running_wall_time_s": time.perf_counter() - since_wall,
+            "sim_time_s": self.cycles * dt,
+            "analysed_time_s": len(rows) * dt,
+            "wall_time_s": now - self.started,
+            "running_wall_time_s": now - since_wall,
             "running_physics_time_s": world.physics_time - since_physics,
             "physics_time_s": world.physics_time,
             "physics_rate_hz": world.substeps / dt,
             "distance_m": distance,
-            "forward_distance_m": float((end - start)[0]),
+            "forward_distance_m": forward,
             "mean_speed_mps": speed,  # = displacement_speed_mps, its first name
             "displacement_speed_mps": speed,
             "path_speed_mps": path_speed,
             "commanded_speed_mps": commanded,
-            **progress_fields(cycle_path_length(_window_path(xy, running), controller.cycle.period), commanded,
-                              window),
-            "mean_power_w": mean_power,
+            **progress,
+            "mean_power_w": power or 0.0,
             "mass_kg": mass,
             "step_frequency_hz": controller.parameters["step_frequency"],
             "step_period_cycles": controller.cycle.period,
@@ -124,10 +126,21 @@ class PhysicsRecord:
             "fell": self.fell,
         })
 
+    def plot_series(self, directory: Path) -> dict[str, Any]:
+        """What :func:`shc_cli.plots.plot_simulation` draws, from the finished log in ``directory`` (the one
+        :meth:`summary` read, or read now: a second signal may have cut the summary short)."""
+        from shc_cli.loop.runread import read_tables
 
-def _window_path(xy: np.ndarray, running: np.ndarray) -> np.ndarray:
-    """The body path over the RUNNING rows, starting where the row before the first of them ended."""
-    rows = np.flatnonzero(running)
-    if len(rows) == 0:
-        return np.zeros((0, 2))
-    return np.vstack([xy[max(rows[0] - 1, 0)], xy[rows[0]:rows[-1] + 1]])
+        log = self.log if self.log is not None else read_tables(directory, self.robot)
+        return {"t": log.t, "position": log.position, "power": log.power, "contact": log.contact,
+                "running": log.running}
+
+
+def window_progress(log: RunLog, rows: np.ndarray, period: int, commanded_speed_mps: float) -> dict[str, Any]:
+    """The summary's progress fields (:func:`shc_cli.analysis.progress.progress_fields`) over the window ``rows``:
+    the body's path from where the window began, sampled once per gait cycle of ``period`` rows."""
+    from shc_cli.analysis.metrics import window_path
+    from shc_cli.analysis.progress import cycle_path_length, progress_fields
+
+    walked = cycle_path_length(window_path(log.position[:, :2], rows), period)
+    return progress_fields(walked, commanded_speed_mps, len(rows) * log.dt)

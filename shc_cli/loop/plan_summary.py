@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from pathlib import Path
 
 import numpy as np
 
@@ -53,8 +54,11 @@ def eq16_speed(controller: Controller, linear_input: tuple[float, float]) -> flo
     return stride * cycle.frequency / cycle.duty_factor
 
 
-def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, seconds: float) -> RunSummary:
-    """Cycles, speeds (achieved by the stance feet vs paper eq. 16), odometry, IK statistics."""
+def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, seconds: float, directory: Path
+                 ) -> RunSummary:
+    """Cycles, speeds (achieved by the stance feet vs paper eq. 16), odometry, IK statistics; the ideal body path's
+    speeds from the finished tables in ``directory`` (the run directory, still ``.partial``) as ``shc analyze``
+    gives them (:func:`shc_cli.analysis.metrics.walk_figures` over the RUNNING rows)."""
     dt = robot.time_delta
     outputs = record.outputs
     cycle = controller.cycle
@@ -69,15 +73,21 @@ def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, secon
             feet = (now.walker_tips[stance, :2] - before.walker_tips[stance, :2]).mean(axis=0)
             achieved.append(float(np.linalg.norm(feet)) / dt)
     distance = float(np.linalg.norm(walker.odometry_position)) if walker else 0.0
-    from shc_cli.analysis.metrics import window_speeds
-    from shc_cli.analysis.progress import cycle_path_length, progress_fields
-    from shc_cli.loop.runread import ideal_path
+    from shc_cli.analysis.metrics import walk_figures
+    from shc_cli.analysis.progress import progress_fields
+    from shc_cli.loop.physics_summary import window_progress
+    from shc_cli.loop.runread import read_tables
 
-    xy, _ = ideal_path(np.array([o.velocity for o in outputs]).reshape(-1, 3), dt)
-    running = np.flatnonzero([o.robot_state == RobotState.RUNNING for o in outputs])
-    path_speed, displacement_speed = window_speeds(xy, running, dt)  # as `shc analyze` measures the plan
-    desired = np.array([o.velocity[:2] for o in outputs]).reshape(-1, 2)[running]
-    commanded = float(np.linalg.norm(desired, axis=1).mean()) if len(desired) else 0.0
+    if outputs:
+        log = read_tables(directory, robot)
+        rows = np.flatnonzero(log.running)
+        figures = walk_figures(log, rows, walking=False)
+        path_speed, displacement_speed = figures.path_speed_mps, figures.displacement_speed_mps
+        commanded = figures.commanded_speed_mps
+        progress = window_progress(log, rows, cycle.period, commanded)
+    else:  # stopped before its first cycle
+        path_speed = displacement_speed = commanded = 0.0
+        progress = progress_fields(0.0, 0.0, 0.0)
     return RunSummary.model_validate({
         "robot": robot.name,
         "gait": controller.gait.name,
@@ -94,7 +104,7 @@ def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, secon
         "path_speed_mps": path_speed,
         "displacement_speed_mps": displacement_speed,
         "commanded_speed_mps": commanded,
-        **progress_fields(cycle_path_length(xy[running], cycle.period), commanded, len(running) * dt),
+        **progress,
         "eq16_speed_mps": float(np.mean(predicted)) if predicted else 0.0,
         "odometry_distance_m": distance,
         "odometry_yaw_rad": walker.odometry_yaw if walker else 0.0,

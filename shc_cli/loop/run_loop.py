@@ -6,11 +6,13 @@ until the start-up is done, then the input's next command, then — after a stop
 controlled stop — requests towards the stop state), the controller step with the backend's sensors, the
 targets applied, one control period, the reading, the fault check, the recorder's row, the observers (who may
 stop the run: a fall). It stops when the input is over, on a fault, on an observer's reason or on a stop request
-(SIGINT/SIGTERM via :func:`shc_cli.loop.session.interrupts`, or :meth:`RunLoop.request_stop`).
+(SIGINT/SIGTERM via :func:`shc_cli.loop.session.interrupts`, or :meth:`RunLoop.request_stop`). Robot and walk state
+changes, faults, stop requests and the end are logged as events (:mod:`shc_cli.events`: the run's ``events.log``).
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from typing import Generic, Protocol, TypeVar
@@ -21,6 +23,9 @@ from shc_cli.backends.base import Backend, InputSource
 from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
 from shc_cli.control.walk import WalkState
 from shc_cli.errors import ShcError
+from shc_cli.events import event
+
+log = logging.getLogger(__name__)
 
 START_UP_MARGIN_S = 2.0
 """Extra time allowed for reaching RUNNING beyond the robot's start-up duration [s] (plan, simulate)."""
@@ -147,7 +152,10 @@ class RunLoop(Generic[ReadingT]):
         self.stop_reason: str | None = None
         self.requested = False
         self.fault_text: str | None = None
+        self.cycle: int | None = None
+        """The control cycle running now (``None`` before the loop runs)."""
         self._stopping_since: int | None = None
+        self._stop_announced = False
         self._stop_limit_s = 0.0
 
     def request_stop(self, reason: str) -> None:
@@ -159,6 +167,7 @@ class RunLoop(Generic[ReadingT]):
     def _fault(self, text: str) -> None:
         self.fault_text = text
         self.stop_reason = "fault"
+        event(log, logging.ERROR, "fault", "fault: %s", text, terminal=self.on_fault is None)
         if self.on_fault is not None:
             self.on_fault(text)
 
@@ -187,6 +196,10 @@ class RunLoop(Generic[ReadingT]):
     def _stopping(self, cycle: int) -> Command | None:
         """After a stop request: end now, or walk to a stop and shut down first (:class:`ControlledStop`)."""
         stop, controller = self.controlled_stop, self.controller
+        if not self._stop_announced:
+            self._stop_announced = True
+            text = "the input is over" if self.stop_reason == "end" else f"stop requested ({self.stop_reason})"
+            event(log, logging.INFO, "stop_requested", "%s", text, cycle=cycle)
         if stop is None:
             return None
         if self._stopping_since is None:
@@ -206,6 +219,7 @@ class RunLoop(Generic[ReadingT]):
         wanted = controller.uses_sensors
         observers, flush_every = self.observers, self.flush_every
         cycle = 0
+        robot_state = walk_state = None
         fault = backend.fault()
         if fault is not None:
             self._fault(fault)
@@ -213,10 +227,13 @@ class RunLoop(Generic[ReadingT]):
         sensors = backend.sensors(wanted)
         backend.begin()
         while True:
+            self.cycle = cycle
             command = self._command(cycle)
             if command is None:
                 break
             out = controller.step(command, sensors)
+            if out.robot_state is not robot_state or out.walk_state is not walk_state:
+                robot_state, walk_state = self._state_events(cycle, out, robot_state, walk_state)
             applied = backend.apply(out)
             backend.advance()
             reading = backend.read()
@@ -238,7 +255,21 @@ class RunLoop(Generic[ReadingT]):
             if cycle % flush_every == 0:
                 recorder.flush()
         recorder.flush()
+        self.cycle = None
+        event(log, logging.INFO, "stopped", "ended after %d cycles (%s)", cycle, self.stop_reason or "end",
+              cycle=cycle)
         return self._result(cycle)
+
+    @staticmethod
+    def _state_events(cycle: int, out: CycleOutput, robot_state: RobotState | None,
+                      walk_state: WalkState | None) -> tuple[RobotState, WalkState]:
+        """Log the robot and walk state changes of this cycle; the states now."""
+        for name, before, now in (("robot_state", robot_state, out.robot_state),
+                                  ("walk_state", walk_state, out.walk_state)):
+            if now is not before:
+                text = now.name if before is None else f"{before.name} → {now.name}"
+                event(log, logging.INFO, name, "%s: %s", name.replace("_", " "), text, cycle=cycle)
+        return out.robot_state, out.walk_state
 
     def _result(self, cycles: int) -> LoopResult:
         return LoopResult(cycles, self.stop_reason or "end", self.fault_text, self.requested)

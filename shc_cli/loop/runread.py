@@ -134,6 +134,16 @@ def first_line(error: BaseException) -> str:
     return f"{type(error).__name__}: {text[0].strip() if text else ''}".rstrip(": ")
 
 
+def read_tables(path: Path, robot: Robot, summary: RunSummary | None = None) -> RunLog:
+    """The tables of a run directory as a :class:`RunLog`, also while it is still ``.partial`` (a finished loop's
+    rows, before its summary is written: the summary is made from them), with the given robot and ``summary``
+    (default: an empty one)."""
+    summary = summary or RunSummary()
+    if (path / "log.csv").exists():
+        return _simulate_run(path, summary, robot)
+    return _plan_run(path, summary, robot)
+
+
 def checked_summary(file: Path, data: Any) -> RunSummary:
     """The :class:`RunSummary` of a ``summary.json``'s JSON data; one line naming the first bad field if it is not
     one (keys this version does not know are left out)."""

@@ -4,7 +4,9 @@
 SIGINT and SIGTERM become a stop request (the loop ends the run, or shuts the robot down first), every logged
 row is flushed and closed, the summary gets ``"complete"`` and ``"stop_reason"``, the plots are drawn and the
 directory gets its final name — for an interrupted run too (only ``"complete": false`` marks it). A second
-signal while finishing skips the plots; the rows are on disk before anything else happens.
+signal while finishing skips the plots (not the summary, made from the log read back); the rows are on disk before
+anything else happens. Meanwhile the package's log records go to the directory's ``events.log``
+(:mod:`shc_cli.events`).
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
+from shc_cli.events import recording
 from shc_cli.loop.run_loop import LoopResult, ReadingT, RunLoop
 from shc_cli.loop.runlog import RunDirectory
 from shc_cli.loop.summary import RunSummary
@@ -38,23 +41,24 @@ def execute(loop: RunLoop[ReadingT], run: RunDirectory, summarise: Callable[[Loo
     if signals.received is not None:
         loop.request_stop(signals.received)
     try:
-        try:
-            result = loop.run()
-        finally:
-            run.close()  # every row on disk before anything else (also when the loop raised)
-        if after_loop is not None:
-            after_loop(result)  # not interruptible: a repeated signal only repeats the stop request
-        signals.finishing = True
-        try:
-            summary = summarise(result)
-        except KeyboardInterrupt:  # a second signal in the (short) summary: the rows and a minimal summary
-            summary = RunSummary(cycles=result.cycles, summary_skipped=True)
-        summary = summary.updated(complete=result.complete, stop_reason=result.stop_reason)
-        if plot is not None and result.cycles > 0:  # a run stopped before its first cycle has nothing to draw
+        with recording(run.partial, lambda: loop.cycle):  # warnings, faults and state changes: events.log
             try:
-                plot(run.partial)
-            except KeyboardInterrupt:
-                summary.plots_skipped = True
+                result = loop.run()
+            finally:
+                run.close()  # every row on disk before anything else (also when the loop raised)
+            if after_loop is not None:
+                after_loop(result)  # not interruptible: a repeated signal only repeats the stop request
+            try:  # a repeated signal now only repeats the stop request: the summary (from the log) is always made
+                summary = summarise(result)
+            except KeyboardInterrupt:  # not from shc's handler: the rows and a minimal summary
+                summary = RunSummary(cycles=result.cycles, summary_skipped=True)
+            signals.finishing = True  # from here a repeated signal skips what is left (the plots)
+            summary = summary.updated(complete=result.complete, stop_reason=result.stop_reason)
+            if plot is not None and result.cycles > 0:  # a run stopped before its first cycle has nothing to draw
+                try:
+                    plot(run.partial)
+                except KeyboardInterrupt:
+                    summary.plots_skipped = True
         return run.finish(summary), summary, result
     finally:
         signals.restore()

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import logging
 import math
 import sys
 import threading
@@ -34,6 +35,15 @@ import numpy as np
 from shc_cli.errors import ShcError
 from shc_cli.loop.runread import RunLog
 from shc_cli.view import meshes, scene
+
+log = logging.getLogger(__name__)
+
+
+def disconnect_errors() -> tuple[type[BaseException], ...]:
+    """What updating a page raises when its browser tab has gone: the socket's errors (viser's websockets)."""
+    from websockets.exceptions import ConnectionClosed
+
+    return ConnectionError, ConnectionClosed
 
 FRAME_RATE = 20.0
 """Playback updates per second."""
@@ -464,7 +474,10 @@ class RunPage:
                 self.timeline.value = value
                 if value >= run.t[-1]:
                     self.playing = False
-            except Exception:  # the tab went away
+            except disconnect_errors():  # the tab went away before its disconnect callback stopped this thread
+                self.alive = False
+            except Exception:  # a bug, not a closed tab: stop the playback and say why
+                log.exception("shc view: playback of %s stopped", run.path)
                 self.alive = False
 
     def _show(self, force_plot: bool = False) -> None:
