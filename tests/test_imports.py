@@ -134,8 +134,9 @@ LAYERS: dict[str, int] = {
 """The layers, lowest first (a module may import its own layer and those below): spec ← model ← control ←
 backends/hardware ← loop (run loop, run log, analysis, interop, plots) ← domain (runs, sweeps, optimize, replay,
 view) ← api ← commands ← cli."""
-ANYWHERE = {"shc_cli", "shc_cli.errors", "shc_cli.outputs", "shc_cli.progress"}
-"""Helpers every layer may import: the version, the one exception tree, file writing, the progress bar."""
+ANYWHERE = {"shc_cli", "shc_cli.errors", "shc_cli.events", "shc_cli.outputs", "shc_cli.progress"}
+"""Helpers every layer may import: the version, the one exception tree, logging (events), file writing, the progress
+bar."""
 KNOWN_UPWARD = {
     # TODO(issue 25, worktree body-model): the robot file's semantic checks run the kinematics and the gait's step
     # cycle, and parsing a plan script builds controller commands; they move above the spec layer.
