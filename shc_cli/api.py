@@ -21,6 +21,7 @@ if TYPE_CHECKING:
     from shc_cli.domain.optimize.loop import StudyReport
     from shc_cli.domain.result import RunResult
     from shc_cli.domain.ros_node import NodeConfig
+    from shc_cli.domain.simulate import OnProgress
     from shc_cli.domain.sweeps.run import OnRow, SweepReport
     from shc_cli.loop.runread import RunLog
     from shc_cli.loop.summary import RunSummary
@@ -130,18 +131,19 @@ def plan(robot: str | Path = "bullet", *, gait: str | None = None, velocity: Vel
 
 
 def simulate(robot: str | Path | None = None, *, config: SimulationConfig | None = None,
-             **options: Unpack[SimulationOptions]) -> Run:
+             progress: OnProgress | None = None, **options: Unpack[SimulationOptions]) -> Run:
     """``shc simulate``: the controller on the robot in physics; keywords are ``shc simulate``'s options
     (:class:`~shc_cli.domain.config.SimulationConfig`: ``gait``, ``velocity``, ``duration``, ``terrain``,
     ``scenario``, ``seed``, ``out``, ``plots``, ``posture``, ``imu_posing``, ``inclination``, ``admittance``, …),
-    over ``config`` when given (``robot`` over its robot)."""
+    over ``config`` when given (``robot`` over its robot); ``progress`` is told the walking cycles done and to do
+    (:data:`~shc_cli.domain.simulate.OnProgress`)."""
     from shc_cli.domain.config import SimulationConfig
     from shc_cli.domain.simulate import simulate as run
 
     changes: dict[str, object] = dict(options)
     if robot is not None:
         changes["robot"] = str(robot)
-    result = run((config or SimulationConfig()).replace(**changes))
+    result = run((config or SimulationConfig()).replace(**changes), progress)
     return Run(result.path, result.summary)
 
 

@@ -4,10 +4,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
 from shc_cli.domain.config import SimulationConfig
+
+if TYPE_CHECKING:
+    from shc_cli.progress import ProgressBar
 
 __all__ = ["run_simulate"]
 
@@ -19,7 +23,7 @@ def run_simulate(config: SimulationConfig, after: Callable[[Path], None] | None 
     from shc_cli.api import simulate
     from shc_cli.commands.outcome import EXIT_FELL, exit_if_interrupted, interrupted_note
 
-    run = simulate(config=config)
+    run = simulate(config=config, progress=_Bar())
     path, summary = run.path, run.summary
     cot = summary.cot if summary.cot is None else round(summary.cot, 3)
     typer.echo(f"{summary.robot} / {summary.gait} / {summary.scenario} on {config.terrain}: "
@@ -38,3 +42,20 @@ def run_simulate(config: SimulationConfig, after: Callable[[Path], None] | None 
     if summary.fell and config.fail_on_fall:
         raise typer.Exit(EXIT_FELL)
     return path
+
+
+
+class _Bar:
+    """The progress bar over the walking cycles (none, quiet, in pipes and CI); it goes when the run ends."""
+
+    def __init__(self) -> None:
+        self.bar: ProgressBar | None = None
+        self.started = False
+
+    def __call__(self, done: int, total: int) -> None:
+        from shc_cli.progress import progress_bar
+
+        if not self.started:
+            self.started, self.bar = True, progress_bar("simulating", total)
+        if self.bar is not None and done > 0:
+            self.bar.update(done)

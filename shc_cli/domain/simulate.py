@@ -3,6 +3,7 @@ logged and summarised in a run directory. Never prints; the command prints the s
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -14,7 +15,6 @@ if TYPE_CHECKING:
     from shc_cli.backends.engine import Reading
     from shc_cli.control.controller import Command, CycleOutput
     from shc_cli.loop.summary import RunSummary
-    from shc_cli.progress import ProgressBar
 
 
 def check_display(gui: bool) -> None:
@@ -30,8 +30,9 @@ def check_display(gui: bool) -> None:
                                "drop --gui, or set DISPLAY / run under a virtual display: xvfb-run shc simulate ...")])
 
 
-def simulate(config: SimulationConfig | None = None) -> RunResult:
-    """Load, simulate through the one loop, log; returns the run directory and its summary.
+def simulate(config: SimulationConfig | None = None, progress: OnProgress | None = None) -> RunResult:
+    """Load, simulate through the one loop, log; returns the run directory and its summary (``progress``: told the
+    walking cycles done, :data:`OnProgress`).
 
     Raises:
         ShcError: bad input (one line), before anything is written.
@@ -59,8 +60,8 @@ def simulate(config: SimulationConfig | None = None) -> RunResult:
             controller = Controller(robot, inputs.gait, joints=backend.start(), pose_sets=inputs.pose_sets)
             run.write_robot(robot)
             record = PhysicsRecord(robot, backend, o.airborne)
-            progress = _progress(inputs.cycles)
-            observers: list[Observer[Reading]] = [record] if progress is None else [record, progress]
+            counter = None if progress is None else _Progress(progress, inputs.cycles)
+            observers: list[Observer[Reading]] = [record] if counter is None else [record, counter]
             loop = RunLoop(controller, backend, TimelineInput(inputs.timeline.commands(inputs.cycles)),
                            LogRecorder(run, robot, backend),
                            StartUp(round((robot.start_up.time_to_start + START_UP_MARGIN_S) / robot.time_delta)),
@@ -69,8 +70,8 @@ def simulate(config: SimulationConfig | None = None) -> RunResult:
             def summarise(_: Any) -> RunSummary:  # from the finished log (run.partial)
                 import numpy as np
 
-                if progress is not None:
-                    progress.stop()
+                if counter is not None:
+                    counter.stop()
                 return record.summary(run.partial, o.scenario, controller.gait.name, controller).updated(
                     seed=o.seed, terrain=str(world.terrain.spec), engine=world.name, engine_version=world.version,
                     engine_warnings=world.warnings,
@@ -85,26 +86,25 @@ def simulate(config: SimulationConfig | None = None) -> RunResult:
     return RunResult(path, summary)
 
 
-class _Progress:
-    """The progress bar over the walking cycles (an observer of the loop)."""
+OnProgress = Callable[[int, int], None]
+"""Told ``(walked cycles, cycles to walk)`` before the run, every :data:`PROGRESS_EVERY` walking cycles and
+``(total, total)`` when the run ends (e.g. a progress bar)."""
+PROGRESS_EVERY = 50
 
-    def __init__(self, bar: ProgressBar) -> None:
-        self.bar, self.walked = bar, 0
+
+class _Progress:
+    """Counts the walking cycles for an :data:`OnProgress` (an observer of the loop)."""
+
+    def __init__(self, on_progress: OnProgress, total: int) -> None:
+        self.on_progress, self.total, self.walked = on_progress, total, 0
+        on_progress(0, total)
 
     def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: object) -> str | None:
         if command.state_request is None or out.robot_state.name == "RUNNING":
             self.walked += 1
-            if self.walked % 50 == 0:
-                self.bar.update(self.walked)
+            if self.walked % PROGRESS_EVERY == 0:
+                self.on_progress(self.walked, self.total)
         return None
 
     def stop(self) -> None:
-        self.bar.stop()
-
-
-def _progress(total: int) -> _Progress | None:
-    """A progress bar on a terminal; None in pipes and CI (quiet)."""
-    from shc_cli.progress import progress_bar
-
-    bar = progress_bar("simulating", total)
-    return None if bar is None else _Progress(bar)
+        self.on_progress(self.total, self.total)
