@@ -36,6 +36,7 @@ def test_dynamic_stiffness_softens_the_swing_leg_and_stiffens_its_neighbours() -
     np.testing.assert_allclose(_controller(dynamic=False).stiffnesses(reach, walking=True), 20.0)
 
 
+@pytest.mark.slow  # simulated legs under load
 def test_tip_force_from_joint_torques_inverts_the_jacobian_transpose(bullet) -> None:  # type: ignore[no-untyped-def]
     """Eq. 19 with τ = Jᵀ·F: J(JᵀJ + λ²I)⁻¹Jᵀ·F equals JJᵀ(JJᵀ + λ²I)⁻¹·F (push-through identity, an independent
     3×3 formula) for random joints; at the standing pose it is F within 2 % of |F| (the damping biases the

@@ -213,6 +213,7 @@ REQUIRED = {"cot", "mean_power_w", "mean_speed_mps", "height_median_m", "height_
             "roll_rate_median_rps", "stability_margin_median_m"}
 
 
+@pytest.mark.slow  # a 15 s simulated walk (the walked fixture)
 def test_json_of_a_simulated_run(walked: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     code, out, _ = run(["analyze", str(walked), "--json"], capsys, monkeypatch)
     assert code == 0
@@ -230,6 +231,7 @@ def test_json_of_a_simulated_run(walked: Path, capsys, monkeypatch) -> None:  # 
     assert result["height_median_m"] == pytest.approx(0.25, abs=0.03)
 
 
+@pytest.mark.slow  # a 15 s simulated walk (the walked fixture)
 def test_several_runs_make_a_table_and_plots(walked: Path, planned: Path, tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
                                              monkeypatch) -> None:
     code, out, _ = run(["analyze", str(walked), str(planned), "--out", str(tmp_path / "an")], capsys, monkeypatch)

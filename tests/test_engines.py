@@ -136,6 +136,7 @@ def test_unknown_engine_is_one_line() -> None:
 
 
 @pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.slow  # long simulations
 def test_standing_readings_agree_between_engines(engine: str) -> None:
     """Standing still in the default stance: the feet carry the weight, the IMU reads +g up, the body is level at
     the standing height — the same in both engines."""
@@ -204,6 +205,7 @@ def test_mujoco_dynamixel_servo_is_the_servo_models_torque() -> None:
     assert current_limited > 1.3 * servo.stall_torque
 
 
+@pytest.mark.slow  # long simulations
 def test_an_unstable_mujoco_run_reports_it_and_writes_no_log_file(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """ATHENA's explicit servo law at a 50 ms physics step blows up in MuJoCo: the warning reaches the summary and the
     terminal, and MuJoCo's own MUJOCO_LOG.TXT is not left in the working directory."""

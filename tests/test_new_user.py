@@ -67,6 +67,7 @@ def test_progress_counts_the_path_per_gait_cycle_not_the_sway() -> None:
     assert not progress_fields(0.0, 0.01, 2.0)["no_progress"]  # 0.02 m commanded: too short to judge
 
 
+@pytest.mark.slow  # a long simulation on blocks
 def test_athena_stuck_at_the_blocks_says_so(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "blocks"
     code, stdout, err = run(["simulate", "athena", "--terrain", "blocks", "--seed", "3", "--out", str(out),

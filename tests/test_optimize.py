@@ -154,6 +154,7 @@ def test_bad_study_files_are_one_line_with_the_line(tmp_path: Path, text: str, l
 # -- running -----------------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow  # whole studies of simulated trials
 def test_small_study_end_to_end(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """Storage, trials and Pareto tables, robot files that validate and reproduce their trial, figures."""
     import optuna
@@ -294,6 +295,7 @@ def test_the_api_returns_the_study_and_prints_nothing(tmp_path: Path, capsys: py
     assert 0.0 < report.overhead_s < report.elapsed_s
 
 
+@pytest.mark.slow  # whole studies of simulated trials
 def test_an_existing_study_is_refused_unless_resumed_or_overwritten(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     path = _write(tmp_path, SMALL.format(duration=0.3, seeds="[0]"))
     out = tmp_path / "out"

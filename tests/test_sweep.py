@@ -215,6 +215,7 @@ def test_a_programming_error_is_a_row_that_keeps_its_traceback(tmp_path: Path, m
     assert not log.exists()
 
 
+@pytest.mark.slow  # whole sweeps of simulations
 def test_ci_smoke_sweep_matches_its_golden_results(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """The reviewed CoT, speed and power of sweeps/ci_smoke.toml (regenerate deliberately: docs/commands.md)."""
     out = tmp_path / "ci_smoke"
@@ -284,6 +285,7 @@ def test_an_existing_output_needs_resume(tmp_path: Path, capsys, monkeypatch) ->
     assert code == 2 and "--resume" in err
 
 
+@pytest.mark.slow  # whole sweeps of simulations
 def test_grids_with_different_keys_and_step_frequencies_make_one_table(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """Two [[grid]] tables naming different keys (a step-frequency grid and a scenario grid) run, and the CoT plot
     groups the rows by the keys each has (it raised KeyError on the key the other grid lacks)."""

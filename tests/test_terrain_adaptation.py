@@ -12,6 +12,8 @@ import pytest
 from shc_cli.domain.config import SimulationConfig
 from shc_cli.domain.simulate import simulate
 
+pytestmark = pytest.mark.slow  # long simulations on ramps, steps and blocks in both engines
+
 ENGINES = ["pybullet", "mujoco"]
 
 

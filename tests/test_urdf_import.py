@@ -106,6 +106,7 @@ def chains(draw: st.DrawFn, name: str) -> LegSpec:
                                                                   HealthCheck.too_slow])
 @given(legs=st.lists(st.sampled_from(["p", "q", "r"]), min_size=1, max_size=3, unique=True).flatmap(
     lambda names: st.tuples(*[chains(name) for name in names])), seed=st.integers(0, 2**31))
+@pytest.mark.slow  # FK of many random URDF chains (property test)
 def test_random_chains_have_the_urdfs_forward_kinematics(legs: tuple[LegSpec, ...], seed: int,
                                                          tmp_path: Path) -> None:
     """Non-DH axes, rpy offsets, fixed joints between: every tip within 1e-6 m of yourdfpy's, inside the limits."""
@@ -393,6 +394,7 @@ def test_bullet_import_masses_and_limits(bullet_import) -> None:  # type: ignore
     assert (joint.min, joint.max, joint.max_vel) == (-2.4, 2.4, 2.35619449)
 
 
+@pytest.mark.slow  # imports, searches workspaces and walks
 def test_bullet_import_validates_has_a_workspace_and_walks(bullet_import, tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
                                                   monkeypatch) -> None:
     _, result = bullet_import
