@@ -190,7 +190,7 @@ def page() -> str:
              "(tests/test_docs_reference.py checks it). -->", "",
              "A run directory (`runs/NAME/`, written by `shc plan`, `shc simulate` and `shc run-hw`) holds "
              "`summary.json`, CSV tables with one row per control cycle, `robot.toml` (the robot as run, fully "
-             "expanded) and plots. While a run goes on its folder is `NAME.partial`.", "",
+             "expanded), `events.log` and plots. While a run goes on its folder is `NAME.partial`.", "",
              "## `summary.json`", "",
              "One object per run. A key a kind of run does not have is absent (`null` in the Python API's "
              "`Run.summary`, a `RunSummary`); the description says which runs write it. `shc schema summary` "
@@ -201,7 +201,15 @@ def page() -> str:
              f"(the names are folded from the bundled `{ROBOT}` robot).", ""]
     for name, columns in found.items():
         lines += [f"## `{name}`", "", intro[name], "", "| column | holds |", "|---|---|", *table_rows(columns), ""]
+    lines += ["## `events.log`", "", events_text(), ""]
     return "\n".join(lines)
+
+
+def events_text() -> str:
+    """The events file's format, from the module that writes it (:mod:`shc_cli.events`)."""
+    from shc_cli.events import EVENTS_FORMAT
+
+    return EVENTS_FORMAT
 
 
 if __name__ == "__main__":

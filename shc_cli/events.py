@@ -36,6 +36,13 @@ logging.addLevelName(NOTICE, "NOTICE")
 PACKAGE_LOGGER = "shc_cli"
 EVENTS_FILE = "events.log"
 """The events file of a run directory."""
+EVENTS_FORMAT = (
+    "Warnings, faults and state changes of the run, one JSON object per line (INFO and above), with the keys "
+    "`time` (UTC, ISO 8601 with milliseconds), `cycle` (the control cycle, null outside the loop), `level` (info, "
+    "notice, warning, error), `event` (robot_state, walk_state, stop_requested, stopped, fell, fault, "
+    "engine_warning, input, watchdog; the logger's name for any other record) and `message` (the text shc logs; "
+    "`shc --verbose` also prints the info ones on stderr).")
+"""``events.log``'s format, for the reference page (docs/run_outputs.py)."""
 VERBOSITY = {"quiet": logging.ERROR, "normal": NOTICE, "verbose": logging.INFO}
 """Terminal level per ``--quiet`` / default / ``--verbose``."""
 
