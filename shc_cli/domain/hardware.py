@@ -127,7 +127,8 @@ def run_hardware(config: HardwareConfig) -> RunResult:
     (``summary["fault"]`` names a servo fault)."""
     from shc_cli.backends.dynamixel import UNMEASURED, DynamixelBackend
     from shc_cli.control.controller import Controller
-    from shc_cli.hardware.bus import HardwareError, ServoBus
+    from shc_cli.hardware.bus import HardwareError
+    from shc_cli.hardware.buses import servo_bus
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import ControlledStop, RunLoop, StartUp
     from shc_cli.loop.runlog import LogRecorder, RunDirectory
@@ -139,7 +140,7 @@ def run_hardware(config: HardwareConfig) -> RunResult:
     commands = Path(argument) if kind == "commands" else c.commands
     inputs = load_inputs(c.robot, c.gait, c.velocity, c.duration, commands, default_s=20.0)
     robot, gait = inputs.robot, inputs.gait
-    bus = ServoBus(robot, c.ports, c.baud, c.profile_velocity)
+    bus = servo_bus(robot, c.ports, c.baud, c.profile_velocity)  # the servo models' protocol
     source: InputSource | None = None
     backend: DynamixelBackend | None = None
     faulted = False
@@ -152,6 +153,11 @@ def run_hardware(config: HardwareConfig) -> RunResult:
         if not c.dry_run:
             for done in bus.configure():
                 log.info("%s", done)
+        slow = bus.rate_problem(robot.time_delta)  # measured: the adapter's latency and per-servo reads count
+        if slow and not c.dry_run:
+            raise HardwareError(f"{bus.port_name}: refusing to start: {slow}")
+        if slow:
+            log.warning("warning: %s", slow)
         bus_time = bus.wire_time()
         if bus_time > robot.time_delta:
             log.warning("warning: one cycle needs %.1f ms on the bus (packets and return delays at %s baud), more "

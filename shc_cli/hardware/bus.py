@@ -1,10 +1,13 @@
-"""The robot's servos on one or more Dynamixel Protocol 2.0 buses, through the official dynamixel-sdk.
+"""The robot's servos on one or more Dynamixel Protocol 2.0 buses, through the official dynamixel-sdk; and the
+base of the other families' buses (:mod:`shc_cli.hardware.bus_protocol1`: Dynamixel Protocol 1.0 and Feetech).
+:func:`shc_cli.hardware.buses.servo_bus` picks the class from the servo models.
 
 Joint angles ↔ ticks: ``ticks = zero_ticks + direction · (q + offset) · ticks_per_revolution / 2π`` (``offset`` is
-the joint's servo offset, as OpenSHC adds it to hardware commands). Per cycle and bus: one sync read (present
-current, velocity and position: addresses 126–135, 10 bytes per servo) and one sync write (goal position, or profile
-velocity + goal position: 112–119). With several buses the sync reads go out on every bus before the replies are
-received, so the buses answer in parallel.
+the joint's servo offset, as OpenSHC adds it to hardware commands; ``ticks_per_revolution`` the model's: 4096, or
+1228.8 for the AX series' 1024 ticks per 300°; ``zero_ticks`` by default the middle of the model's range).
+Per cycle and bus: one sync read (present current, velocity and position: addresses 126–135, 10 bytes per servo)
+and one sync write (goal position, or profile velocity + goal position: 112–119). With several buses the sync
+reads go out on every bus before the replies are received, so the buses answer in parallel.
 
 dynamixel-sdk's GroupSyncRead drops each servo's status error byte, so the sync read is sent with it and the replies
 are received one by one with ``PacketHandler.readRx``, which keeps the error byte: its alert bit flags a hardware
@@ -99,15 +102,15 @@ class ServoBus:
         ports = [ports] if isinstance(ports, str) else list(ports)
         self.robot, self.port_names, self.baud = robot, ports, baud or hardware.baud
         self.port_name = ", ".join(ports)
-        self.ticks = hardware.ticks_per_revolution
         self.profile_velocity = profile_velocity
         self.slots = []
         for i, (leg, spec) in enumerate(robot.legs.items()):
             for k, (joint, joint_spec) in enumerate(spec.joints.items()):
                 servo = hardware.servos[f"{leg}_{joint}"]
                 model = MODELS[servo.model or hardware.model]
+                zero = model.centre if servo.zero_ticks is None else servo.zero_ticks
                 self.slots.append(Slot(f"{leg}_{joint}", i, k, servo.id, servo.bus, model, servo.direction,
-                                       servo.zero_ticks, joint_spec.offset, (joint_spec.min, joint_spec.max)))
+                                       zero, joint_spec.offset, (joint_spec.min, joint_spec.max)))
         used = sorted({slot.bus for slot in self.slots})
         if used[-1] >= len(ports):
             raise HardwareError(f"{robot.name}: servos are on buses {', '.join(map(str, used))}, but "
@@ -120,6 +123,9 @@ class ServoBus:
         self._direction = np.array([s.direction for s in self.slots], dtype=float)
         self._zero = np.array([s.zero for s in self.slots], dtype=float)
         self._offset = np.array([s.offset for s in self.slots])
+        self._ticks_per_rad = np.array([hardware.ticks_per_revolution / (2.0 * math.pi) if s.model.name == "generic"
+                                        else s.model.ticks_per_radian for s in self.slots])
+        """Each servo's ticks per radian (its model's units)."""
         self._current_unit = np.array([s.model.current_unit_ma for s in self.slots])
         self._velocity_unit = np.array([s.model.velocity_unit_rpm for s in self.slots])
         self._handler: Any = None
@@ -345,7 +351,7 @@ class ServoBus:
         current = raw[:, 0:2].copy().view("<i2")[:, 0].astype(float)
         velocity = raw[:, 2:6].copy().view("<i4")[:, 0].astype(float)
         ticks = raw[:, 6:10].copy().view("<i4")[:, 0].astype(float)
-        positions = self._direction * (ticks - self._zero) * (2.0 * math.pi / self.ticks) - self._offset
+        positions = self._direction * (ticks - self._zero) / self._ticks_per_rad - self._offset
         velocities = self._direction * velocity * self._velocity_unit * (2.0 * math.pi / 60.0)
         return BusState(self.padded(positions), self.padded(velocities), self.padded(current * self._current_unit),
                         answered, alerts, failures)
@@ -370,7 +376,7 @@ class ServoBus:
         ticks = self._to_ticks(slice(None), joints[self._rows, self._cols])
         if self.profile_velocity:
             previous = ticks if self._last_ticks is None else self._last_ticks
-            rpm = np.abs(ticks - previous) / self.ticks / period * 60.0
+            rpm = np.abs(ticks - previous) / (self._ticks_per_rad * 2.0 * math.pi) / period * 60.0
             speed = np.maximum(1, np.rint(rpm / self._velocity_unit)).astype(np.int64)
         self._last_ticks = ticks
         for line in self.lines:
@@ -406,8 +412,39 @@ class ServoBus:
     def _to_ticks(self, index: Any, joints: np.ndarray) -> np.ndarray:
         """Joint angles [rad] of the slots ``index`` → servo ticks."""
         ticks: np.ndarray = np.rint(self._zero[index] + self._direction[index] * (joints + self._offset[index])
-                                    * (self.ticks / (2.0 * math.pi))).astype(np.int64)
+                                    * self._ticks_per_rad[index]).astype(np.int64)
         return ticks
+
+    def read_mode(self) -> str:
+        """How the state is read (for messages)."""
+        return "sync read"
+
+    def measure_cycle(self, reads: int = 20) -> float:
+        """Seconds a cycle occupies the bus, measured: the fastest of ``reads`` state reads (the adapter's and the
+        host's turnaround included; the fastest, so that a busy computer's pauses do not count) plus the goal
+        write's time on the wire. Before the torque is on."""
+        import time
+
+        times = []
+        for _ in range(reads):
+            began = time.perf_counter()
+            self.read_state()
+            times.append(time.perf_counter() - began)
+        per_goal = 1 + (8 if self.profile_velocity else 4)
+        write = max((14 + len(line.slots) * per_goal) * 10.0 / self.baud for line in self.lines)
+        return min(times) + write
+
+    def rate_problem(self, period: float, reads: int = 20) -> str | None:
+        """Why the bus cannot keep ``period`` [s] (a sentence naming the rate it keeps and the fixes), or None."""
+        cycle = self.measure_cycle(reads)
+        if cycle <= period:
+            return None
+        longer = math.ceil(cycle * 1.2 * 1000.0) / 1000.0
+        return (f"one cycle's reads and goal write take {cycle * 1e3:.1f} ms on the bus (the fastest of {reads} "
+                f"reads, {self.read_mode()}, {max(len(line.slots) for line in self.lines)} servos on the busiest bus), "
+                f"more than the {period * 1e3:.0f} ms period: it keeps {1.0 / cycle:.0f} Hz; set time_delta = "
+                f"{longer:g} or more in the robot file, split the servos over more buses, or lower the USB "
+                "adapter's latency timer (/sys/bus/usb-serial/devices/ttyUSB0/latency_timer = 1)")
 
     def padded(self, values: np.ndarray) -> np.ndarray:
         out = np.zeros(self.shape)

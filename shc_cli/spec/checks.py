@@ -37,9 +37,10 @@ def check_robot(loaded: LoadedRobot) -> list[Issue]:
 
 def _hardware(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
     """The servo table: every joint mapped once, known models, unique IDs per bus, zero offsets inside a turn."""
-    from shc_cli.hardware.models import MODELS
+    from shc_cli.hardware.models import FAMILY_NAMES, MODELS
 
     hardware = robot.hardware
+    families: dict[int, tuple[str, str]] = {}
     if not hardware.servos:
         return []
     joints = [f"{leg}_{joint}" for leg, spec in robot.legs.items() for joint in spec.joints]
@@ -61,10 +62,19 @@ def _hardware(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
         if servo.model is not None and servo.model not in MODELS:
             issues.append(loaded.issue(("hardware", "servos", key, "model"), f"unknown servo model '{servo.model}'",
                                        f"use one of {', '.join(MODELS)}"))
-        if servo.zero_ticks >= hardware.ticks_per_revolution:
+        model = MODELS.get(servo.model or hardware.model)
+        ticks = hardware.ticks_per_revolution if model is None or model.name == "generic" else model.resolution
+        if servo.zero_ticks is not None and servo.zero_ticks >= ticks:
             issues.append(loaded.issue(("hardware", "servos", key, "zero_ticks"),
-                                       f"zero_ticks {servo.zero_ticks} is outside one turn",
-                                       f"use 0 … {hardware.ticks_per_revolution - 1}"))
+                                       f"zero_ticks {servo.zero_ticks} is outside the servo's range",
+                                       f"use 0 … {ticks - 1}"))
+        if model is not None:
+            family = families.setdefault(servo.bus, (model.family, key))
+            if family[0] != model.family:
+                issues.append(loaded.issue(("hardware", "servos", key, "model"),
+                                           f"{model.name} speaks {FAMILY_NAMES[model.family]}, but {family[1]} on "
+                                           f"bus {servo.bus} speaks {FAMILY_NAMES[family[0]]}",
+                                           "put each protocol on a bus of its own (bus = N)"))
         other = seen.get((servo.bus, servo.id))
         if other is not None:
             issues.append(loaded.issue(("hardware", "servos", key, "id"),

@@ -280,7 +280,8 @@ class Servo(Strict):
     work (the load driving the motor) is dissipated, not returned, unless ``regenerative_efficiency`` > 0.
     """
 
-    model: str = Field("generic", description="servo model name, e.g. 'Dynamixel MX-106'")
+    model: str = Field("generic", description="servo model name; a model with a datasheet (AX-12A, AX-18A, "
+                       "XL430-W250, XM430-W350, MX-64, MX-106, STS3215, …) fills the fields below that are left unset")
     stall_torque: Positive = Field(8.4, description="torque limit passed to the physics engine [N·m]")
     no_load_speed: Positive = Field(4.7, description="speed limit passed to the physics engine [rad/s]")
     torque_constant: Positive = Field(1.6, description="output torque per ampere, gearbox included [N·m/A]")
@@ -328,24 +329,40 @@ class Servo(Strict):
     static_speed: Positive = Field(
         0.05, description="joint speed below which a joint counts as holding still (holding_ratio applies) [rad/s]")
 
+    @model_validator(mode="before")
+    @classmethod
+    def _datasheet(cls, data: object) -> object:
+        """A model with a datasheet (:mod:`shc_cli.spec.servo_models`: AX-12A, AX-18A, XL430-W250, XM430-W350,
+        MX-64, MX-106, STS3215, …) fills the fields the file leaves unset."""
+        from shc_cli.spec.servo_models import servo_defaults
+
+        if isinstance(data, dict) and isinstance(data.get("model"), str):
+            return {**servo_defaults(data["model"]), **data}
+        return data
+
 
 class ServoMap(Strict):
     """Where one joint's servo is on the bus and how its ticks map to the joint angle."""
 
     id: Annotated[int, Field(ge=0, le=252)] = Field(description="Dynamixel ID")
     bus: Annotated[int, Field(ge=0)] = Field(0, description="bus index (one port per bus; `run-hw --port` is bus 0)")
-    model: str | None = Field(None, description="servo model, default hardware.model (e.g. 'MX-106', 'XM430-W350')")
+    model: str | None = Field(None, description="servo model, default hardware.model (e.g. 'MX-106', 'AX-12A', "
+                              "'STS3215')")
     direction: Literal[1, -1] = Field(1, description="+1 if the servo turns with the joint angle, −1 if against it")
-    zero_ticks: Annotated[int, Field(ge=0)] = Field(
-        2048, description="servo position [ticks] at joint angle 0 (must be below ticks_per_revolution)")
+    zero_ticks: Annotated[int, Field(ge=0)] | None = Field(
+        None, description="servo position [ticks] at joint angle 0 (default the middle of the model's range: 2048 "
+        "for 4096-tick models, 512 for the AX series' 1024)")
 
 
 class Hardware(Strict):
-    """The real robot's servo bus (``shc run-hw``): Dynamixel Protocol 2.0."""
+    """The real robot's servo buses (``shc run-hw``): the servo model names the protocol (Dynamixel Protocol 2.0
+    or 1.0, Feetech STS/SCS), units and control table (:mod:`shc_cli.hardware.models`)."""
 
     baud: Annotated[int, Field(gt=0)] = Field(1_000_000, description="bus baud rate [bit/s]")
-    model: str = Field("MX-106", description="servo model of every joint unless its entry names another")
-    ticks_per_revolution: Annotated[int, Field(gt=0)] = Field(4096, description="position ticks per turn")
+    model: str = Field("MX-106", description="servo model of every joint unless its entry names another (e.g. "
+                       "'MX-106', 'XM430-W350', 'AX-12A', 'MX-64(1.0)', 'STS3215')")
+    ticks_per_revolution: Annotated[int, Field(gt=0)] = Field(
+        4096, description="position ticks per turn of the 'generic' model (the others' follow from the model)")
     return_delay_us: Annotated[int, Field(ge=0, le=508)] | None = Field(
         0, description="Return Delay Time written to the servos at start-up [µs, multiple of 2] (None: leave as "
         "configured). Dynamixels ship with 500 µs: with 30 servos that alone is 15 ms per sync read")
