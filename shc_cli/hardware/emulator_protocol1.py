@@ -419,20 +419,24 @@ class Protocol1Emulator:
                 self._transmit(replies, arrived + (size * 10.0 / self.baud if self.wire_time else 0.0))
 
     def _transmit(self, replies: list[tuple[EmulatedServo, bytes]], bus_free: float) -> None:
-        """Each status packet its servo's Return Delay Time after the bus fell silent (plus its bytes' time)."""
+        """Each status packet its servo's Return Delay Time after the bus fell silent (plus its bytes' time). A
+        chain's packets go out together when the last is due: the host has them all at the same time as on the wire,
+        and the thread wakes once (a loaded computer's scheduling would stretch a packet-by-packet chain)."""
         if replies and self.latency_s:
             bus_free += self.latency_s
+        due = bus_free
         for servo, data in replies:
             delay = servo.table[servo.addr["delay"]] * 2e-6 + servo.faults.late_reply_s
-            due = bus_free + delay + (len(data) * 10.0 / self.baud if self.wire_time else 0.0)
-            wait = due - time.monotonic()
-            if wait > 0.002:
-                time.sleep(wait - 0.001)
-            while time.monotonic() < due:  # the last millisecond spun: a sleep of microseconds overshoots
-                pass
-            with contextlib.suppress(OSError):
-                os.write(self._master, data)
-            bus_free = due
+            due += delay + (len(data) * 10.0 / self.baud if self.wire_time else 0.0)
+        if not replies:
+            return
+        wait = due - time.monotonic()
+        if wait > 0.002:
+            time.sleep(wait - 0.001)
+        while time.monotonic() < due:  # the last millisecond spun: a sleep of microseconds overshoots
+            pass
+        with contextlib.suppress(OSError):
+            os.write(self._master, b"".join(data for _, data in replies))
 
     def _status(self, servo: EmulatedServo, error: int = 0, params: bytes = b"") -> list[tuple[EmulatedServo, bytes]]:
         if servo.faults.no_reply or servo.vanished:

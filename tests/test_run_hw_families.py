@@ -1,0 +1,219 @@
+"""``shc run-hw`` end to end on a Dynamixel Protocol 1.0 bus (AX-12A: a READ per servo; MX-64 with 1.0 firmware:
+BULK READ) and a Feetech STS3215 bus: 18 emulated servos (shc_cli/hardware/emulator_protocol1.py, keeping the 1 Mbaud
+wire's time line), a 3-DOF hexapod that extends openshc_default. Goals on the bus in the model's ticks, faults
+mid-walk, the rate check; the 60 s runs are slow-marked.
+
+The emulator is served by a thread of this process with the garbage collector off while run-hw runs in its own (see
+tests/test_run_hw.py: a full collection of a large pytest heap outlasts the SDKs' packet timeouts).
+"""
+
+from __future__ import annotations
+
+import gc
+import json
+import math
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from shc_cli.hardware import protocol1 as p1
+from shc_cli.hardware.emulator_protocol1 import Protocol1Emulator
+from shc_cli.loop.runread import read_run
+
+SHC = [sys.executable, "-m", "shc_cli.cli"]
+JOINTS = [f"{leg}_{joint}" for leg in ("AR", "BR", "CR", "CL", "BL", "AL") for joint in ("coxa", "femur", "tibia")]
+"""Servo id k + 1 drives JOINTS[k]."""
+FAMILIES = {"AX-12A": (0.04, 1024, 300.0, 30), "MX-64(1.0)": (0.01, 4096, 360.0, 30),
+            "STS3215": (0.01, 4096, 360.0, 42)}
+"""Model → (control period [s]: AX-12A reads each servo, see docs/performance.md; ticks over the range [°]; the
+Goal Position address)."""
+FAULTED = 5
+"""The servo the fault tests break: BR_femur."""
+
+
+def _robot(folder: Path, model: str, period: float | None = None, extra: str = "") -> Path:
+    """The hexapod on one bus of ``model`` servos: AL_coxa turned against its joint with its zero off the middle
+    and a joint offset, so the goal ticks test direction, zero and offset."""
+    dt, ticks, _, _ = FAMILIES[model]
+    zero = ticks // 2 - 12
+    lines = ['extends = "openshc_default"', f'name = "hexapod_{model[:2].lower()}"', f"time_delta = {period or dt}",
+             "[legs.AL.joints.coxa]", "offset = 0.05", "[hardware]", f'model = "{model}"', "return_delay_us = 0",
+             extra, "[hardware.servos]"]
+    lines += [f"{key} = {{ id = {k + 1} }}" if key != "AL_coxa" else
+              f"{key} = {{ id = {k + 1}, direction = -1, zero_ticks = {zero} }}" for k, key in enumerate(JOINTS)]
+    path = folder / f"{model.replace('(', '').replace(')', '')}.toml"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@contextmanager
+def _bus(model: str, latency_s: float = 0.0) -> Iterator[Protocol1Emulator]:
+    gc.collect()
+    gc.disable()
+    try:
+        with Protocol1Emulator({k + 1: model for k in range(18)}, wire_time=True, latency_s=latency_s) as bus:
+            yield bus
+    finally:
+        gc.enable()
+
+
+def _goal_writes(bus: Protocol1Emulator, model: str, start: int = 0) -> list[p1.Packet]:
+    address = FAMILIES[model][3]
+    with bus.lock:
+        return [p for p in bus.packets[start:] if p.instruction == p1.SYNC_WRITE and p.params[0] == address]
+
+
+def _wait_running(run: Path, process: subprocess.Popen[str], extra_s: float, timeout_s: float = 90.0) -> None:
+    """Wait until the streamed log shows RUNNING (flushed every 100 cycles), then ``extra_s`` more."""
+    log = run.with_name(run.name + ".partial") / "log.csv"
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if process.poll() is not None:
+            raise AssertionError(f"run-hw ended before walking: {process.communicate()[1]}")
+        if log.exists() and ",RUNNING," in log.read_text():
+            time.sleep(extra_s)
+            return
+        time.sleep(0.1)
+    raise AssertionError(f"{log}: never RUNNING")
+
+
+@pytest.mark.parametrize("model", list(FAMILIES))
+def test_walks_and_the_goals_are_the_models_ticks(model: str, tmp_path: Path) -> None:
+    """A goal on the bus = zero + direction × (angle + offset) in the model's ticks (AX-12A: 1024 per 300°); the
+    robot walks, packs and the torque goes off."""
+    robot = _robot(tmp_path, model)
+    with _bus(model) as bus:
+        result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run"),
+                                 "--velocity", "1,0,0", "--duration", "1", "--stop-state", "running"],
+                                capture_output=True, text=True, timeout=300)
+        assert result.returncode == 0, result.stderr
+        assert not any(bus.torque_on(k + 1) for k in range(18))
+        writes = _goal_writes(bus, model)
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["fault"] is None and summary["sim_time_s"] > 2.0
+    log = read_run(tmp_path / "run")
+    assert (log.walk_state == "MOVING").any()
+    commanded = log.commanded
+    assert commanded is not None
+    _, ticks, degrees, _ = FAMILIES[model]
+    per_rad = ticks / math.radians(degrees)
+    last = writes[-1].params  # the last goal write is the log's last commanded row
+    on_bus = {last[at]: int.from_bytes(last[at + 1:at + 3], "little") for at in range(2, len(last), 1 + last[1])}
+    columns = [f"{key}_commanded" for key in JOINTS]
+    row = dict(zip(columns, commanded[-1].reshape(-1), strict=True))  # (L, n): legs in file order
+    for k, key in enumerate(JOINTS):
+        zero, direction, offset = (ticks // 2 - 12, -1, 0.05) if key == "AL_coxa" else (ticks // 2, 1, 0.0)
+        expected = round(zero + direction * (row[f"{key}_commanded"] + offset) * per_rad)
+        assert on_bus[k + 1] == expected, key
+    assert on_bus[16] != ticks // 2 - 12  # the offset moved it
+
+
+@pytest.mark.parametrize("fault", ["overload", "vanish", "corrupt"])
+@pytest.mark.parametrize("model", list(FAMILIES))
+def test_a_fault_mid_walk_stops_the_goals_names_the_servo_and_exits_3(model: str, fault: str,
+                                                                       tmp_path: Path) -> None:
+    robot = _robot(tmp_path, model)
+    with _bus(model) as bus:
+        process = subprocess.Popen([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run"),
+                                    "--velocity", "1,0,0", "--duration", "30"],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            _wait_running(tmp_path / "run", process, extra_s=0.5)
+            with bus.lock:
+                marker = len(bus.packets)
+                if fault == "overload":
+                    bus.protect(FAULTED)
+                elif fault == "vanish":
+                    bus.faults(FAULTED).vanish_after_packets = bus.servos[FAULTED].packets_seen
+                else:
+                    bus.faults(FAULTED).corrupt_checksum = True
+            _, stderr = process.communicate(timeout=120)
+        finally:
+            if process.poll() is None:
+                process.kill()
+        assert process.returncode == 3, stderr
+        reason = {"overload": "BR_femur: overload", "vanish": "no reply from BR_femur",
+                  "corrupt": "corrupt reply (checksum or length) from BR_femur"}[fault]
+        assert f"fault: {reason}" in stderr
+        assert len(_goal_writes(bus, model, marker)) <= 1
+        heard = [k + 1 for k in range(18) if not (fault == "vanish" and k + 1 == FAULTED)]  # a vanished one hears none
+        assert not any(bus.torque_on(servo) for servo in heard)  # torque released
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert "BR_femur" in summary["fault"]
+
+
+def test_refuses_a_rate_the_bus_cannot_keep_and_says_which_it_can(tmp_path: Path) -> None:
+    """18 AX-12A read one by one behind an adapter with 1.5 ms of turnaround: ≥ 27 ms a cycle, so 100 Hz is
+    refused before the torque goes on, naming the rate it keeps and the time_delta that works."""
+    robot = _robot(tmp_path, "AX-12A", period=0.01)
+    with _bus("AX-12A", latency_s=0.0015) as bus:
+        result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run")],
+                                capture_output=True, text=True, timeout=120)
+        assert not any(p.instruction == p1.SYNC_WRITE and p.params[0] == 24 and p.params[3] == 1
+                       for p in bus.packets)  # the torque never went on
+    assert result.returncode == 2, result.stderr
+    assert "refusing to start: one cycle's reads and goal write take" in result.stderr
+    assert "one read per servo, 18 servos on the busiest bus" in result.stderr and "set time_delta = " in result.stderr
+    assert len(result.stderr.strip().splitlines()) == 2  # the return delay written, then the one-line error
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize(("model", "file_model", "message"), [
+    ("AX-12A", "AX-18A", "AR_coxa: servo 1 is model number 12, not a AX-18A (18)"),
+    ("STS3215", "MX-64(1.0)", "AR_coxa: servo 1 does not answer"),
+])
+def test_refuses_the_wrong_model_or_protocol(model: str, file_model: str, message: str, tmp_path: Path) -> None:
+    robot = _robot(tmp_path, model)
+    robot.write_text(robot.read_text().replace(f'model = "{model}"', f'model = "{file_model}"'))
+    with _bus(model) as bus:
+        result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run")],
+                                capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2 and message in result.stderr, result.stderr
+
+
+def test_refuses_wheel_mode_and_angle_limits_narrower_than_the_joints(tmp_path: Path) -> None:
+    robot = _robot(tmp_path, "AX-12A")
+    with _bus("AX-12A") as bus:
+        bus.servos[4].set(6, 0)
+        bus.servos[4].set(8, 0)  # both angle limits 0: wheel mode
+        bus.servos[9].set(6, 400)  # CW limit inside CR_tibia's range
+        result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run")],
+                                capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2, result.stderr
+    assert "BR_coxa: servo 4 is in wheel mode" in result.stderr
+    assert "CR_tibia: the joint limits" in result.stderr and "servo 9's angle limits 400..1023" in result.stderr
+
+
+def test_validate_refuses_two_protocols_on_one_bus(tmp_path: Path) -> None:
+    robot = _robot(tmp_path, "AX-12A")
+    robot.write_text(robot.read_text().replace("AR_coxa = { id = 1 }", 'AR_coxa = { id = 1, model = "STS3215" }'))
+    result = subprocess.run([*SHC, "validate", str(robot)], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2
+    assert "STS3215 speaks Feetech STS/SCS, but" in result.stderr and "put each protocol on a bus of its own" in (
+        result.stderr)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("model", list(FAMILIES))
+def test_sixty_seconds_of_walking_hold_the_rate(model: str, tmp_path: Path) -> None:
+    """60 s of walking on 18 servos at the family's rate (100 Hz; AX-12A 25 Hz): no fault, and the cycle-time
+    distribution (printed; docs/performance.md has the figures) keeps its median within the period."""
+    robot = _robot(tmp_path, model)
+    with _bus(model) as bus:
+        result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run"),
+                                 "--velocity", "1,0,0", "--duration", "60", "--stop-state", "running"],
+                                capture_output=True, text=True, timeout=900)
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    times = np.loadtxt(tmp_path / "run" / "timing.csv", delimiter=",", skiprows=1, usecols=2)
+    period_ms = FAMILIES[model][0] * 1e3
+    print(f"{model}: {summary['cycles']} cycles, p50 {np.percentile(times, 50):.2f} ms, p99 "
+          f"{np.percentile(times, 99):.2f} ms, max {times.max():.2f} ms, {summary['overruns']} overruns")
+    assert summary["fault"] is None and summary["sim_time_s"] > 60.0
+    assert np.percentile(times, 50) < period_ms
