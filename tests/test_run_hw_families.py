@@ -29,10 +29,14 @@ from shc_cli.loop.runread import read_run
 SHC = [sys.executable, "-m", "shc_cli.cli"]
 JOINTS = [f"{leg}_{joint}" for leg in ("AR", "BR", "CR", "CL", "BL", "AL") for joint in ("coxa", "femur", "tibia")]
 """Servo id k + 1 drives JOINTS[k]."""
-FAMILIES = {"AX-12A": (0.04, 1024, 300.0, 30), "MX-64(1.0)": (0.01, 4096, 360.0, 30),
+FAMILIES = {"AX-12A": (0.1, 1024, 300.0, 30), "MX-64(1.0)": (0.01, 4096, 360.0, 30),
             "STS3215": (0.01, 4096, 360.0, 42)}
-"""Model → (control period [s]: AX-12A reads each servo, see docs/performance.md; ticks over the range [°]; the
-Goal Position address)."""
+"""Model → (control period [s] of the fast tests; ticks over the range [°]; the Goal Position address). AX-12A
+reads each servo: its 18 round trips through the pty cost this (loaded, 2-core) test machine 18–45 ms, so its fast
+tests run at 10 Hz, which run-hw's rate check accepts however busy the machine is; the slow 60 s test runs it at
+the documented 25 Hz (docs/performance.md)."""
+RATES = {"AX-12A": 0.04, "MX-64(1.0)": 0.01, "STS3215": 0.01}
+"""The 60 s runs' periods [s]: 100 Hz, and 25 Hz for 18 AX-12A read one by one on one bus."""
 FAULTED = 5
 """The servo the fault tests break: BR_femur."""
 
@@ -166,7 +170,7 @@ def test_refuses_a_rate_the_bus_cannot_keep_and_says_which_it_can(tmp_path: Path
 
 @pytest.mark.parametrize(("model", "file_model", "message"), [
     ("AX-12A", "AX-18A", "AR_coxa: servo 1 is model number 12, not a AX-18A (18)"),
-    ("STS3215", "MX-64(1.0)", "AR_coxa: servo 1 does not answer"),
+    ("STS3215", "MX-64(1.0)", "AR_coxa: servo 1 is model number 2563, not a MX-64(1.0) (310)"),  # STS firmware
 ])
 def test_refuses_the_wrong_model_or_protocol(model: str, file_model: str, message: str, tmp_path: Path) -> None:
     robot = _robot(tmp_path, model)
@@ -195,8 +199,8 @@ def test_validate_refuses_two_protocols_on_one_bus(tmp_path: Path) -> None:
     robot.write_text(robot.read_text().replace("AR_coxa = { id = 1 }", 'AR_coxa = { id = 1, model = "STS3215" }'))
     result = subprocess.run([*SHC, "validate", str(robot)], capture_output=True, text=True, timeout=120)
     assert result.returncode == 2
-    assert "STS3215 speaks Feetech STS/SCS, but" in result.stderr and "put each protocol on a bus of its own" in (
-        result.stderr)
+    assert "AX-12A speaks Dynamixel Protocol 1.0, but AR_coxa on bus 0 speaks Feetech STS/SCS" in result.stderr
+    assert "put each protocol on a bus of its own" in result.stderr
 
 
 @pytest.mark.slow
@@ -204,7 +208,7 @@ def test_validate_refuses_two_protocols_on_one_bus(tmp_path: Path) -> None:
 def test_sixty_seconds_of_walking_hold_the_rate(model: str, tmp_path: Path) -> None:
     """60 s of walking on 18 servos at the family's rate (100 Hz; AX-12A 25 Hz): no fault, and the cycle-time
     distribution (printed; docs/performance.md has the figures) keeps its median within the period."""
-    robot = _robot(tmp_path, model)
+    robot = _robot(tmp_path, model, period=RATES[model])
     with _bus(model) as bus:
         result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run"),
                                  "--velocity", "1,0,0", "--duration", "60", "--stop-state", "running"],
@@ -212,7 +216,7 @@ def test_sixty_seconds_of_walking_hold_the_rate(model: str, tmp_path: Path) -> N
     assert result.returncode == 0, result.stderr
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     times = np.loadtxt(tmp_path / "run" / "timing.csv", delimiter=",", skiprows=1, usecols=2)
-    period_ms = FAMILIES[model][0] * 1e3
+    period_ms = RATES[model] * 1e3
     print(f"{model}: {summary['cycles']} cycles, p50 {np.percentile(times, 50):.2f} ms, p99 "
           f"{np.percentile(times, 99):.2f} ms, max {times.max():.2f} ms, {summary['overruns']} overruns")
     assert summary["fault"] is None and summary["sim_time_s"] > 60.0

@@ -133,12 +133,18 @@ class Protocol1Bus(ServoBus):
 
     # -- transactions ------------------------------------------------------------------------------------------
 
-    def _read(self, index: int, address: int, length: int) -> tuple[bytes | None, int, str]:
-        """One READ of a servo: (data or None, error byte, why it failed)."""
+    def _read(self, index: int, address: int, length: int, again: bool = True) -> tuple[bytes | None, int, str]:
+        """One READ of a servo: (data or None, error byte, why it failed); without a proper reply it is asked once
+        more (``again``) after the line fell silent."""
         line = self.lines[self.slots[index].bus]
         self._clear(line)
         data, result, error = self._handler.readTxRx(line.port, self.slots[index].servo_id, address, length)
-        return self._judge(data, result, error, length)
+        got = self._judge(data, result, error, length)
+        if got[0] is None and again:
+            self.retries += 1
+            self._settle(line)
+            return self._read(index, address, length, again=False)
+        return got
 
     def _judge(self, data: Any, result: int, error: int, length: int) -> tuple[bytes | None, int, str]:
         if result != self._sdk.COMM_SUCCESS:
@@ -310,7 +316,7 @@ class Protocol1Bus(ServoBus):
                 if got is None:
                     self.retries += 1
                     self._settle(line)
-                    got, error, failure = self._read(index, self.table.present_position, length)
+                    got, error, failure = self._read(index, self.table.present_position, length, again=False)
                 if got is None:
                     failures[index] = failure
                 else:
