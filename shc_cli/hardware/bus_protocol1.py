@@ -48,6 +48,9 @@ log = logging.getLogger(__name__)
 
 FEETECH_ALERTS = 1 | 2 | 4 | 8 | 32
 """Feetech status bits that are the servo's protection (voltage, angle sensor, overheating, overcurrent, overload)."""
+READ_WAIT_S = 0.001
+"""How long one serial read blocks for its bytes [s]: the SDKs' receive loops call it with their own deadline, so
+this only replaces their busy polling (timeout 0) with waiting (the packet timeouts are unchanged)."""
 PROTOCOL1_BAUD = {1_000_000: 1, 500_000: 3, 400_000: 4, 250_000: 7, 200_000: 9, 115_200: 16, 57_600: 34}
 """Protocol 1.0 Baud Rate values (2,000,000 / (value + 1) bit/s)."""
 
@@ -112,6 +115,7 @@ class Protocol1Bus(ServoBus):
                 self.close()
                 raise HardwareError(f"{line.name}: cannot open the serial port at {self.baud} baud "
                                     "(check --port and --baud or hardware.baud)")
+            port.ser.timeout = READ_WAIT_S  # the SDKs poll with timeout 0: a spinning host starves a busy computer
             line.port = port
             line.ids = [self.slots[i].servo_id for i in line.slots]
 
