@@ -60,10 +60,22 @@ def test_a_wrong_checksum_is_refused_and_the_next_packet_still_found() -> None:
     assert found == p1.Packet(4, p1.PING, b"")
 
 
+def _answered(call: Any, *args: Any) -> Any:
+    """An SDK call, asked again (up to 3 times) when it timed out: the emulator is a thread of this process on a
+    shared, loaded machine, and a pause past the SDK's 34 ms packet timeout is the machine's, not the protocol's."""
+    for _ in range(3):
+        out = call(*args)
+        result = out[1] if isinstance(out, tuple) and len(out) == 3 else out[0] if isinstance(out, tuple) else out
+        if result != -6:  # COMM_RX_TIMEOUT in both SDKs
+            return out
+    return out
+
+
 @contextmanager
 def _port(bus: Protocol1Emulator, sdk: Any) -> Iterator[Any]:
     port = sdk.PortHandler(bus.port)
     assert port.openPort() and port.setBaudRate(1_000_000)
+    port.ser.timeout = 0.001  # block in the read (as the bus does) instead of the SDK's polling, which holds the GIL
     try:
         yield port
     finally:
@@ -115,7 +127,7 @@ def test_mx_bulk_read_through_dynamixel_sdk_without_group_bulk_read() -> None:
         assert handler.bulkReadTx(port, [2, 1, 30, 2, 2, 36], 6) == sdk.COMM_SUCCESS  # the e-Manual's layout
         assert handler.readRx(port, 1, 2) == ([0x00, 0x08], sdk.COMM_SUCCESS, 0)  # goal 2048
         assert handler.readRx(port, 2, 2) == ([0x00, 0x08], sdk.COMM_SUCCESS, 0)  # present 2048
-        assert handler.ping(port, 2)[0] == 320
+        assert _answered(handler.ping, port, 2)[0] == 320
 
 
 def test_feetech_sdk_drives_sts_servos() -> None:
@@ -154,12 +166,13 @@ def test_feetech_sdk_takes_a_late_reply_for_the_next_read_and_the_bus_port_does_
         for make, expected_wrong in ((sdk.PortHandler, True), (_FeetechPort, False)):
             port = make(bus.port)
             assert port.openPort() and port.setBaudRate(1_000_000)
+            port.ser.timeout = 0.001
             handler = sdk.PacketHandler(0)
             bus.faults(1).late_reply_s = 0.06
             assert handler.read2ByteTxRx(port, 1, 56)[1] == sdk.COMM_RX_TIMEOUT  # 34 ms timeout
             time.sleep(0.08)  # the late reply arrives
             bus.faults(1).late_reply_s = 0.0
-            number, result, _ = handler.read2ByteTxRx(port, 1, 3)  # the model number
+            number, result, _ = _answered(handler.read2ByteTxRx, port, 1, 3)  # the model number
             assert result == sdk.COMM_SUCCESS and (number != 777) is expected_wrong
             port.closePort()
 
