@@ -30,7 +30,7 @@ from shc_cli.backends.terrain import parse_terrain
 from shc_cli.control.controller import Command, Controller, RobotState
 from shc_cli.domain.config import SimulationConfig
 from shc_cli.domain.simulate import simulate
-from shc_cli.spec.checks import load_checked
+from shc_cli.validation import load_checked
 
 LAYERS = ("physics", "+ joint-state samples", "+ servo commands", "+ controller", "+ sensor read")
 

@@ -104,7 +104,7 @@ class StudyResult:
 
 def load_robot(robot: str | Path = "bullet") -> Robot:
     """A robot file or bundled name, fully expanded and validated (``shc validate``'s checks)."""
-    from shc_cli.spec.checks import load_checked
+    from shc_cli.validation import load_checked
 
     return load_checked(str(robot), None)[0]
 

@@ -129,7 +129,7 @@ def test_readings_are_those_after_the_last_physics_step(substeps: int) -> None:
     from shc_cli.backends.simulated import open_world
     from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.controller import Command, Controller, RobotState
-    from shc_cli.spec.checks import load_checked
+    from shc_cli.validation import load_checked
 
     robot, gait, _ = load_checked("bullet", "tripod")
     world = open_world(robot, EngineOptions(parse_terrain("flat"), substeps))
@@ -157,7 +157,7 @@ def test_mean_joint_speed_from_the_displacement_equals_the_mean_of_every_physics
     from shc_cli.backends.simulated import open_world
     from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.controller import Command, Controller, RobotState
-    from shc_cli.spec.checks import load_checked
+    from shc_cli.validation import load_checked
 
     robot, gait, _ = load_checked("bullet", "tripod")
     world = open_world(robot, EngineOptions(parse_terrain("flat"), 4))

@@ -112,7 +112,7 @@ def test_rough_terrain_mode_on_flat_ground_walks_as_usual(tmp_path: Path) -> Non
     """Without sensing, rough-terrain mode only re-derives the default tips from where the feet land; on flat
     ground that is where they were, so the planned joints equal the normal mode's."""
     from shc_cli.control.controller import Command, Controller, RobotState
-    from shc_cli.spec.checks import load_checked
+    from shc_cli.validation import load_checked
 
     robot_file = tmp_path / "bullet_rough.toml"
     robot_file.write_text(ROUGH_ROBOT, encoding="utf-8")

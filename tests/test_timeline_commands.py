@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from shc_cli.control.controller import Command
+from shc_cli.loop.input_sources import timeline_commands
 from shc_cli.spec.timeline import EVENTS, Timeline, constant
 
 
@@ -40,7 +41,7 @@ change = st.fixed_dictionaries({}, optional={
 @given(st.lists(st.tuples(st.integers(-3, 40), change), max_size=6), st.integers(0, 45))
 def test_commands_on_demand_equal_the_list_of_every_cycle(changes: list[tuple[int, dict[str, object]]],
                                                           cycles: int) -> None:
-    made = Timeline(changes).commands(cycles)
+    made = timeline_commands(Timeline(changes), cycles)
     expected = every_cycle(changes, cycles)
     assert len(made) == cycles
     assert list(made) == expected
@@ -50,7 +51,7 @@ def test_commands_on_demand_equal_the_list_of_every_cycle(changes: list[tuple[in
 def test_a_ten_hour_timeline_holds_no_command_per_cycle() -> None:
     tracemalloc.start()
     try:
-        commands = constant((0.5, 0.0, 0.0)).commands(3_600_000)  # 10 h at 100 Hz
+        commands = timeline_commands(constant((0.5, 0.0, 0.0)), 3_600_000)  # 10 h at 100 Hz
         last = commands[len(commands) - 1]
         _, peak = tracemalloc.get_traced_memory()
     finally:

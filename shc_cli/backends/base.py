@@ -10,33 +10,67 @@
     reading = backend.read()            # what the robot measured at the end of the period
     backend.fault()                     # a reason to stop at once (servo fault), or None
 
-A backend that measures the ``log.csv`` quantities (:func:`shc_cli.loop.runlog.log_columns`) also gives
-:meth:`MeasuringBackend.measured_row`; the kinematic backend measures nothing and its runs are logged as the
-controller's own tables (``joints.csv``, ``tips.csv``, ``body.csv``).
+A backend that measures the ``log.csv`` quantities also gives :meth:`MeasuringBackend.measured`: the data, as a
+:class:`Measured`; the loop's recorder (:class:`shc_cli.loop.runlog.LogRecorder`) formats it. The kinematic backend
+measures nothing and its runs are logged as the controller's own tables (``joints.csv``, ``tips.csv``, ``body.csv``).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol, TypeVar, runtime_checkable
 
 if TYPE_CHECKING:
     import numpy as np
 
+    from shc_cli.backends.engine import Reading
     from shc_cli.control.controller import Command, CycleOutput
     from shc_cli.control.sensing import Sensors
 
 MEASURED_BODY_COLUMNS = ["x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz", "wx", "wy", "wz", "imu_qx",
                          "imu_qy", "imu_qz", "imu_qw", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y", "acc_z",
                          "height", "power_w"]
-"""The body and IMU quantities a measuring backend reports (:meth:`MeasuringBackend.measured_row`), as
-columns of ``log.csv`` after the per-leg ones: ground-truth position [m], roll/pitch/yaw [rad],
-world linear [m/s] and angular [rad/s] velocity, IMU quaternion (x, y, z, w, body → world), gyro [rad/s],
-specific force [m/s²], body height above the terrain [m], total servo power [W]."""
+"""The body and IMU quantities a measuring backend reports (:meth:`Measured.body_values`), as columns of ``log.csv``
+after the per-leg ones: ground-truth position [m], roll/pitch/yaw [rad], world linear [m/s] and angular [rad/s]
+velocity, IMU quaternion (x, y, z, w, body → world), gyro [rad/s], specific force [m/s²], body height above the
+terrain [m], total servo power [W]."""
 ReadingT = TypeVar("ReadingT")
 """What a backend's :meth:`Backend.read` returns: the physics engine's
 :class:`~shc_cli.backends.engine.Reading`, the servo bus's :class:`~shc_cli.hardware.bus.BusState`, or ``None``
 (the kinematic backend measures nothing)."""
 ReadingT_co = TypeVar("ReadingT_co", covariant=True)
+
+
+@dataclass(frozen=True)
+class Measured:
+    """What a measuring backend measured at the end of a cycle; ``None``: not measured (logged as 0).
+
+    Attributes:
+        joints: the real joints' positions in servo order (legs in id order, joints body to tip) ``(J,)`` [rad].
+        torques: their torques ``(J,)`` [N·m].
+        power: their servos' electrical power ``(J,)`` [W].
+        foot_forces: contact normal force on each foot ``(L,)`` [N].
+        foot_contact: whether each foot touches anything ``(L,)``.
+        body: the body's ground-truth pose and twist, IMU and height (an engine's reading).
+    """
+
+    joints: np.ndarray
+    torques: np.ndarray
+    power: np.ndarray | None = None
+    foot_forces: np.ndarray | None = None
+    foot_contact: np.ndarray | None = None
+    body: Reading | None = None
+
+    def total_power(self) -> float:
+        """Sum of the servos' power [W] (0 when not measured)."""
+        return float(self.power.sum()) if self.power is not None else 0.0
+
+    def body_values(self) -> list[np.ndarray | tuple[float, ...]]:
+        """The values of :data:`MEASURED_BODY_COLUMNS`, in that order (``None`` when the body is not measured)."""
+        r = self.body
+        assert r is not None
+        return [r.position, r.rpy, r.linear_velocity, r.angular_velocity, r.orientation, r.angular_rate,
+                r.linear_acceleration, (r.body_height, self.total_power())]
 
 
 @runtime_checkable
@@ -78,11 +112,11 @@ class Backend(Protocol[ReadingT_co]):
 
 
 class MeasuringBackend(Backend[ReadingT], Protocol[ReadingT]):
-    """A backend whose reading fills the measured columns of ``log.csv``."""
+    """A backend whose reading fills the measured columns of ``log.csv`` (the type of
+    :class:`~shc_cli.loop.runlog.LogRecorder`'s backend)."""
 
-    def measured_row(self, reading: ReadingT) -> np.ndarray:
-        """The measured ``log.csv`` values of ``reading`` in :func:`shc_cli.loop.runlog.log_columns` order (from the
-        measured joints to ``power_w``)."""
+    def measured(self, reading: ReadingT) -> Measured:
+        """What ``reading`` measured."""
         ...
 
 

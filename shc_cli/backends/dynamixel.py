@@ -11,19 +11,26 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING
+from typing import IO, TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from shc_cli.backends.base import MEASURED_BODY_COLUMNS
-from shc_cli.backends.engine import servo_slots
+from shc_cli.backends.base import MEASURED_BODY_COLUMNS, Measured
 from shc_cli.control.sensing import Sensors
+from shc_cli.model.chains import joint_slots
 
 if TYPE_CHECKING:
     from shc_cli.control.controller import CycleOutput
     from shc_cli.hardware.bus import BusState, ServoBus
-    from shc_cli.loop.runlog import RunDirectory
     from shc_cli.spec.robot import Robot
+
+class Tables(Protocol):
+    """Where ``timing.csv`` goes: a run directory (:class:`shc_cli.loop.runlog.RunDirectory`)."""
+
+    def table(self, name: str, columns: list[str], formats: list[str]) -> tuple[IO[str], str]:
+        """A new table: its file and its row format (``cycle``, ``t`` first)."""
+        ...
+
 
 UNMEASURED = ["<LEG>_<joint>_power", "<LEG>_force", "<LEG>_contact", *MEASURED_BODY_COLUMNS]
 """``log.csv`` columns a robot on servos does not measure (written as 0)."""
@@ -43,7 +50,7 @@ class DynamixelBackend:
         sleep: the wait [s] (injectable for tests).
     """
 
-    def __init__(self, robot: Robot, bus: ServoBus, dry_run: bool, run: RunDirectory | None = None,
+    def __init__(self, robot: Robot, bus: ServoBus, dry_run: bool, run: Tables | None = None,
                  on_fault: str = "torque-off", on_stop: str = "torque-off",
                  clock: Callable[[], float] = time.perf_counter, sleep: Callable[[float], None] = time.sleep) -> None:
         from shc_cli.model.chains import Chains
@@ -55,8 +62,7 @@ class DynamixelBackend:
         chains = Chains.from_robot(robot)
         self.lower, self.upper = chains.lower, chains.upper
         self.max_step = chains.max_vel * self.dt * 1.5  # rate limit: 1.5 × the joint speed limit per cycle
-        self.rows, self.cols, _ = servo_slots(robot)
-        self.zeros = np.zeros(len(self.rows) + 2 * len(robot.legs) + len(MEASURED_BODY_COLUMNS))
+        self.rows, self.cols = joint_slots(robot)
         self.timing = run.table("timing.csv", ["cycle_time_ms", "overrun"], ["%.4f", "%d"]) if run else None
         self.state: BusState | None = None
         self.goals: np.ndarray | None = None
@@ -110,9 +116,10 @@ class DynamixelBackend:
         self.state = self.bus.read_state()
         return self.state
 
-    def measured_row(self, reading: BusState) -> np.ndarray:
+    def measured(self, reading: BusState) -> Measured:
+        """Positions and currents (logged as the torque column, in A: the servo does not measure its torque)."""
         rows, cols = self.rows, self.cols
-        return np.concatenate((reading.positions[rows, cols], reading.currents[rows, cols] / 1000.0, self.zeros))
+        return Measured(reading.positions[rows, cols], reading.currents[rows, cols] / 1000.0)
 
     def fault(self) -> str | None:
         """The first servo that failed and why (the rest of its bus unread), or the hardware errors named."""

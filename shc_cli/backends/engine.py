@@ -176,14 +176,6 @@ def spawn_height(robot: Robot, terrain: Terrain, joints: np.ndarray, fixed_base:
     return ground + SPAWN_GAP + max(-float(tips[i, 2]) + feet[i] for i in range(len(feet)))
 
 
-def servo_slots(robot: Robot) -> tuple[np.ndarray, np.ndarray, int]:
-    """Row (leg) and column (joint) of each servo in the padded ``(L, n)`` arrays, and ``n``."""
-    counts = [len(leg.joints) for leg in robot.legs.values()]
-    rows = np.array([leg for leg, count in enumerate(counts) for _ in range(count)], dtype=np.intp)
-    cols = np.array([k for count in counts for k in range(count)], dtype=np.intp)
-    return rows, cols, max(counts)
-
-
 def tilt(rpy: np.ndarray) -> float:
     """Angle between the body's z axis and the vertical [rad]."""
     roll, pitch = float(rpy[0]), float(rpy[1])

@@ -11,8 +11,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from shc_cli.backends.engine import servo_slots
+from shc_cli.backends.base import Measured
 from shc_cli.control.sensing import Sensors
+from shc_cli.model.chains import joint_slots
 
 if TYPE_CHECKING:
     from shc_cli.backends.engine import Engine, EngineOptions, Reading
@@ -43,7 +44,7 @@ class SimulatedBackend:
 
     def __init__(self, robot: Robot, world: Engine) -> None:
         self.robot, self.world = robot, world
-        self.rows, self.cols, _ = servo_slots(robot)
+        self.rows, self.cols = joint_slots(robot)
         self.reading: Reading | None = None
         self._running = False
         self._first = True  # the spawn reading is not fed to the controller (it starts from its joints)
@@ -79,14 +80,10 @@ class SimulatedBackend:
             world.release_stand()  # started up on the stand: now on its own feet
         return reading
 
-    def measured_row(self, reading: Reading) -> np.ndarray:
+    def measured(self, reading: Reading) -> Measured:
         rows, cols = self.rows, self.cols
-        power = reading.servo_power[rows, cols]
-        total = float(power.sum())
-        return np.concatenate((reading.joints[rows, cols], reading.joint_efforts[rows, cols], power,
-                               reading.foot_forces, reading.foot_contact, reading.position, reading.rpy,
-                               reading.linear_velocity, reading.angular_velocity, reading.orientation,
-                               reading.angular_rate, reading.linear_acceleration, (reading.body_height, total)))
+        return Measured(reading.joints[rows, cols], reading.joint_efforts[rows, cols], reading.servo_power[rows, cols],
+                        reading.foot_forces, reading.foot_contact, reading)
 
     def fault(self) -> str | None:
         return None

@@ -20,8 +20,8 @@ def run_replay(source: Path, robot_name: str, gait_name: str | None, as_json: bo
     from shc_cli.replay import replay
     from shc_cli.replay.opening import open_source
     from shc_cli.replay.report import differences_csv, plot_differences, summary, text
-    from shc_cli.spec.checks import load_checked
     from shc_cli.spec.timeline import constant
+    from shc_cli.validation import load_checked
 
     if tolerance_joints is not None and not (math.isfinite(tolerance_joints) and tolerance_joints >= 0.0):
         raise SpecError([Issue(None, None, "--tolerance-joints", f"{tolerance_joints:g} is not a non-negative "

@@ -31,7 +31,7 @@ def _kind(name: str) -> str:
 
 def run_validate(files: list[str], *, show: bool) -> None:
     """Validate every file; print a summary per robot; raise one SpecError listing every problem."""
-    from shc_cli.spec.checks import check_robot
+    from shc_cli.validation import check_robot
 
     issues: list[Issue] = []
     robots: list[LoadedRobot] = []
@@ -66,7 +66,7 @@ def run_validate(files: list[str], *, show: bool) -> None:
 
 def _check_gait_against(gait: LoadedGait, robots: list[Robot]) -> list[Issue]:
     """Check a gait against the robots of the same invocation whose legs it names; if it fits none, say so."""
-    from shc_cli.spec.checks import check_gait, check_gait_pattern
+    from shc_cli.validation import check_gait, check_gait_pattern
 
     if not robots:
         return check_gait_pattern(gait)
@@ -85,7 +85,7 @@ def _check_own_gait(loaded: LoadedRobot) -> list[Issue]:
     Problems are reported at walker.gait in the robot file: choosing that gait is the robot's doing,
     and the gait file may be a bundled one the user never edits.
     """
-    from shc_cli.spec.checks import check_gait
+    from shc_cli.validation import check_gait
 
     file, _ = loaded.where(("walker", "gait"))
     try:

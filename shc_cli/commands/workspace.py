@@ -23,7 +23,7 @@ def run_workspace(
     out: Path | None,
     json_output: bool,
 ) -> None:
-    from shc_cli.spec.checks import load_checked
+    from shc_cli.validation import load_checked
 
     robot, gait, _ = load_checked(robot_name, gait_name)
     if bearing_count < 1 or 360 % bearing_count:

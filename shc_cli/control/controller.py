@@ -40,7 +40,7 @@ from shc_cli.model.chains import Chains, FloatArray
 from shc_cli.model.workspace import Workplane, plane_at, search_workspaces, volumetric_workspaces, walkspace
 from shc_cli.spec.autopose import AutoPoseSet
 from shc_cli.spec.gait import Gait
-from shc_cli.spec.robot import Robot
+from shc_cli.spec.robot import ADJUSTABLE, ADJUSTABLE_ADMITTANCE, ADJUSTABLE_WALKER, Robot
 
 UNDEFINED = float(2147483647)
 """OpenSHC's 'undefined position' value, published before a tip has been posed."""
@@ -58,7 +58,7 @@ class Command:
         gait: a gait to switch to; the robot stops, changes gait and walks on when inputs ask for it.
         cruise: switch cruise control on (True) or off (False); None leaves it as it is.
         parameters: run-time parameter changes ``{name: value}`` (clamped to the parameter's range); one is
-            applied per cycle, in the given order, as OpenSHC does. Names: see :data:`ADJUSTABLE`.
+            applied per cycle, in the given order, as OpenSHC does. Names: see :data:`~shc_cli.spec.robot.ADJUSTABLE`.
         leg_toggle: a leg id to switch between walking and manual manipulation (at most two manual legs);
             the robot stops first, then every leg steps so the chosen one is lifted (study §9.5).
         tip_velocity: per manual leg, a velocity input (x, y, z) each −1..1: in ``tip_control`` the tip moves at
@@ -85,11 +85,6 @@ _UNKNOWN, _RUNNING = RobotState.UNKNOWN, RobotState.RUNNING
 _STOPPED = WalkState.STOPPED
 _WALKING_LEG = int(LegMode.WALKING)
 _IMMEDIATE_ALL = PoseReset.IMMEDIATE_ALL
-
-
-ADJUSTABLE = ("step_frequency", "swing_height", "swing_width", "step_depth", "stance_span_modifier",
-              "virtual_mass", "virtual_stiffness", "virtual_damping_ratio", "force_gain")
-"""Parameters that can change while running (OpenSHC's dynamic parameters, study §9.6)."""
 
 
 @dataclass
@@ -280,8 +275,8 @@ class Controller(LegManipulation):
         self.contact_detector = ContactDetector(len(robot.legs), adm.touchdown_threshold, adm.liftoff_threshold)
         self.contacts = np.zeros(len(robot.legs), dtype=bool)
         """Feet on the ground by the force thresholds (touchdown/lift-off), updated when sensors report forces."""
-        self.parameters = {name: getattr(walker_spec, name).default for name in ADJUSTABLE[:5]}
-        self.parameters.update({name: getattr(admittance, name).default for name in ADJUSTABLE[5:]})
+        self.parameters = {name: getattr(walker_spec, name).default for name in ADJUSTABLE_WALKER}
+        self.parameters.update({name: getattr(admittance, name).default for name in ADJUSTABLE_ADMITTANCE})
 
     # -- inputs ------------------------------------------------------------------------------------------------
 

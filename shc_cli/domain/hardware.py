@@ -145,7 +145,7 @@ def run_hardware(config: HardwareConfig) -> RunResult:
     backend: DynamixelBackend | None = None
     faulted = False
     try:
-        source = _source(kind, argument, robot, gait, inputs.timeline.commands(inputs.cycles), c.watchdog)
+        source = _source(kind, argument, robot, gait, inputs.commands(), c.watchdog)
         bus.open()
         problems = bus.check()
         if problems:

@@ -43,7 +43,7 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
     writer.write_robot(model)
     record = PlanRecord(controller)
     start_up = StartUp(round((model.start_up.time_to_start + START_UP_MARGIN_S) / model.time_delta))
-    loop = RunLoop(controller, KinematicBackend(), TimelineInput(inputs.timeline.commands(inputs.cycles)), writer,
+    loop = RunLoop(controller, KinematicBackend(), TimelineInput(inputs.commands()), writer,
                    start_up, observers=[record], flush_every=500)
     started = time.perf_counter()
 

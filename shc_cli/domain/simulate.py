@@ -62,7 +62,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
             record = PhysicsRecord(robot, backend, o.airborne)
             counter = None if progress is None else _Progress(progress, inputs.cycles)
             observers: list[Observer[Reading]] = [record] if counter is None else [record, counter]
-            loop = RunLoop(controller, backend, TimelineInput(inputs.timeline.commands(inputs.cycles)),
+            loop = RunLoop(controller, backend, TimelineInput(inputs.commands()),
                            LogRecorder(run, robot, backend),
                            StartUp(round((robot.start_up.time_to_start + START_UP_MARGIN_S) / robot.time_delta)),
                            observers=observers, flush_every=200)

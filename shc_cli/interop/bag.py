@@ -38,8 +38,9 @@ from shc_cli.control.states import RobotState, WalkState
 from shc_cli.errors import Issue, OutputError, SpecError
 from shc_cli.interop import mcap_chunks
 from shc_cli.interop.batch import BatchSerializer
-from shc_cli.loop.runlog import ROBOT_FILE, joint_slots
+from shc_cli.loop.runlog import ROBOT_FILE
 from shc_cli.loop.runread import RunLog
+from shc_cli.model.chains import joint_slots
 
 FORMATS = ("mcap", "sqlite3", "ros1")
 ROBOT_STATES = {state.name: int(state) for state in RobotState}

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from shc_cli.loop.runlog import joint_slots
 from shc_cli.loop.runread import RunLog, bad_run, checked_summary
+from shc_cli.model.chains import joint_slots
 
 
 def read_bag_run(path: Path) -> RunLog:

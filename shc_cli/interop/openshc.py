@@ -14,10 +14,9 @@ from pathlib import Path
 from typing import Any
 
 from shc_cli.errors import Issue, SpecError
+from shc_cli.spec.robot import ADJUSTABLE_ADMITTANCE, ADJUSTABLE_WALKER
 from shc_cli.spec.toml_out import dump_toml
 
-ADJUSTABLE_WALKER = ("step_frequency", "swing_height", "swing_width", "step_depth", "stance_span_modifier")
-ADJUSTABLE_ADMITTANCE = ("virtual_mass", "virtual_stiffness", "virtual_damping_ratio", "force_gain")
 SIMPLE = {
     # OpenSHC name: (shc table, shc name)
     "body_clearance": ("walker", "body_clearance"),
@@ -212,8 +211,8 @@ def import_openshc(robot_yaml: Path, gait_yaml: Path | None, pose_yaml: Path | N
     """Write ``out/robots/NAME.toml`` (+ ``out/gaits/*.toml``, ``out/poses/*.toml``); returns the files, each
     checked by loading it back. The robot is named after the YAML file."""
     from shc_cli.outputs import write_text
-    from shc_cli.spec.checks import check_robot
     from shc_cli.spec.loading import load_robot
+    from shc_cli.validation import check_robot
 
     params = _read_yaml(robot_yaml, "parameters")
     name = robot_yaml.stem

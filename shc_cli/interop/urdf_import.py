@@ -718,8 +718,8 @@ def import_urdf(file: Path, out: Path | None = None, name: str | None = None, le
 def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips: list[str] | None,
                  clearance: float | None, reach: float | None, snap: float, args: dict[str, str] | None) -> Result:
     from shc_cli.outputs import write_text
-    from shc_cli.spec.checks import check_robot
     from shc_cli.spec.loading import load_robot
+    from shc_cli.validation import check_robot
 
     source = read_source(file, args or {}, snap)
     model = parse_urdf(file, source.snapped_text)

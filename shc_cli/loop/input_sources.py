@@ -22,6 +22,7 @@ pose velocity and a requested robot state (``running`` at first) hold until chan
 
 from __future__ import annotations
 
+import bisect
 import contextlib
 import json
 import logging
@@ -30,13 +31,15 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Sequence
-from typing import IO, Any
+from typing import IO, Any, overload
 
 from shc_cli.control.controller import Command, RobotState
+from shc_cli.control.pose import PoseReset
 from shc_cli.errors import ShcError, install_hint
 from shc_cli.events import NOTICE
 from shc_cli.events import event as log_event
 from shc_cli.spec.gait import Gait
+from shc_cli.spec.timeline import EVENTS, Timeline
 
 log = logging.getLogger(__name__)
 
@@ -49,6 +52,81 @@ DEAD_ZONE = 0.1
 
 class InputError(ShcError):
     """An input device is missing or unusable (one line, exit 2)."""
+
+
+def timeline_commands(timeline: Timeline, cycles: int) -> TimelineCommands:
+    """The command of every cycle ``0 … cycles − 1`` of ``timeline``, made when asked for (memory independent of
+    ``cycles``)."""
+    return TimelineCommands(timeline.changes, cycles)
+
+
+def _enums(change: dict[str, object]) -> dict[str, object]:
+    """A timeline change with its enum names (``pose_reset``, ``state_request``) turned into the controller's
+    :class:`PoseReset` and :class:`RobotState`."""
+    out = dict(change)
+    if isinstance(reset := out.get("pose_reset"), str):
+        out["pose_reset"] = PoseReset[reset.upper()]
+    if isinstance(state := out.get("state_request"), str):
+        out["state_request"] = RobotState[state.upper()]
+    return out
+
+
+class TimelineCommands(Sequence[Command]):
+    """The commands of a timeline's cycles ``0 … cycles − 1`` as a sequence built on demand.
+
+    A run of hours (or ``--duration 1e9``) holds one entry per change, not one command per cycle: the command of
+    a cycle is made when it is read. Every read makes a new :class:`Command` (callers may change theirs).
+
+    Args:
+        changes: the timeline's ``(cycle, change)`` pairs; a change holds from its cycle on (one-off requests,
+            :data:`~shc_cli.spec.timeline.EVENTS`, only at it).
+        cycles: how many cycles.
+    """
+
+    def __init__(self, changes: list[tuple[int, dict[str, object]]], cycles: int) -> None:
+        self.cycles = cycles
+        self.starts: list[int] = []
+        """First cycle of each segment (ascending): where a change (or several on one cycle) takes effect."""
+        self.held: list[dict[str, object]] = []
+        """Inputs holding over each segment."""
+        self.events: list[dict[str, object]] = []
+        """One-off requests made at each segment's first cycle."""
+        current: dict[str, object] = {}
+        for cycle, change in sorted(changes, key=lambda c: c[0]):
+            start = max(cycle, 0)
+            if start >= cycles:
+                break
+            if not self.starts or self.starts[-1] != start:
+                self.starts.append(start)
+                self.events.append({})
+                self.held.append({})
+            change = _enums(change)
+            current = {**current, **{k: v for k, v in change.items() if k not in EVENTS}}
+            self.held[-1] = current
+            self.events[-1].update({k: v for k, v in change.items() if k in EVENTS})
+
+    def __len__(self) -> int:
+        return self.cycles
+
+    @overload
+    def __getitem__(self, index: int) -> Command: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> list[Command]: ...
+
+    def __getitem__(self, index: int | slice) -> Command | list[Command]:
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(self.cycles))]
+        if index < 0:
+            index += self.cycles
+        if not 0 <= index < self.cycles:
+            raise IndexError("timeline cycle out of range")
+        segment = bisect.bisect_right(self.starts, index) - 1
+        if segment < 0:
+            return Command()
+        if index == self.starts[segment]:
+            return Command(**self.held[segment], **self.events[segment])  # type: ignore[arg-type]
+        return Command(**self.held[segment])  # type: ignore[arg-type]
 
 
 class TimelineInput:

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from shc_cli.errors import Issue, SpecError
+from shc_cli.loop.input_sources import TimelineCommands, timeline_commands
 from shc_cli.spec.autopose import AutoPoseSet, compatibility_issues, load_auto_pose_set
 from shc_cli.spec.gait import Gait
 from shc_cli.spec.robot import Robot
@@ -123,6 +124,10 @@ class RunInputs:
     cycles: int
     pose_sets: dict[str, AutoPoseSet]
 
+    def commands(self) -> TimelineCommands:
+        """The command of every cycle of the run, made when asked for."""
+        return timeline_commands(self.timeline, self.cycles)
+
 
 def load_inputs(robot_name: str, gait_name: str | None, velocity: str | tuple[float, float, float],
                 duration: float | None, commands: Path | None, default_s: float, walking: bool = True,
@@ -140,7 +145,7 @@ def load_inputs(robot_name: str, gait_name: str | None, velocity: str | tuple[fl
         robot_change: a callable ``Robot → Robot`` applied after loading (``simulate``'s feedback switches).
         check_fit: check the legs and gaits the timeline names against the robot.
     """
-    from shc_cli.spec.checks import load_checked
+    from shc_cli.validation import load_checked
 
     robot, gait, loaded = load_checked(robot_name, gait_name)
     if callable(robot_change):

@@ -34,9 +34,10 @@ from typing import IO, TYPE_CHECKING, Generic, TypeVar
 
 import numpy as np
 
-from shc_cli.backends.base import MEASURED_BODY_COLUMNS
+from shc_cli.backends.base import MEASURED_BODY_COLUMNS, Measured
 from shc_cli.errors import OutputError
 from shc_cli.loop.stop_signals import StopSignals
+from shc_cli.model.chains import joint_slots
 from shc_cli.spec.robot import Robot
 
 if TYPE_CHECKING:  # the controller (and numba) only for the annotation: readers of runs stay light
@@ -178,15 +179,6 @@ def joint_columns(robot: Robot, suffix: str = "") -> list[str]:
     return [f"{leg}_{joint}{suffix}" for leg, spec in robot.legs.items() for joint in spec.joints]
 
 
-def joint_slots(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
-    """Rows (legs) and columns (joints) of every real joint in the padded ``(L, n)`` arrays, in
-    :func:`joint_columns` (servo, log) order: ``padded[rows, cols]`` is the log's joint values."""
-    pairs = [(i, k) for i, leg in enumerate(robot.legs.values()) for k in range(len(leg.joints))]
-    return (np.array([i for i, _ in pairs], dtype=np.intp), np.array([k for _, k in pairs], dtype=np.intp))
-
-
-
-
 def log_columns(robot: Robot) -> list[str]:
     """The columns of ``log.csv`` after ``cycle`` and ``t``."""
     legs = list(robot.legs)
@@ -194,11 +186,6 @@ def log_columns(robot: Robot) -> list[str]:
             + joint_columns(robot, "_power") + [f"{leg}_force" for leg in legs] + [f"{leg}_contact" for leg in legs]
             + MEASURED_BODY_COLUMNS + ["cmd_vx", "cmd_vy", "cmd_wz", "vel_x", "vel_y", "vel_wz", "robot_state",
                                        "walk_state"])
-
-
-def measured_width(robot: Robot) -> int:
-    """How many values a backend's ``measured_row`` gives (the measured joints to ``power_w``)."""
-    return len(log_columns(robot)) - len(joint_columns(robot)) - 8
 
 
 class LogRecorder(Generic[ReadingT]):
@@ -216,12 +203,26 @@ class LogRecorder(Generic[ReadingT]):
         self.handle, self.row = run.table("log.csv", columns, ["%.6g"] * (len(columns) - 2) + ["%s", "%s"])
         self.rows, self.cols = joint_slots(robot)
         self.dt = robot.time_delta
-        self.measured_row = backend.measured_row
+        self.measured = backend.measured
+        self.zero_joints = np.zeros(len(self.rows))
+        self.zero_legs = np.zeros(len(robot.legs))
+        self.zero_body = np.zeros(len(MEASURED_BODY_COLUMNS) - 1)
+
+    def measured_values(self, measured: Measured) -> list[np.ndarray | tuple[float, ...]]:
+        """The measured columns of ``log.csv`` (measured joints to ``power_w``); what is not measured is 0."""
+        def given(values: np.ndarray | None, zeros: np.ndarray) -> np.ndarray:
+            return zeros if values is None else values
+
+        parts = [measured.joints, measured.torques, given(measured.power, self.zero_joints),
+                 given(measured.foot_forces, self.zero_legs), given(measured.foot_contact, self.zero_legs)]
+        if measured.body is None:
+            return [*parts, self.zero_body, (measured.total_power(),)]
+        return [*parts, *measured.body_values()]
 
     def record(self, cycle: int, command: Command, out: CycleOutput, applied: np.ndarray,
                reading: ReadingT) -> None:
-        values = np.concatenate((applied[self.rows, self.cols], self.measured_row(reading), command.velocity,
-                                 out.velocity))
+        values = np.concatenate((applied[self.rows, self.cols], *self.measured_values(self.measured(reading)),
+                                 command.velocity, out.velocity))
         self.handle.write(self.row % (cycle, cycle * self.dt, *values.tolist(), out.robot_state.name,
                                       out.walk_state.name))
 

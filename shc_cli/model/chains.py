@@ -51,6 +51,13 @@ def dh_matrix(d: FloatArray, theta: FloatArray, r: FloatArray, alpha: FloatArray
     return out
 
 
+def joint_slots(robot: Robot) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Rows (legs) and columns (joints) of every real joint in the padded ``(L, n)`` arrays, legs in id order and
+    joints body to tip — the servo and ``log.csv`` column order: ``padded[rows, cols]`` lists the real joints."""
+    pairs = [(i, k) for i, leg in enumerate(robot.legs.values()) for k in range(len(leg.joints))]
+    return (np.array([i for i, _ in pairs], dtype=np.intp), np.array([k for _, k in pairs], dtype=np.intp))
+
+
 def _kernels() -> Any:
     """The numba kernels, imported on first use: numpy-only users of chains (run readers, exporters) stay light."""
     from shc_cli.model import kernels

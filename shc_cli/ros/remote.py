@@ -22,11 +22,11 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
-from shc_cli.control.controller import ADJUSTABLE, Command, RobotState
+from shc_cli.control.controller import Command, RobotState
 from shc_cli.control.pose import PoseReset
 from shc_cli.ros.node import RosNode
 from shc_cli.spec.gait import Gait
-from shc_cli.spec.robot import Robot
+from shc_cli.spec.robot import ADJUSTABLE, Robot
 
 log = logging.getLogger(__name__)
 

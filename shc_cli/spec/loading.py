@@ -451,7 +451,7 @@ def one_per_mistake(issues: list[Issue], mirrors: Mapping[str, tuple[str, set[st
 
 
 def load_robot(name_or_path: str | Path) -> LoadedRobot:
-    """Read, expand and validate a robot file (schema only; see :mod:`shc_cli.spec.checks`)."""
+    """Read, expand and validate a robot file (schema only; see :mod:`shc_cli.validation`)."""
     path = resolve("robots", name_or_path)
     data, documents = _read_with_extends(path)
     located = Located(path=path, origin_map=origins(data), documents=documents)

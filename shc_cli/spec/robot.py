@@ -372,6 +372,14 @@ class Hardware(Strict):
         default_factory=dict, description="one entry per joint, keyed '<LEG>_<joint>' (e.g. AR_coxa)")
 
 
+ADJUSTABLE_WALKER = ("step_frequency", "swing_height", "swing_width", "step_depth", "stance_span_modifier")
+"""The ``[walker]`` parameters that can change while running (each an :class:`Adjustable`)."""
+ADJUSTABLE_ADMITTANCE = ("virtual_mass", "virtual_stiffness", "virtual_damping_ratio", "force_gain")
+"""The ``[admittance]`` parameters that can change while running (each an :class:`Adjustable`)."""
+ADJUSTABLE = ADJUSTABLE_WALKER + ADJUSTABLE_ADMITTANCE
+"""Parameters that can change while running (OpenSHC's dynamic parameters, study §9.6)."""
+
+
 class Robot(Strict):
     """A fully expanded robot: what ``shc validate --show`` prints and the controller uses."""
 

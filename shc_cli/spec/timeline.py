@@ -45,27 +45,26 @@ changed; ``gait``, ``parameters``, ``cruise`` and ``leg_toggle`` are requests ma
 
 from __future__ import annotations
 
-import bisect
 import csv
-from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Literal, overload
+from typing import Annotated, Literal
 
 from pydantic import Field, ValidationError, model_validator
 
-from shc_cli.control.controller import ADJUSTABLE, Command, RobotState
-from shc_cli.control.pose import PoseReset
 from shc_cli.errors import Issue, NotFoundError, SpecError
 from shc_cli.spec.gait import Gait
 from shc_cli.spec.loading import Located, _describe, load_gait
-from shc_cli.spec.robot import Strict
+from shc_cli.spec.robot import ADJUSTABLE, Strict
 from shc_cli.spec.source import Document, origins, unwrap
 
 Vector3 = Annotated[tuple[float, float, float], Field(strict=False)]
 """Three numbers, written as a TOML array."""
 
 ResetName = Literal["no_reset", "z_and_yaw", "x_and_y", "pitch_and_roll", "all", "immediate_all"]
+"""Manual pose reset modes: the controller's ``PoseReset`` members, in lower case."""
+StateName = Literal["packed", "ready", "running"]
+"""Robot states a script can request: the controller's ``RobotState`` members, in lower case."""
 
 
 class Step(Strict):
@@ -81,7 +80,7 @@ class Step(Strict):
     parameters: dict[str, float] = Field(default_factory=dict,
                                          description="run-time parameter changes, e.g. { step_frequency = 1.5 }")
     cruise: bool | None = Field(None, description="cruise control on or off")
-    state: Literal["packed", "ready", "running"] | None = Field(
+    state: StateName | None = Field(
         None, description="requested robot state (reached one state at a time; sequences run as configured)")
     leg_toggle: str | None = Field(None, description="leg id to switch between walking and manual manipulation")
     tip_velocity: dict[str, Vector3] = Field(
@@ -108,74 +107,20 @@ EVENTS = ("gait", "parameters", "cruise", "leg_toggle")
 
 @dataclass
 class Timeline:
-    """Command changes by RUNNING-relative cycle; :meth:`commands` gives the inputs of every cycle."""
+    """Command changes by RUNNING-relative cycle; :func:`shc_cli.loop.input_sources.timeline_commands` gives the
+    command of every cycle.
+
+    A change maps the controller's ``Command`` fields to values: ``velocity``, ``pose_velocity`` (tuples),
+    ``pose_reset`` (a :data:`ResetName`), ``state_request`` (a :data:`StateName`), ``gait`` (a :class:`Gait`),
+    ``parameters``, ``cruise``, ``leg_toggle``, ``tip_velocity``, ``tip_position``. Enum-valued fields hold the
+    member's name in lower case (the loop's commands hold the enums).
+    """
 
     changes: list[tuple[int, dict[str, object]]]
 
     @property
     def last_cycle(self) -> int:
         return self.changes[-1][0] if self.changes else 0
-
-    def commands(self, cycles: int) -> TimelineCommands:
-        """The command of every cycle ``0 … cycles − 1``, made when asked for (memory independent of ``cycles``)."""
-        return TimelineCommands(self.changes, cycles)
-
-
-class TimelineCommands(Sequence[Command]):
-    """The commands of a timeline's cycles ``0 … cycles − 1`` as a sequence built on demand.
-
-    A run of hours (or ``--duration 1e9``) holds one entry per change, not one command per cycle: the command of
-    a cycle is made when it is read. Every read makes a new :class:`Command` (callers may change theirs).
-
-    Args:
-        changes: the timeline's ``(cycle, change)`` pairs; a change holds from its cycle on (one-off requests,
-            :data:`EVENTS`, only at it).
-        cycles: how many cycles.
-    """
-
-    def __init__(self, changes: list[tuple[int, dict[str, object]]], cycles: int) -> None:
-        self.cycles = cycles
-        self.starts: list[int] = []
-        """First cycle of each segment (ascending): where a change (or several on one cycle) takes effect."""
-        self.held: list[dict[str, object]] = []
-        """Inputs holding over each segment."""
-        self.events: list[dict[str, object]] = []
-        """One-off requests made at each segment's first cycle."""
-        current: dict[str, object] = {}
-        for cycle, change in sorted(changes, key=lambda c: c[0]):
-            start = max(cycle, 0)
-            if start >= cycles:
-                break
-            if not self.starts or self.starts[-1] != start:
-                self.starts.append(start)
-                self.events.append({})
-                self.held.append({})
-            current = {**current, **{k: v for k, v in change.items() if k not in EVENTS}}
-            self.held[-1] = current
-            self.events[-1].update({k: v for k, v in change.items() if k in EVENTS})
-
-    def __len__(self) -> int:
-        return self.cycles
-
-    @overload
-    def __getitem__(self, index: int) -> Command: ...
-
-    @overload
-    def __getitem__(self, index: slice) -> list[Command]: ...
-
-    def __getitem__(self, index: int | slice) -> Command | list[Command]:
-        if isinstance(index, slice):
-            return [self[i] for i in range(*index.indices(self.cycles))]
-        if index < 0:
-            index += self.cycles
-        if not 0 <= index < self.cycles:
-            raise IndexError("timeline cycle out of range")
-        segment = bisect.bisect_right(self.starts, index) - 1
-        if segment < 0:
-            return Command()
-        if index == self.starts[segment]:
-            return Command(**self.held[segment], **self.events[segment])  # type: ignore[arg-type]
-        return Command(**self.held[segment])  # type: ignore[arg-type]
 
 
 def constant(velocity: tuple[float, float, float]) -> Timeline:
@@ -259,7 +204,7 @@ def _load_script(path: Path, time_delta: float) -> Timeline:
         if step.pose_velocity is not None:
             change["pose_velocity"] = step.pose_velocity
         if step.pose_reset is not None:
-            change["pose_reset"] = PoseReset[step.pose_reset.upper()]
+            change["pose_reset"] = step.pose_reset
         if step.gait is not None:
             change["gait"] = _gait(step.gait, path, located, index)
         if step.parameters:
@@ -272,7 +217,7 @@ def _load_script(path: Path, time_delta: float) -> Timeline:
         if step.cruise is not None:
             change["cruise"] = step.cruise
         if step.state is not None:
-            change["state_request"] = RobotState[step.state.upper()]
+            change["state_request"] = step.state
         if step.leg_toggle is not None:
             change["leg_toggle"] = step.leg_toggle
         if step.tip_velocity:

@@ -31,13 +31,14 @@ from typing import Any
 import numpy as np
 
 from shc_cli.backends import servo_kernels
-from shc_cli.backends.engine import EngineOptions, Reading, rpy_from_matrix, servo_slots, spawn_height
+from shc_cli.backends.engine import EngineOptions, Reading, rpy_from_matrix, spawn_height
 from shc_cli.backends.imu import Imu
 from shc_cli.backends.mujoco_.mjcf import Options, robot_mjcf, velocity_stiffness
 from shc_cli.backends.servo import ServoModel
 from shc_cli.backends.terrain import Terrain
 from shc_cli.errors import BackendError
 from shc_cli.model.body import leg_names
+from shc_cli.model.chains import joint_slots
 from shc_cli.spec.robot import Robot
 
 RAY_GROUPS = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)
@@ -80,7 +81,8 @@ class MujocoWorld:
         self.xml = robot_mjcf(robot, self.terrain, Options(timestep, height, fixed_base, stand, friction, restitution))
         self.model = model = mujoco.MjModel.from_xml_string(self.xml)
         self.data = data = mujoco.MjData(model)
-        self.slot_rows, self.slot_cols, self.width = servo_slots(robot)
+        self.slot_rows, self.slot_cols = joint_slots(robot)
+        self.width = max(len(leg.joints) for leg in robot.legs.values())
         joints = [name for names in leg_names(robot).values() for name in names.joints]
         ids = [model.joint(name).id for name in joints]
         self.qpos_index = np.array([model.jnt_qposadr[i] for i in ids], dtype=np.intp)

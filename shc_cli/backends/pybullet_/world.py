@@ -24,6 +24,7 @@ from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
 from shc_cli.backends.pybullet_.urdf import robot_urdf
 from shc_cli.backends.servo import ServoModel
 from shc_cli.errors import BackendError
+from shc_cli.model.chains import joint_slots
 from shc_cli.spec.robot import Robot
 
 __all__ = ["Reading", "World", "quiet_stdout", "tilt"]
@@ -134,11 +135,10 @@ class World:
             self.joint_index.append([names[f"{leg_id}_{joint}_joint"] for joint in leg.joints])
         self.foot_links = [links[f"{leg_id}_foot"] for leg_id in robot.legs]
         self.flat_joints = [index for indices in self.joint_index for index in indices]
-        self.slots = [(leg, k) for leg, indices in enumerate(self.joint_index) for k in range(len(indices))]
-        self.slot_rows = np.array([leg for leg, _ in self.slots], dtype=np.intp)
-        """Row (leg) of each servo in the padded ``(L, n)`` arrays; with :attr:`slot_cols`, ``a[slot_rows, slot_cols]``
+        self.slot_rows, self.slot_cols = joint_slots(robot)
+        """Row (leg) and column (joint) of each servo in the padded ``(L, n)`` arrays: ``a[slot_rows, slot_cols]``
         lists the real joints of ``a`` in servo (= log column) order."""
-        self.slot_cols = np.array([k for _, k in self.slots], dtype=np.intp)
+        self.slots = list(zip(self.slot_rows.tolist(), self.slot_cols.tolist(), strict=True))
         self._states: Any = None
         """The joint states after the last physics step (``None`` until the first step)."""
         self.foot_leg = {link: leg for leg, link in enumerate(self.foot_links)}

@@ -44,8 +44,8 @@ def check_points(sweep: Sweep) -> None:
 def check_runs(path: Path, points: list[Point], document_lines: dict[str, int | None]) -> None:
     """Fail early with the line of the file at ``path`` (``document_lines``: line of each key) on robot-file paths
     the robot lacks and robots/gaits that do not load; used by sweeps and studies."""
-    from shc_cli.spec.checks import load_checked
     from shc_cli.spec.loading import load_robot, resolve
+    from shc_cli.validation import load_checked
 
     robots = {str(option(p, "robot")) for p in points}
     for name in sorted(robots):

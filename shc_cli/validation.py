@@ -1,7 +1,9 @@
 """Semantic checks of a schema-valid robot and its gaits: what pydantic alone cannot see.
 
-Each check returns :class:`~shc_cli.errors.Issue` objects located at the line the user wrote.
-Checks that need kinematics import :mod:`shc_cli.model` lazily.
+Each check returns :class:`~shc_cli.errors.Issue` objects located at the line the user wrote. The checks need the
+kinematics (:mod:`shc_cli.model`), gait timing (:mod:`shc_cli.control.gait`) and the servo models
+(:mod:`shc_cli.hardware.models`), so they sit above those layers and below the run loop, not in :mod:`shc_cli.spec`;
+those imports stay inside the checks that need them (``shc validate`` of a file with schema errors starts fast).
 """
 
 from __future__ import annotations
