@@ -1,9 +1,9 @@
-"""Cost of transport (paper eq. 22), the one place it and standard gravity are computed."""
+"""Cost of transport (paper eq. 22), the one place it is computed."""
 
 from __future__ import annotations
 
-GRAVITY = 9.81
-"""Standard gravity [m/s²]."""
+from shc_cli.model.body import GRAVITY
+
 MIN_SPEED = 1e-3
 """Below this speed the robot did not travel and has no cost of transport [m/s]."""
 

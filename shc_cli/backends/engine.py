@@ -26,8 +26,6 @@ if TYPE_CHECKING:
     from shc_cli.backends.terrain import Terrain, TerrainSpec
     from shc_cli.spec.robot import Robot
 
-GRAVITY = 9.81
-"""Standard gravity [m/s²]."""
 SPAWN_GAP = 0.01
 """Height of the lowest foot above the ground when the robot is spawned [m]."""
 AIR_LIFT = 0.3

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from shc_cli.backends.engine import GRAVITY
+from shc_cli.model.body import GRAVITY
 
 
 class Imu:

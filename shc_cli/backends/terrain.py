@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import difflib
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -310,6 +311,12 @@ class Terrain:
             field = np.array(spec.heights, dtype=float)
             field.setflags(write=False)
             self.field = field
+
+    def height_above(self, position: Sequence[float] | np.ndarray) -> float:
+        """Height of ``position`` (x, y, z) [m] above the ground under it, from the terrain's geometry [m]: the
+        engines' height ray where it hits nothing."""
+        x, y, z = (float(v) for v in position)
+        return z - self.height_at(x, y)
 
     def height_at(self, x: float, y: float) -> float:
         """Ground height [m] under the point (x, y) [m], from the terrain's geometry.

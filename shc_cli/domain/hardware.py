@@ -174,7 +174,7 @@ def run_hardware(config: HardwareConfig) -> RunResult:
         stop = STATES[c.stop_state]
         action = "holding" if c.on_fault == "hold" else "torque off"
         loop = RunLoop(controller, backend, source, LogRecorder(run, robot, backend),
-                       StartUp(round((robot.start_up.time_to_start * 2.5 + 10.0) / dt), as_fault=True),
+                       StartUp.of(robot, hardware=True),
                        ControlledStop(stop, STOP_TIMEOUT_S), flush_every=100,
                        on_fault=lambda text: log.error("fault: %s — %s", text, action))
 

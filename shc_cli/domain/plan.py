@@ -31,7 +31,7 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
     from shc_cli.loop.input_sources import TimelineInput
     from shc_cli.loop.plan_summary import PlanRecord, plan_summary
     from shc_cli.loop.run_inputs import load_inputs
-    from shc_cli.loop.run_loop import START_UP_MARGIN_S, RunLoop, StartUp
+    from shc_cli.loop.run_loop import RunLoop, StartUp
     from shc_cli.loop.runlog import RunWriter
     from shc_cli.loop.session import execute
 
@@ -42,7 +42,7 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
     writer = RunWriter(directory, model, overwrite)
     writer.write_robot(model)
     record = PlanRecord(controller)
-    start_up = StartUp(round((model.start_up.time_to_start + START_UP_MARGIN_S) / model.time_delta))
+    start_up = StartUp.of(model)
     loop = RunLoop(controller, KinematicBackend(), TimelineInput(inputs.commands()), writer,
                    start_up, observers=[record], flush_every=500)
     started = time.perf_counter()

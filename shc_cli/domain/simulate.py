@@ -43,7 +43,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     from shc_cli.loop.input_sources import TimelineInput
     from shc_cli.loop.physics_summary import PhysicsRecord
     from shc_cli.loop.run_inputs import load_inputs
-    from shc_cli.loop.run_loop import START_UP_MARGIN_S, Observer, RunLoop, StartUp
+    from shc_cli.loop.run_loop import Observer, RunLoop, StartUp
     from shc_cli.loop.runlog import LogRecorder, RunDirectory
     from shc_cli.loop.session import execute
 
@@ -64,7 +64,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
             observers: list[Observer[Reading]] = [record] if counter is None else [record, counter]
             loop = RunLoop(controller, backend, TimelineInput(inputs.commands()),
                            LogRecorder(run, robot, backend),
-                           StartUp(round((robot.start_up.time_to_start + START_UP_MARGIN_S) / robot.time_delta)),
+                           StartUp.of(robot),
                            observers=observers, flush_every=200)
 
             def summarise(_: Any) -> RunSummary:  # from the finished log (run.partial)

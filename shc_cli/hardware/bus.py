@@ -27,6 +27,7 @@ import numpy as np
 from shc_cli.errors import ShcError
 from shc_cli.hardware import protocol2 as p2
 from shc_cli.hardware.models import MODELS, OPERATING_MODES, POSITION_MODES, ServoModel, hardware_error_names
+from shc_cli.model.chains import JointSlots
 from shc_cli.spec.robot import Robot
 
 STATE_ADDRESS, STATE_LENGTH = 126, 10
@@ -117,9 +118,8 @@ class ServoBus:
                                 f"{len(ports)} port{'s' if len(ports) > 1 else ''} given "
                                 f"(give --port once per bus, bus 0 first)")
         self.lines = [_Line(name, [i for i, s in enumerate(self.slots) if s.bus == b]) for b, name in enumerate(ports)]
-        self.shape = (len(robot.legs), max(len(leg.joints) for leg in robot.legs.values()))
-        self._rows = np.array([s.leg for s in self.slots])
-        self._cols = np.array([s.joint for s in self.slots])
+        self.layout = JointSlots.of(robot)  # the slots are in servo order: legs in id order, joints body to tip
+        self.shape = (self.layout.legs, self.layout.width)
         self._direction = np.array([s.direction for s in self.slots], dtype=float)
         self._zero = np.array([s.zero for s in self.slots], dtype=float)
         self._offset = np.array([s.offset for s in self.slots])
@@ -353,7 +353,8 @@ class ServoBus:
         ticks = raw[:, 6:10].copy().view("<i4")[:, 0].astype(float)
         positions = self._direction * (ticks - self._zero) / self._ticks_per_rad - self._offset
         velocities = self._direction * velocity * self._velocity_unit * (2.0 * math.pi / 60.0)
-        return BusState(self.padded(positions), self.padded(velocities), self.padded(current * self._current_unit),
+        padded = self.layout.padded
+        return BusState(padded(positions), padded(velocities), padded(current * self._current_unit),
                         answered, alerts, failures)
 
     def hardware_errors(self) -> dict[str, list[str]]:
@@ -373,7 +374,7 @@ class ServoBus:
         that reaches it in ``period`` [s] (at least one unit: 0 would mean unlimited)."""
         from dynamixel_sdk import GroupSyncWrite
 
-        ticks = self._to_ticks(slice(None), joints[self._rows, self._cols])
+        ticks = self._to_ticks(slice(None), joints[self.layout.rows, self.layout.cols])
         if self.profile_velocity:
             previous = ticks if self._last_ticks is None else self._last_ticks
             rpm = np.abs(ticks - previous) / (self._ticks_per_rad * 2.0 * math.pi) / period * 60.0
@@ -445,11 +446,6 @@ class ServoBus:
                 f"more than the {period * 1e3:.0f} ms period: it keeps {1.0 / cycle:.0f} Hz; set time_delta = "
                 f"{longer:g} or more in the robot file, split the servos over more buses, or lower the USB "
                 "adapter's latency timer (/sys/bus/usb-serial/devices/ttyUSB0/latency_timer = 1)")
-
-    def padded(self, values: np.ndarray) -> np.ndarray:
-        out = np.zeros(self.shape)
-        out[self._rows, self._cols] = values
-        return out
 
     def wire_time(self) -> float:
         """Seconds one cycle's sync read (instruction + every status, each after its servo's Return Delay Time) and

@@ -342,7 +342,8 @@ class Protocol1Bus(ServoBus):
         positions = self._direction * (ticks - self._zero) / self._ticks_per_rad - self._offset
         velocities = self._direction * speed
         currents = self._direction * load * self._stall_ma
-        return BusState(self.padded(positions), self.padded(velocities), self.padded(currents), answered, alerts,
+        padded = self.layout.padded
+        return BusState(padded(positions), padded(velocities), padded(currents), answered, alerts,
                         failures)
 
     def _chain(self, line: _Line) -> bool:
@@ -373,7 +374,7 @@ class Protocol1Bus(ServoBus):
     def write_goals(self, joints: np.ndarray, period: float) -> None:
         """One SYNC WRITE per bus of every goal position ``(L, n)`` [rad]; with ``profile_velocity`` also the speed
         that reaches it in ``period`` [s] (at least one unit: 0 means the servo's maximum)."""
-        ticks = self._to_ticks(slice(None), joints[self._rows, self._cols])
+        ticks = self._to_ticks(slice(None), joints[self.layout.rows, self.layout.cols])
         if self.profile_velocity:
             previous = ticks if self._last_ticks is None else self._last_ticks
             rpm = np.abs(ticks - previous) / (self._ticks_per_rad * 2.0 * math.pi) / period * 60.0

@@ -24,11 +24,17 @@ from shc_cli.control.controller import Command, Controller, CycleOutput, RobotSt
 from shc_cli.control.walk import WalkState
 from shc_cli.errors import ShcError
 from shc_cli.events import event
+from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
 
 START_UP_MARGIN_S = 2.0
 """Extra time allowed for reaching RUNNING beyond the robot's start-up duration [s] (plan, simulate)."""
+HARDWARE_START_UP_SHARE = 2.5
+"""A real robot's start-up, or its shut-down after a stop, may take this many times the robot's start-up duration
+(``start_up.time_to_start``): the goals are rate-limited and the servos lag them (``run-hw``)."""
+HARDWARE_START_UP_MARGIN_S = 10.0
+"""Extra time allowed for a real robot's start-up beyond :data:`HARDWARE_START_UP_SHARE` of its duration [s]."""
 
 ReadingT = TypeVar("ReadingT")
 """The backend's reading type (:data:`shc_cli.backends.base.ReadingT`)."""
@@ -84,6 +90,17 @@ class StartUp:
 
     limit_cycles: int
     as_fault: bool = False
+
+    @classmethod
+    def of(cls, robot: Robot, hardware: bool = False) -> StartUp:
+        """The start-up allowance of ``robot``: its start-up duration plus :data:`START_UP_MARGIN_S` (an error when
+        it passes), or on hardware :data:`HARDWARE_START_UP_SHARE` of it plus :data:`HARDWARE_START_UP_MARGIN_S` (a
+        fault)."""
+        time_to_start = robot.start_up.time_to_start
+        if hardware:
+            return cls(round((time_to_start * HARDWARE_START_UP_SHARE + HARDWARE_START_UP_MARGIN_S)
+                             / robot.time_delta), as_fault=True)
+        return cls(round((time_to_start + START_UP_MARGIN_S) / robot.time_delta))
 
 
 @dataclass(frozen=True)
@@ -205,7 +222,8 @@ class RunLoop(Generic[ReadingT]):
         if self._stopping_since is None:
             self._stopping_since = cycle
             down = controller.state > stop.state
-            self._stop_limit_s = stop.timeout_s + (2.5 * controller.robot.start_up.time_to_start if down else 0.0)
+            self._stop_limit_s = stop.timeout_s + (HARDWARE_START_UP_SHARE * controller.robot.start_up.time_to_start
+                                                    if down else 0.0)
         walker = controller.walker
         stopped = walker is None or walker.state == WalkState.STOPPED
         reached = controller.state <= stop.state and not controller.transition_pending

@@ -27,6 +27,9 @@ from shc_cli.spec.robot import DH, Joint, Leg, Robot
 
 Vec3 = tuple[float, float, float]
 
+GRAVITY = 9.81
+"""Standard gravity [m/s²]: what every engine simulates, the IMU feels and the cost of transport divides by."""
+
 DEFAULT_LINK_MASS = 0.1
 """Mass of a link whose joint gives no ``mass`` [kg]."""
 MIN_LINK_MASS = 0.001

@@ -58,6 +58,36 @@ def joint_slots(robot: Robot) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
     return (np.array([i for i, _ in pairs], dtype=np.intp), np.array([k for _, k in pairs], dtype=np.intp))
 
 
+@dataclass(frozen=True)
+class JointSlots:
+    """Where each real joint (servo order, :func:`joint_slots`) sits in the padded ``(L, n)`` arrays.
+
+    Attributes:
+        rows: each joint's leg.
+        cols: each joint's index within its leg.
+        legs: ``L``.
+        width: ``n``, the most joints of a leg.
+    """
+
+    rows: NDArray[np.intp]
+    cols: NDArray[np.intp]
+    legs: int
+    width: int
+
+    @classmethod
+    def of(cls, robot: Robot) -> JointSlots:
+        rows, cols = joint_slots(robot)
+        return cls(rows, cols, len(robot.legs), max(len(leg.joints) for leg in robot.legs.values()))
+
+    def padded(self, values: NDArray[np.float64]) -> FloatArray:
+        """Per-joint values (servo order) as a new padded ``(L, n)`` array, 0 where a leg has fewer joints."""
+        if len(self.rows) == self.legs * self.width:  # no padding
+            return np.array(values, dtype=float).reshape(self.legs, self.width)
+        out = np.zeros((self.legs, self.width))
+        out[self.rows, self.cols] = values
+        return out
+
+
 def _kernels() -> Any:
     """The numba kernels, imported on first use: numpy-only users of chains (run readers, exporters) stay light."""
     from shc_cli.model import kernels

@@ -148,22 +148,13 @@ def _mesh_asset(mesh: tuple[np.ndarray, np.ndarray] | None) -> str:
             f'face="{" ".join(str(int(f)) for f in faces.ravel())}"/>')
 
 
-def _gl_backend() -> None:
-    """Pick MuJoCo's headless OpenGL: the user's ``MUJOCO_GL``, else OSMesa when libOSMesa is there, else EGL."""
-    if "MUJOCO_GL" in os.environ:
-        return
-    import ctypes.util
-
-    os.environ["MUJOCO_GL"] = "osmesa" if ctypes.util.find_library("OSMesa") else "egl"
-    if os.environ["MUJOCO_GL"] == "osmesa":
-        os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
-
-
 class Renderer:
     """Frames of one robot's scene: :meth:`draw` places the model and returns an ``(H, W, 3)`` uint8 image."""
 
     def __init__(self, shape: scene.Shapes, terrain: scene.TerrainShapes, width: int, height: int) -> None:
-        _gl_backend()
+        from shc_cli.backends.mujoco_.gl import choose_gl
+
+        choose_gl(fallback="egl")
         try:
             import mujoco
         except ImportError as error:

@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from shc_cli.backends.terrain import FEATURE_RGBA, FEATURE_START_X, GROUND_RGBA, Terrain
-from shc_cli.model.body import COLOURS, CUBE_SIDE, BodyModel, Segment, body_model, joint_names, joint_offset
+from shc_cli.model.body import COLOURS, CUBE_SIDE, GRAVITY, BodyModel, Segment, body_model, joint_names, joint_offset
 from shc_cli.spec.robot import DH, Robot
 
 TOUCH_SHARE = 1.5
@@ -115,8 +115,8 @@ def robot_mjcf(robot: Robot, terrain: Terrain, options: Options) -> str:
     """The MJCF text of ``robot`` on ``terrain`` (deterministic: the same inputs give the same bytes)."""
     root = ET.Element("mujoco", model=robot.name)
     ET.SubElement(root, "compiler", angle="radian", autolimits="true", inertiafromgeom="false")
-    ET.SubElement(root, "option", timestep=_num(options.timestep), gravity="0 0 -9.81", integrator="implicitfast",
-                  cone="pyramidal")
+    ET.SubElement(root, "option", timestep=_num(options.timestep), gravity=_vec((0.0, 0.0, -GRAVITY)),
+                  integrator="implicitfast", cone="pyramidal")
     ratio = contact_restitution_ratio(options.restitution)
     mu = options.friction * options.friction
     default = ET.SubElement(root, "default")

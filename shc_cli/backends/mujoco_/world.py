@@ -24,7 +24,6 @@ here only; it needs no GL to simulate.
 
 from __future__ import annotations
 
-import os
 import time
 from typing import Any
 
@@ -33,12 +32,13 @@ import numpy as np
 from shc_cli.backends import servo_kernels
 from shc_cli.backends.engine import EngineOptions, Reading, rpy_from_matrix, spawn_height
 from shc_cli.backends.imu import Imu
+from shc_cli.backends.mujoco_.gl import choose_gl
 from shc_cli.backends.mujoco_.mjcf import Options, robot_mjcf, velocity_stiffness
 from shc_cli.backends.servo import ServoModel
 from shc_cli.backends.terrain import Terrain
 from shc_cli.errors import BackendError
 from shc_cli.model.body import leg_names
-from shc_cli.model.chains import joint_slots
+from shc_cli.model.chains import JointSlots
 from shc_cli.spec.robot import Robot
 
 RAY_GROUPS = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)
@@ -81,8 +81,8 @@ class MujocoWorld:
         self.xml = robot_mjcf(robot, self.terrain, Options(timestep, height, fixed_base, stand, friction, restitution))
         self.model = model = mujoco.MjModel.from_xml_string(self.xml)
         self.data = data = mujoco.MjData(model)
-        self.slot_rows, self.slot_cols = joint_slots(robot)
-        self.width = max(len(leg.joints) for leg in robot.legs.values())
+        self.layout = JointSlots.of(robot)
+        self.slot_rows, self.slot_cols = self.layout.rows, self.layout.cols
         joints = [name for names in leg_names(robot).values() for name in names.joints]
         ids = [model.joint(name).id for name in joints]
         self.qpos_index = np.array([model.jnt_qposadr[i] for i in ids], dtype=np.intp)
@@ -91,8 +91,6 @@ class MujocoWorld:
                                      for names in leg_names(robot).values()], dtype=np.intp)
         self.base = model.body("base_link").id
         self.com_offset = np.array(robot.body.com, dtype=float)
-        self._legs = len(robot.legs)
-        self._unpadded = len(joints) == self._legs * self.width
         flat = initial_joints[self.slot_rows, self.slot_cols].astype(float)
         data.qpos[self.qpos_index] = flat
         mujoco.mj_forward(model, data)
@@ -171,7 +169,7 @@ class MujocoWorld:
 
     def read(self) -> Reading:
         """Sensor readings now."""
-        data = self.data
+        data, padded = self.data, self.layout.padded
         rotation = data.xmat[self.base].reshape(3, 3).copy()
         quat = data.xquat[self.base]
         position = data.xpos[self.base].copy()
@@ -187,28 +185,20 @@ class MujocoWorld:
         specific_force, rate = self.imu.sense(rotation, velocity, angular)
         forces = data.sensordata[self.touch_index].copy()
         return Reading(
-            joints=self.padded(self._positions), joint_velocities=self.padded(np.array(self._v)),
-            joint_efforts=self.padded(self._mean_torque), servo_power=self.padded(self._mean_power),
+            joints=padded(self._positions), joint_velocities=padded(np.array(self._v)),
+            joint_efforts=padded(self._mean_torque), servo_power=padded(self._mean_power),
             orientation=np.array([quat[1], quat[2], quat[3], quat[0]]), angular_rate=rate,
             linear_acceleration=specific_force, foot_forces=forces, foot_contact=forces > 0.0,
             body_height=self._ray_height(position), position=position, rpy=rpy_from_matrix(rotation),
             linear_velocity=velocity, angular_velocity=angular,
         )
 
-    def padded(self, values: np.ndarray) -> np.ndarray:
-        """Per-servo values (servo order) as a padded ``(L, n)`` array, 0 where a leg has fewer joints."""
-        if self._unpadded:
-            return np.array(values, dtype=float).reshape(self._legs, self.width)
-        out = np.zeros((self._legs, self.width))
-        out[self.slot_rows, self.slot_cols] = values
-        return out
-
     def _ray_height(self, position: np.ndarray) -> float:
         """Body-origin height above the terrain, from a ray cast down that sees only terrain geoms."""
         distance = self.mujoco.mj_ray(self.model, self.data, position, np.array([0.0, 0.0, -1.0]), RAY_GROUPS, 1, -1,
                                       self._ray_hit)
         if distance < 0.0:
-            return float(position[2] - self.terrain.height_at(float(position[0]), float(position[1])))
+            return self.terrain.height_above(position)
         return float(distance)
 
     def close(self) -> None:
@@ -223,12 +213,7 @@ def import_mujoco() -> Any:
     later (``simulate --video``, a test session), must not leave it with a windowed backend. OSMesa when libOSMesa
     is installed; otherwise ``MUJOCO_GL`` is left as it is (the physics needs no GL).
     """
-    if "MUJOCO_GL" not in os.environ:
-        import ctypes.util
-
-        if ctypes.util.find_library("OSMesa"):
-            os.environ["MUJOCO_GL"] = "osmesa"
-            os.environ.setdefault("PYOPENGL_PLATFORM", "osmesa")
+    choose_gl(fallback=None)
     import mujoco
 
     if mujoco.get_mju_user_warning() is None:  # else MuJoCo appends its warnings to MUJOCO_LOG.TXT in the cwd

@@ -17,14 +17,15 @@ from typing import Any
 
 import numpy as np
 
-from shc_cli.backends.engine import GRAVITY, EngineOptions, Reading, spawn_height, tilt
+from shc_cli.backends.engine import EngineOptions, Reading, spawn_height, tilt
 from shc_cli.backends.imu import Imu
 from shc_cli.backends.pybullet_.quiet import quiet_stdout
 from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
 from shc_cli.backends.pybullet_.urdf import robot_urdf
 from shc_cli.backends.servo import ServoModel
 from shc_cli.errors import BackendError
-from shc_cli.model.chains import joint_slots
+from shc_cli.model.body import GRAVITY
+from shc_cli.model.chains import JointSlots
 from shc_cli.spec.robot import Robot
 
 __all__ = ["Reading", "World", "quiet_stdout", "tilt"]
@@ -112,10 +113,7 @@ class World:
 
     def _load_robot(self, fixed_base: bool, joints: np.ndarray, friction: float, restitution: float,
                     stand: bool = False) -> None:
-        from shc_cli.model.chains import Chains
-
         p, c, robot = self.p, self.client, self.robot
-        chains = Chains.from_robot(robot)
         height = spawn_height(robot, self.terrain, joints, fixed_base, stand)
         with tempfile.NamedTemporaryFile("w", suffix=".urdf", delete=False) as handle:
             handle.write(robot_urdf(robot))
@@ -135,17 +133,16 @@ class World:
             self.joint_index.append([names[f"{leg_id}_{joint}_joint"] for joint in leg.joints])
         self.foot_links = [links[f"{leg_id}_foot"] for leg_id in robot.legs]
         self.flat_joints = [index for indices in self.joint_index for index in indices]
-        self.slot_rows, self.slot_cols = joint_slots(robot)
-        """Row (leg) and column (joint) of each servo in the padded ``(L, n)`` arrays: ``a[slot_rows, slot_cols]``
-        lists the real joints of ``a`` in servo (= log column) order."""
+        self.layout = JointSlots.of(robot)
+        """Where each servo sits in the padded ``(L, n)`` arrays: ``a[slot_rows, slot_cols]`` lists the real joints of
+        ``a`` in servo (= log column) order."""
+        self.slot_rows, self.slot_cols = self.layout.rows, self.layout.cols
         self.slots = list(zip(self.slot_rows.tolist(), self.slot_cols.tolist(), strict=True))
         self._states: Any = None
         """The joint states after the last physics step (``None`` until the first step)."""
         self.foot_leg = {link: leg for leg, link in enumerate(self.foot_links)}
         # PyBullet reports the base's centre of mass; the body frame (base_link) is offset from it.
         self.com_offset = np.array(p.getDynamicsInfo(self.body, -1, physicsClientId=c)[3])
-        self.width = chains.joints
-        self._unpadded = len(self.flat_joints) == len(self.joint_index) * self.width  # every leg has n joints
         for j in range(p.getNumJoints(self.body, physicsClientId=c)):  # free joints: no default motors
             p.setJointMotorControl2(self.body, j, p.VELOCITY_CONTROL, force=0.0, physicsClientId=c)
         for link in [-1, *range(p.getNumJoints(self.body, physicsClientId=c))]:
@@ -292,7 +289,7 @@ class World:
 
     def read(self) -> Reading:
         """Sensor readings now."""
-        p, c = self.p, self.client
+        p, c, padded = self.p, self.client, self.layout.padded
         states = self._states if self._states is not None else p.getJointStates(self.body, self.flat_joints,
                                                                                   physicsClientId=c)
         velocities = np.fromiter([state[1] for state in states], float, len(states))
@@ -308,21 +305,13 @@ class World:
             if foot is not None and point[2] != self.body:
                 forces[foot] += point[9]
         return Reading(
-            joints=self.padded(self._positions), joint_velocities=self.padded(velocities),
-            joint_efforts=self.padded(self._mean_torque), servo_power=self.padded(self._mean_power),
+            joints=padded(self._positions), joint_velocities=padded(velocities),
+            joint_efforts=padded(self._mean_torque), servo_power=padded(self._mean_power),
             orientation=np.array(orientation), angular_rate=rate, linear_acceleration=specific_force,
             foot_forces=forces, foot_contact=forces > 0.0, body_height=self._ray_height(position),
             position=position, rpy=np.array(p.getEulerFromQuaternion(orientation)),
             linear_velocity=linear_v, angular_velocity=angular_v,
         )
-
-    def padded(self, values: np.ndarray) -> np.ndarray:
-        """Per-servo values (servo order) as a padded ``(L, n)`` array, 0 where a leg has fewer joints."""
-        if self._unpadded:
-            return values.reshape(len(self.joint_index), self.width)
-        out = np.zeros((len(self.joint_index), self.width))
-        out[self.slot_rows, self.slot_cols] = values
-        return out
 
     def _ray_height(self, position: Any) -> float:
         """Body-origin height above the terrain, from a ray cast down that passes through the robot itself."""
@@ -335,7 +324,7 @@ class World:
             if hit[0] != self.body:
                 return float(z - hit[3][2])
             start = hit[3][2] - 0.001
-        return float(z - self.terrain.height_at(x, y))
+        return self.terrain.height_above(position)
 
     def close(self) -> None:
         self.p.disconnect(physicsClientId=self.client)
