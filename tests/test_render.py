@@ -19,7 +19,7 @@ FPS = 5.0
 
 
 def _has_offscreen_gl() -> bool:
-    code = ("from shc_cli.view.render import _gl_backend; _gl_backend(); import mujoco; "
+    code = ("from shc_cli.backends.mujoco_.gl import choose_gl; choose_gl('egl'); import mujoco; "
             "r = mujoco.Renderer(mujoco.MjModel.from_xml_string('<mujoco/>'), 16, 16); r.close()")
     return subprocess.run([sys.executable, "-c", code], capture_output=True).returncode == 0
 

@@ -23,6 +23,7 @@ import numpy as np
 
 from shc_cli.analysis.cot import cost_of_transport
 from shc_cli.loop.runread import RunLog
+from shc_cli.spec.metric_names import ANALYZE_KEYS
 
 
 @dataclass(frozen=True)
@@ -275,13 +276,7 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
                               else run.robot.walker.step_frequency.default),
         "window_s": len(rows) * dt, "window_start_s": float(run.t[rows[0]]) if len(rows) else None,
     }
-    keys = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps", "steady_speed_mps",
-            "commanded_speed_mps", "speed_ratio", "distance_m", "duty_factor", "foot_slip_m", "height_median_m",
-            "height_iqr_m", "pitch_rate_median_rps", "pitch_rate_iqr_rps", "roll_rate_median_rps",
-            "roll_rate_iqr_rps", "stability_margin_median_m", "stability_margin_min_m", "zmp_margin_median_m",
-            "zmp_margin_iqr_m", "zmp_centre_distance_median_m", "zmp_centre_distance_iqr_m", "gait_cycles",
-            "joint_limit_fraction")
-    out.update(dict.fromkeys(keys))
+    out.update(dict.fromkeys(ANALYZE_KEYS))
     if len(rows) < 2:
         return out
     walking = (summary.scenario or "WG") == "WG"

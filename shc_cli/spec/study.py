@@ -49,6 +49,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from shc_cli.errors import Issue, SpecError
+from shc_cli.spec.metric_names import OBJECTIVE_KEYS
 from shc_cli.spec.source import Document
 from shc_cli.spec.sweep import DEFAULT_DURATION, Point, check_value, is_option, slug_value
 
@@ -64,13 +65,6 @@ NOT_SEARCHED = ("seed", "duration", "robot")
 """Simulation options a study sets once (``seeds``, ``duration``, ``robot``), never per trial."""
 RUN_KEYS = ("fell", "max_tilt_rad")
 """Run-summary keys a constraint or objective may name besides the analyze keys."""
-ANALYZE_KEYS = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps", "steady_speed_mps",
-                "commanded_speed_mps", "speed_ratio",
-                "distance_m", "duty_factor", "foot_slip_m", "height_median_m", "height_iqr_m",
-                "pitch_rate_median_rps", "pitch_rate_iqr_rps", "roll_rate_median_rps", "roll_rate_iqr_rps",
-                "stability_margin_median_m", "stability_margin_min_m", "zmp_margin_median_m", "zmp_margin_iqr_m",
-                "zmp_centre_distance_median_m", "zmp_centre_distance_iqr_m", "joint_limit_fraction")
-"""The numeric ``shc analyze`` keys: what objectives and constraints are made of."""
 
 
 @dataclass(frozen=True)
@@ -218,8 +212,9 @@ def _constraint(document: Document, key: str, spec: Any) -> Constraint:
         if spec is not False:
             raise _issue(document, where, f"fell = {spec!r} is not a constraint", "write fell = false (no seed falls)")
         return Constraint("fell", max=0.0, line=line)
-    if key not in ANALYZE_KEYS and key not in RUN_KEYS:
-        raise _issue(document, where, f"'{key}' is not an analyze key", f"use one of {', '.join(ANALYZE_KEYS)} or fell")
+    if key not in OBJECTIVE_KEYS and key not in RUN_KEYS:
+        raise _issue(document, where, f"'{key}' is not an analyze key",
+                     f"use one of {', '.join(OBJECTIVE_KEYS)} or fell")
     if not isinstance(spec, dict) or not spec or set(spec) - {"min", "max"}:
         raise _issue(document, where, "must be a table with min and/or max", f"e.g. {key} = {{ min = 0.05 }}")
     low = _number(document, (*where, "min"), spec["min"]) if "min" in spec else None
@@ -287,8 +282,8 @@ def load_study(path: Path) -> Study:
     objectives: dict[str, str] = {}
     for key, direction in data.get("objectives", {}).items():
         where = ("objectives", key)
-        if key not in ANALYZE_KEYS and key not in RUN_KEYS:
-            raise _issue(document, where, f"'{key}' is not an analyze key", f"use one of {', '.join(ANALYZE_KEYS)}")
+        if key not in OBJECTIVE_KEYS and key not in RUN_KEYS:
+            raise _issue(document, where, f"'{key}' is not an analyze key", f"use one of {', '.join(OBJECTIVE_KEYS)}")
         if direction not in ("minimize", "maximize"):
             raise _issue(document, where, f"{direction!r} is not a direction", 'write "minimize" or "maximize"')
         objectives[key] = str(direction)
