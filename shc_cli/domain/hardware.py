@@ -24,7 +24,6 @@ bus set-up, warnings and faults go to ``logging`` (logger ``shc_cli.domain.hardw
 from __future__ import annotations
 
 import logging
-from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -131,7 +130,7 @@ def run_hardware(config: HardwareConfig) -> RunResult:
     from shc_cli.hardware.buses import servo_bus
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import ControlledStop, RunLoop, StartUp
-    from shc_cli.loop.runlog import LogRecorder, RunDirectory
+    from shc_cli.loop.runlog import LogRecorder, RunDirectory, default_run_directory
     from shc_cli.loop.session import execute
     from shc_cli.loop.summary import RunSummary
 
@@ -164,7 +163,7 @@ def run_hardware(config: HardwareConfig) -> RunResult:
                         "than the %.0f ms period: raise the baud rate, lower Return Delay Time "
                         "(hardware.return_delay_us) or split the servos over more buses", bus_time * 1e3, bus.baud,
                         robot.time_delta * 1e3)
-        directory = c.out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-run-hw"
+        directory = c.out or default_run_directory("run-hw")
         run = RunDirectory(directory, c.overwrite)
         backend = DynamixelBackend(robot, bus, c.dry_run, run, c.on_fault, c.on_stop)
         controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,

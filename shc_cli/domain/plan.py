@@ -4,7 +4,6 @@ backend (commanded joints fed back), logged and summarised in a run directory. N
 from __future__ import annotations
 
 import time
-from datetime import datetime
 from pathlib import Path
 
 from shc_cli.domain.result import RunResult
@@ -32,12 +31,12 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
     from shc_cli.loop.plan_summary import PlanRecord, plan_summary
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import RunLoop, StartUp
-    from shc_cli.loop.runlog import RunWriter
+    from shc_cli.loop.runlog import RunWriter, default_run_directory
     from shc_cli.loop.session import execute
 
     inputs = load_inputs(robot, gait, velocity, duration, commands, default_s=10.0, check_fit=True)
     model = inputs.robot
-    directory = out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-plan"
+    directory = out or default_run_directory("plan")
     controller = Controller(model, inputs.gait, pose_sets=inputs.pose_sets)
     writer = RunWriter(directory, model, overwrite)
     writer.write_robot(model)

@@ -14,7 +14,6 @@ import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -69,10 +68,11 @@ def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) 
     Raises:
         ShcError: bad input, or no ROS master (one line), before anything is written.
     """
+    from shc_cli.loop.runlog import default_run_directory
     from shc_cli.ros.messages import MessageTypes
     from shc_cli.ros.node import RosNode
 
-    directory = config.out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-ros"
+    directory = config.out or default_run_directory("ros")
     node = RosNode(config.name, MessageTypes(), config.master_uri)
     try:
         robot, gait, pose_sets, gaits = _robot(node, config, directory)

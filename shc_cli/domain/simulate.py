@@ -4,7 +4,6 @@ logged and summarised in a run directory. Never prints; the command prints the s
 from __future__ import annotations
 
 from collections.abc import Callable
-from datetime import datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -44,7 +43,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     from shc_cli.loop.physics_summary import PhysicsRecord
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import Observer, RunLoop, StartUp
-    from shc_cli.loop.runlog import LogRecorder, RunDirectory
+    from shc_cli.loop.runlog import LogRecorder, RunDirectory, default_run_directory
     from shc_cli.loop.session import execute
 
     o = config or SimulationConfig()
@@ -53,7 +52,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
                          robot_change=o.apply_switches)
     robot = inputs.robot
     options = o.engine_options(robot)
-    directory = o.out or Path("runs") / f"{datetime.now():%Y%m%d-%H%M%S}-simulate"
+    directory = o.out or default_run_directory("simulate")
     with RunDirectory(directory, o.overwrite) as run:  # refuses an existing --out before the physics opens
         world = open_world(robot, options)
         with SimulatedBackend(robot, world) as backend:

@@ -132,20 +132,3 @@ def chain_dh(axes: list[Axis], tip: FloatArray) -> tuple[Row, list[Row]]:
     theta = _angle(x, across / r, z) if r > 0.0 else 0.0
     rows.append(Row(d, theta, r, 0.0))
     return rows[0], rows[1:]
-
-
-def dh_tip(base: Row, joints: list[Row], q: FloatArray) -> FloatArray:
-    """Tip position in base_link of a DH chain at joint angles ``q`` [m] (a plain reference implementation)."""
-    transform = _matrix(base, 0.0)
-    for row, angle in zip(joints, q, strict=True):
-        transform = transform @ _matrix(row, float(angle))
-    return transform[:3, 3]
-
-
-def _matrix(row: Row, angle: float) -> FloatArray:
-    ct, st = math.cos(row.theta + angle), math.sin(row.theta + angle)
-    ca, sa = math.cos(row.alpha), math.sin(row.alpha)
-    return np.array([[ct, -st * ca, st * sa, row.r * ct],
-                     [st, ct * ca, -ct * sa, row.r * st],
-                     [0.0, sa, ca, row.d],
-                     [0.0, 0.0, 0.0, 1.0]])

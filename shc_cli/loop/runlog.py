@@ -49,6 +49,15 @@ ReadingT = TypeVar("ReadingT")
 """The measuring backend's reading type (:data:`shc_cli.backends.base.ReadingT`)."""
 PARTIAL_SUFFIX = ".partial"
 ROBOT_FILE = "robot.toml"
+RUNS_FOLDER = Path("runs")
+"""Where runs go without ``--out`` (relative to the working directory)."""
+
+
+def default_run_directory(kind: str) -> Path:
+    """A new run's directory without ``--out``: ``runs/<YYYYmmdd-HHMMSS>-<kind>`` (local time)."""
+    from datetime import datetime
+
+    return RUNS_FOLDER / f"{datetime.now():%Y%m%d-%H%M%S}-{kind}"
 
 
 class RunDirectory:

@@ -31,6 +31,9 @@ def chain_frames(base, d, theta, r, alpha, q, out):  # type: ignore[no-untyped-d
             out[0, i, j] = 1.0 if i == j else 0.0
     link = np.empty((4, 4))
     for k in range(n):
+        # The DH transform of :func:`shc_cli.model.chains.dh_matrix`, written out: a compiled kernel cannot call the
+        # batched numpy function, and this is the controller's hot path (test_compiled_tips_equal_numpy_frames
+        # checks the two equal).
         ct = math.cos(theta[k] + q[k])
         st = math.sin(theta[k] + q[k])
         ca = math.cos(alpha[k])
