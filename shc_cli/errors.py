@@ -7,6 +7,7 @@ The CLI prints that line and exits with code 2; tracebacks appear only with ``--
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -80,3 +81,26 @@ class OutputError(ShcError):
 
 class BackendError(ShcError):
     """A backend (physics engine, servo bus) cannot do what was asked."""
+
+
+def spoken(items: Iterable[str]) -> str:
+    """``a, b or c``: a list of choices as a sentence says it."""
+    words = list(items)
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} or {words[-1]}"
+
+
+def check_choice(option: str, value: object, allowed: Iterable[object], what: str, fix: str | None = None) -> None:
+    """Refuse a command-line value that is not one of ``allowed`` with one line: ``OPTION: 'VALUE' is not WHAT
+    (FIX)``, ``FIX`` by default ``use`` and the choices (:func:`spoken`).
+
+    Args:
+        option: the option, e.g. ``--engine``.
+        value: what the user gave.
+        allowed: the values accepted.
+        what: what a right value is, with its article (``a physics engine``).
+        fix: how to fix it, when the plain list of choices does not say enough.
+    """
+    choices = list(allowed)
+    if value not in choices:
+        raise SpecError([Issue(None, None, option, f"'{value}' is not {what}",
+                               fix or f"use {spoken(str(c) for c in choices)}")])

@@ -6,15 +6,15 @@ from pathlib import Path
 
 import typer
 
-from shc_cli.errors import Issue, SpecError
+from shc_cli.errors import Issue, SpecError, check_choice
 
 BAG_FORMATS = ("mcap", "sqlite3", "ros1")
 
 
 def check_outputs(bag: str | None, video: Path | None) -> None:
     """Refuse a bad ``--bag`` format or ``--video`` name before the run, not after it."""
-    if bag is not None and bag not in BAG_FORMATS:
-        raise SpecError([Issue(None, None, "--bag", f"'{bag}' is not a bag format", "use mcap, sqlite3 or ros1")])
+    if bag is not None:
+        check_choice("--bag", bag, BAG_FORMATS, "a bag format")
     if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
         raise SpecError([Issue(None, None, "--video", f"'{video}' is neither .mp4 nor .gif", "e.g. --video walk.mp4")])
 

@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any, Literal, TypedDict
 from pydantic import BaseModel, ConfigDict, ValidationError, field_validator
 
 from shc_cli.backends.engine_registry import DEFAULT_ENGINE, ENGINES, EngineName
-from shc_cli.errors import Issue, SpecError
+from shc_cli.errors import Issue, SpecError, check_choice
 
 if TYPE_CHECKING:
     from shc_cli.backends.engine import EngineOptions
@@ -130,31 +130,28 @@ class SimulationConfig(BaseModel):
     @field_validator("engine", mode="before")
     @classmethod
     def _engine(cls, value: object) -> object:
-        if value not in ENGINES:
-            raise _bad("--engine", f"'{value}' is not a physics engine", f"use {' or '.join(ENGINES)}")
+        check_choice("--engine", value, ENGINES, "a physics engine")
         return value
 
     @field_validator("scenario", mode="before")
     @classmethod
     def _scenario(cls, value: object) -> object:
         scenario = value.upper() if isinstance(value, str) else value
-        if scenario not in SCENARIOS:
-            raise _bad("--scenario", f"'{scenario}' is not a scenario",
-                       "use SA (stance air), WA (walk air), SG (stance ground) or WG (walk ground)")
+        check_choice("--scenario", scenario, SCENARIOS, "a scenario",
+                     "use SA (stance air), WA (walk air), SG (stance ground) or WG (walk ground)")
         return scenario
 
     @field_validator("start", mode="before")
     @classmethod
     def _start(cls, value: object) -> object:
-        if value not in ("unpacked", "packed"):
-            raise _bad("--start", f"'{value}' is not a start pose", "use unpacked or packed")
+        check_choice("--start", value, ("unpacked", "packed"), "a start pose")
         return value
 
     @field_validator("inclination", mode="before")
     @classmethod
     def _inclination(cls, value: object) -> object:
-        if value is not None and value not in ("off", "openshc", "support_centroid"):
-            raise _bad("--inclination", f"'{value}' is not a mode", "use off, openshc or support_centroid")
+        if value is not None:
+            check_choice("--inclination", value, ("off", "openshc", "support_centroid"), "a mode")
         return value
 
     @field_validator("posture")

@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any, Literal
 from pydantic import BaseModel, ConfigDict, field_validator
 
 from shc_cli.domain.result import RunResult
-from shc_cli.errors import Issue, SpecError
+from shc_cli.errors import Issue, SpecError, check_choice
 from shc_cli.loop.input_sources import STATES
 
 if TYPE_CHECKING:
@@ -98,18 +98,14 @@ class HardwareConfig(BaseModel):
     @field_validator("on_fault", "on_stop", mode="before")
     @classmethod
     def _hold_or_off(cls, value: object, info: Any) -> object:
-        if value not in ("hold", "torque-off"):
-            option = "--" + str(info.field_name).replace("_", "-")
-            raise SpecError([Issue(None, None, option, f"'{value}' is not hold or torque-off",
-                                   "use hold or torque-off")])
+        check_choice("--" + str(info.field_name).replace("_", "-"), value, ("hold", "torque-off"),
+                     "hold or torque-off")
         return value
 
     @field_validator("stop_state")
     @classmethod
     def _stop_state(cls, value: str) -> str:
-        if value not in STATES:
-            raise SpecError([Issue(None, None, "--stop-state", f"'{value}' is not a robot state",
-                                   "use packed, ready or running")])
+        check_choice("--stop-state", value, STATES, "a robot state")
         return value
 
     @field_validator("input_mode")

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from shc_cli.control.states import RobotState, WalkState
-from shc_cli.errors import Issue, OutputError, SpecError
+from shc_cli.errors import OutputError, check_choice
 from shc_cli.interop import mcap_chunks
 from shc_cli.interop.batch import BatchSerializer
 from shc_cli.loop.runlog import ROBOT_FILE
@@ -187,8 +187,7 @@ def _differences(values: np.ndarray, dt: float) -> np.ndarray:
 
 def export_bag(run: RunLog, out: Path, fmt: str) -> Path:
     """Write ``run`` as a bag at ``out`` (a directory for ROS 2 formats, a ``.bag`` file for ROS 1), atomically."""
-    if fmt not in FORMATS:
-        raise SpecError([Issue(None, None, "--format", f"'{fmt}' is not a bag format", "use mcap, sqlite3 or ros1")])
+    check_choice("--format", fmt, FORMATS, "a bag format")
     if out.exists():
         raise OutputError(f"{out}: already exists (choose another --out or remove it)")
     # Written under a hidden .partial folder and moved into place when complete; inside it the bag keeps its final

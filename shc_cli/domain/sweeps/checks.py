@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from shc_cli.domain.sweeps.options import check_sweep, option
-from shc_cli.errors import Issue, ShcError, SpecError
+from shc_cli.errors import Issue, ShcError, SpecError, check_choice
 from shc_cli.spec.sweep import Point, Sweep
 
 if TYPE_CHECKING:
@@ -89,9 +89,7 @@ def key_lines(sweep: Sweep) -> dict[str, int | None]:
 
 def check_executor(executor: str, scheduler: str | None) -> None:
     """One line for an unknown executor or a scheduler without Dask."""
-    if executor not in EXECUTORS:
-        raise SpecError([Issue(None, None, "--executor", f"'{executor}' is not an executor",
-                               f"use {' or '.join(EXECUTORS)}")])
+    check_choice("--executor", executor, EXECUTORS, "an executor")
     if scheduler is not None and executor != "dask":
         raise SpecError([Issue(None, None, "--scheduler", "only the dask executor has a scheduler",
                                "add --executor dask")])

@@ -27,7 +27,7 @@ from pathlib import Path
 from shc_cli.domain.sweeps.checks import check_executor, check_points
 from shc_cli.domain.sweeps.pool import RunPool
 from shc_cli.domain.sweeps.results import WARNINGS, PartialTable, Row, sweep_columns, write_table
-from shc_cli.errors import Issue, ShcError, SpecError
+from shc_cli.errors import Issue, ShcError, SpecError, check_choice
 from shc_cli.spec.sweep import Sweep, load_sweep
 
 OnRow = Callable[[int, int, Row | None], None]
@@ -87,9 +87,7 @@ def with_engine(sweep: Sweep, engine: str | None) -> Sweep:
         return sweep
     from shc_cli.backends.engine_registry import ENGINES
 
-    if engine not in ENGINES:
-        raise SpecError([Issue(None, None, "--engine", f"'{engine}' is not a physics engine",
-                               f"use {' or '.join(ENGINES)}")])
+    check_choice("--engine", engine, ENGINES, "a physics engine")
     if "engine" in sweep.fixed or "engine" in sweep.grid:
         return sweep
     return dataclasses.replace(sweep, points=[dataclasses.replace(point, options={**point.options, "engine": engine})
