@@ -23,13 +23,6 @@ def quartic(points: np.ndarray, t: float) -> np.ndarray:
     )
 
 
-def quartic_dot(points: np.ndarray, t: float) -> np.ndarray:
-    """Derivative ``dB/dt`` of the quartic Bézier at ``t``."""
-    s = 1.0 - t
-    return np.asarray(4.0 * s * s * s * (points[1] - points[0]) + 12.0 * s * s * t * (points[2] - points[1])
-            + 12.0 * s * t * t * (points[3] - points[2]) + 4.0 * t * t * t * (points[4] - points[3]))
-
-
 def cubic(points: np.ndarray, t: float) -> np.ndarray:
     """Point of the cubic Bézier with control points ``points`` (4, …) at ``t`` ∈ [0, 1]."""
     s = 1.0 - t

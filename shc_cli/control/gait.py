@@ -54,9 +54,6 @@ class StepCycle:
         """Stance share ``β = S/P``."""
         return self.stance_period / self.period
 
-    def in_swing(self, phase: int) -> bool:
-        return self.swing_start <= phase < self.swing_end
-
 
 def step_cycle(gait: Gait, step_frequency: float, time_delta: float) -> StepCycle:
     """The step cycle of ``gait`` at ``step_frequency`` [Hz] and control period ``time_delta`` [s]."""

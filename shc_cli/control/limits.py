@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from shc_cli.control.gait import StepCycle
@@ -87,8 +86,3 @@ def generate_limits(walkspace: Workplane, cycle: StepCycle, time_delta: float, s
         out[bearing] = BearingLimit(radius, scaled, stance_overshoot, swing_overshoot, max_speed, max_acc,
                                     angular, angular / time_to_max)
     return Limits(out, time_to_max, extension, stance_radius)
-
-
-def stance_radius_of(default_tip: tuple[float, float]) -> float:
-    """|xy| of a default tip position [m]."""
-    return math.hypot(*default_tip)

@@ -459,7 +459,3 @@ class ServoBus:
             write = (14 + count * per_goal) * 10.0 / self.baud
             busiest = max(busiest, read + write + sum(self.return_delays[i] for i in line.slots))
         return busiest
-
-
-def _signed(value: int, bits: int) -> int:
-    return value - (1 << bits) if value >= 1 << (bits - 1) else value

@@ -131,11 +131,6 @@ def poses(shape: Shapes, joints: FloatArray, position: FloatArray, rpy: FloatArr
     return Poses(world, np.asarray(position, dtype=float), rpy_quaternion(rpy), rotation)
 
 
-def box_centres(shape: Shapes, pose: Poses) -> FloatArray:
-    """World centres of the body box, ``(N, 3)``."""
-    return np.asarray(pose.body_position + np.einsum("nij,j->ni", pose.body_rotation, np.asarray(shape.body_com)))
-
-
 def at_limit(shape: Shapes, joints: FloatArray) -> np.ndarray:
     """Which joints are within :data:`LIMIT_MARGIN` of a limit, ``(..., L, n)`` (padding never)."""
     chains = shape.chains
