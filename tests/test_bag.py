@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shc_cli.interop.bag import _Messages, _serialize_as, _topics, typestore_for
+from shc_cli.interop.bag import Messages, _serialize_as, _topics, typestore_for
 from shc_cli.interop.batch import BatchSerializer
 from shc_cli.loop.runread import RunLog, read_run
 
@@ -38,7 +38,7 @@ def test_batch_bytes_equal_the_librarys_serialiser(walked: Path, fmt: str) -> No
     store = typestore_for(fmt)
     serialize = store.serialize_ros1 if fmt == "ros1" else store.serialize_cdr
     stamps = np.round(log.t * 1e9).astype(np.int64)
-    for topic, msgtype, build, width, values, once in _topics(log, _Messages(store)):
+    for topic, msgtype, build, width, values, once in _topics(log, Messages(store)):
         if once:
             continue
         rows = BatchSerializer(partial(_serialize_as, serialize, msgtype), build, width).serialize(stamps, values)
@@ -202,7 +202,7 @@ def test_every_field_of_every_topic_is_the_runs(walked: Path, tmp_path: Path, fm
     serialize = store.serialize_ros1 if fmt == "ros1" else store.serialize_cdr
     stamps = np.round(log.t * 1e9).astype(np.int64)
     expected = {topic: (msgtype, build, values, once) for topic, msgtype, build, _, values, once
-                in _topics(log, _Messages(store))}
+                in _topics(log, Messages(store))}
     raw: dict[str, list[bytes]] = {}
     if fmt == "ros1":
         from rosbags.rosbag1 import Reader as Reader1
