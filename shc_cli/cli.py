@@ -398,7 +398,7 @@ def import_openshc(
 @import_app.command("urdf")
 def import_urdf(
     file: Annotated[Path, typer.Argument(help="URDF or xacro file of a legged robot.", metavar="FILE.urdf|FILE.xacro")],
-    out: Annotated[Path | None, typer.Option(help="Folder for robots/NAME.toml and joint_map.csv "
+    out: Annotated[Path | None, typer.Option(help="Folder for robots/NAME.toml "
                                                   "[default: imported/NAME].")] = None,
     name: Annotated[str | None, typer.Option(help="Robot name [default: the URDF's robot name].")] = None,
     legs: Annotated[str, typer.Option(help="'auto' (every chain to a leaf link) or the tip links LINK,… or "
@@ -411,11 +411,14 @@ def import_urdf(
     snap: Annotated[float, typer.Option(help="Snap rpy values this close to a multiple of pi/2 [rad] (for "
                                              "axes meant to be parallel that are not quite).")] = 0.0,
     arg: Annotated[list[str] | None, typer.Option(help="xacro argument NAME=VALUE. Repeatable.")] = None,
+    forward: Annotated[str | None, typer.Option(help="base_link axis the robot walks along: +x, +y, -x or -y "
+                                                     "[default: +x, or +y if a leg is straight ahead].")] = None,
 ) -> None:
-    """Turn a legged robot's URDF or xacro into an shc robot file and a joint map (URDF joint → leg, joint)."""
+    """Turn a legged robot's URDF or xacro into an shc robot file (legs, limits, masses, a standing pose and the
+    servo map of [hardware.servos])."""
     from shc_cli.commands.importing import import_urdf as run
 
-    run(file, out, name, legs, tip, clearance, reach, snap, arg)
+    run(file, out, name, legs, tip, clearance, reach, snap, arg, forward)
 
 
 @app.command()

@@ -57,6 +57,17 @@ def test_legs_share_a_template_and_list_only_their_differences(tmp_path: Path) -
             assert mine.joints[name].model_dump(exclude={"mass"}) == joint.model_dump(exclude={"mass"})
 
 
+def test_the_servo_map_is_numbered_like_bullets_and_marked_to_check(tmp_path: Path) -> None:
+    """OpenSHC keeps its servo ids elsewhere: the import numbers them as robots/bullet.toml does (10 × leg +
+    joint) and says they are to check."""
+    from shc_cli.interop.openshc import import_openshc
+
+    robot_file = import_openshc(GOLDEN / "openshc" / "bullet_insectoid.yaml", None, None, tmp_path)[0]
+    assert "[hardware.servos] below is TO CHECK" in robot_file.read_text()
+    ids = {key: servo.id for key, servo in load_robot(robot_file).robot.hardware.servos.items()}
+    assert ids == {key: servo.id for key, servo in load_robot("bullet").robot.hardware.servos.items()}
+
+
 def test_gaits_and_auto_pose_sets_equal_the_shipped_ones(tmp_path: Path) -> None:
     from shc_cli.interop.openshc import import_openshc
 

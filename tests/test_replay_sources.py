@@ -253,3 +253,23 @@ def test_a_start_up_hidden_by_the_print_precision_is_found(head: Recorded, bulle
                         None, head.legs, None, progress)
     plan = infer_states(recorded, bullet)
     assert (plan.first_motion, plan.running, plan.evidence) == (start, start + steps, "leg progress")
+
+
+def test_a_recording_under_the_urdfs_joint_names_replays_through_the_servo_map(head: Recorded) -> None:
+    """A robot recorded with its URDF's joint names (``j_c1_rf``, …): [hardware.servos]'s ``joint`` names them, and
+    the comparison takes the same columns as for OpenSHC's names; without the map it is refused."""
+    import dataclasses
+
+    from shc_cli.replay.compare import Comparer
+    from shc_cli.spec.loading import load_robot
+
+    robot = load_robot("bullet").robot
+    renamed = {name: f"urdf_{k}_{name.lower()}" for k, name in enumerate(head.joint_names)}
+    recorded = dataclasses.replace(head, joint_names=[renamed[name] for name in head.joint_names][::-1],
+                                   joints=head.joints[:, ::-1])
+    servos = {key: servo.model_copy(update={"joint": renamed[f"{key}_joint"]})
+              for key, servo in robot.hardware.servos.items()}
+    mapped = robot.model_copy(update={"hardware": robot.hardware.model_copy(update={"servos": servos})})
+    assert np.array_equal(Comparer(recorded, mapped).joints, Comparer(head, robot).joints)
+    with pytest.raises(ShcError, match="are not those of robot 'bullet'"):
+        Comparer(recorded, robot)

@@ -6,7 +6,6 @@ for the Bullet xacro, our hand-written ``robots/bullet.toml`` (from CSIRO's Open
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 import shutil
@@ -248,9 +247,10 @@ def test_dog_with_straight_legs_and_a_free_root_stands_lower_and_plans(tmp_path:
     assert data["walker"]["gait"] == "quad_wave"
     assert list(data["legs"]) == ["AR", "BR", "BL", "AL"]
     assert list(data["templates"]["leg"]["joints"]) == ["joint0", "joint1", "joint2"]
-    rows = list(csv.DictReader((tmp_path / "joint_map.csv").open()))
-    assert [(r["urdf_joint"], r["leg"], r["joint"]) for r in rows[:3]] == \
-        [("FR_joint0", "AR", "joint0"), ("FR_joint1", "AR", "joint1"), ("FR_joint2", "AR", "joint2")]
+    assert _servo_rows(tmp_path / "robots" / "dog.toml")[:4] == \
+        [("FR_joint0", "AR", "joint0", 11), ("FR_joint1", "AR", "joint1", 12), ("FR_joint2", "AR", "joint2", 13),
+         ("RR_joint0", "BR", "joint0", 21)]
+    assert "[hardware.servos] below is TO CHECK" in (tmp_path / "robots" / "dog.toml").read_text()
     code, out, err = run(["plan", str(tmp_path / "robots" / "dog.toml"), "--duration", "3", "--no-plots", "--out",
                           str(tmp_path / "run")], capsys, monkeypatch)
     assert code == 0, err
@@ -270,9 +270,9 @@ def test_legs_named_and_ordered_by_hand_and_xacro_arguments(tmp_path: Path, caps
                           "--legs", legs], capsys, monkeypatch)
     assert code == 0, err
     assert "walker.gait 'quad_wave' names legs AR, BR, BL, AL, not these" in out
-    rows = list(csv.DictReader((tmp_path / "joint_map.csv").open()))
-    assert [row["leg"] for row in rows[::3]] == ["FL", "FR", "RR", "RL"]
-    assert [row["urdf_joint"] for row in rows[::3]] == ["leg3_joint0", "leg0_joint0", "leg1_joint0", "leg2_joint0"]
+    rows = _servo_rows(tmp_path / "robots" / "fido.toml")
+    assert [row[1] for row in rows[::3]] == ["FL", "FR", "RR", "RL"]
+    assert [row[0] for row in rows[::3]] == ["leg3_joint0", "leg0_joint0", "leg1_joint0", "leg2_joint0"]
     assert list(tomllib.loads((tmp_path / "robots" / "fido.toml").read_text())["legs"]) == ["FL", "FR", "RR", "RL"]
     xacro_file.write_text(xacro_file.read_text().replace("$(arg name)", "${undefined_thing}"))
     code, _, err = run(["import", "urdf", str(xacro_file), "--out", str(tmp_path / "bad")], capsys, monkeypatch)
@@ -308,18 +308,22 @@ def bullet_import(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, objec
     return out, import_urdf(BULLET_XACRO, out, tips=[BULLET_TIP])
 
 
-def _through_joint_map(out: Path, ours: Robot, imported: Robot, q: np.ndarray) -> np.ndarray:
-    """Joint angles of robots/bullet.toml → the imported robot's, through joint_map.csv (OpenSHC drives the URDF
-    joints ``LEG_JOINT_joint`` with its own angles)."""
-    rows = list(csv.DictReader((out / "joint_map.csv").open()))
+def _servo_rows(robot_file: Path) -> list[tuple[str, str, str, int]]:
+    """``(urdf_joint, leg, joint, id)`` of each [hardware.servos] entry an import wrote, in file order."""
+    servos = tomllib.loads(robot_file.read_text())["hardware"]["servos"]
+    return [(entry["joint"], *key.split("_", 1), entry["id"]) for key, entry in servos.items()]
+
+
+def _through_servo_map(robot_file: Path, ours: Robot, imported: Robot, q: np.ndarray) -> np.ndarray:
+    """Joint angles of robots/bullet.toml → the imported robot's, through [hardware.servos]'s URDF joint names
+    (OpenSHC drives the URDF joints ``LEG_JOINT_joint`` with its own angles; a URDF angle is the shc angle)."""
+    rows = _servo_rows(robot_file)
     assert len(rows) == 30
     mapped = np.zeros_like(q)
-    for row in rows:
-        leg, name = row["urdf_joint"].removesuffix("_joint").split("_")
-        urdf_angle = q[..., list(ours.legs).index(leg), list(ours.legs[leg].joints).index(name)]
-        shc_angle = (urdf_angle - float(row["offset"])) * int(row["direction"])
-        mapped[..., list(imported.legs).index(row["leg"]), list(imported.legs[row["leg"]].joints).index(row["joint"])] \
-            = shc_angle
+    for urdf_joint, leg_id, joint, _ in rows:
+        leg, name = urdf_joint.removesuffix("_joint").split("_")
+        mapped[..., list(imported.legs).index(leg_id), list(imported.legs[leg_id].joints).index(joint)] = \
+            q[..., list(ours.legs).index(leg), list(ours.legs[leg].joints).index(name)]
     return mapped
 
 
@@ -331,7 +335,7 @@ def test_bullet_xacro_matches_the_urdf_exactly(bullet_import) -> None:  # type: 
 def test_bullet_xacro_gives_bullet_toml_tips(bullet_import) -> None:  # type: ignore[no-untyped-def]
     """Same joint angles, same tips: within 10.5 mm, the differences of CSIRO's OpenSHC parameters from its URDF;
     with those values replaced by the URDF's, within 1e-5 m."""
-    out, result = bullet_import
+    _, result = bullet_import
     ours, imported = load_robot("bullet").robot, load_robot(result.robot_path).robot
     assert ours is not None and imported is not None
     assert list(imported.legs) == list(ours.legs)
@@ -339,7 +343,7 @@ def test_bullet_xacro_gives_bullet_toml_tips(bullet_import) -> None:  # type: ig
     mine = Chains.from_robot(ours)
     q = rng.uniform(np.maximum(mine.lower, -2.4), np.minimum(mine.upper, 2.4), size=(200, *mine.lower.shape))
     theirs = Chains.from_robot(imported)
-    mapped = _through_joint_map(out, ours, imported, q)
+    mapped = _through_servo_map(result.robot_path, ours, imported, q)
     worst = max(float(np.linalg.norm(mine.tips(a) - theirs.tips(b), axis=1).max())
                 for a, b in zip(q, mapped, strict=True))
     assert 0.009 < worst < 0.0105
@@ -469,21 +473,26 @@ def test_bad_urdfs_are_one_line_and_exit_2(content: str | None, message: str, tm
     assert not (tmp_path / "out").exists()
 
 
-def test_nearly_parallel_axes_are_one_line_and_snap_fixes_them(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+def test_nearly_parallel_axes_are_snapped_within_a_milliradian(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
                                                                 monkeypatch) -> None:
-    """Femur and tibia axes 2e-5 rad apart in their common plane (a pitch of 2e-5 rad): they meet 4 km away."""
+    """Femur and tibia axes 2e-5 rad apart in their common plane (a pitch of 2e-5 rad): they meet 4 km away. The
+    import snaps 1e-3 rad without being asked and says so; 0.003 rad apart is a one-line refusal naming --snap."""
     leg = LegSpec("p", [Element("revolute", (0.1, -0.1, 0.0), (0.0, 0.0, -math.pi / 2)),
                         Element("revolute", (0.04, 0.0, 0.0), (math.pi / 2, 0.0, 0.0)),
                         Element("revolute", (0.08, 0.0, 0.0), (0.0, 2e-5, 0.0))],
                   sphere=(0.1, 0.0, 0.0))
     path = tmp_path / "robot.urdf"
     path.write_text(robot_urdf([leg]))
-    code, _, err = run(["import", "urdf", str(path), "--out", str(tmp_path / "out")], capsys, monkeypatch)
-    assert code == 2
-    assert err.count("\n") == 1 and "from parallel" in err and "--snap 0.001" in err, err
-    assert not (tmp_path / "out").exists()
     from shc_cli.interop.urdf_import import import_urdf
 
-    result = import_urdf(path, tmp_path / "out", legs="p_link2", snap=0.001, clearance=0.05, reach=0.9)
+    result = import_urdf(path, tmp_path / "out", legs="p_link2", clearance=0.05, reach=0.9)
     assert result.fk_error < 1e-9 and result.snap == pytest.approx(2e-5, rel=0.01)
     assert 1e-7 < result.fk_error_unsnapped < 2e-5 * 0.2
+    assert any("2e-05 rad from parallel" in note and "snapped" in note for note in result.notes)
+    tilted = Element("revolute", (0.08, 0.0, 0.0), (0.0, 0.003, 0.0))
+    path.write_text(robot_urdf([LegSpec("p", [*leg.elements[:2], tilted], sphere=(0.1, 0.0, 0.0))]))
+    code, _, err = run(["import", "urdf", str(path), "--out", str(tmp_path / "out2"), "--legs", "p_link2"],
+                       capsys, monkeypatch)
+    assert code == 2
+    assert err.count("\n") == 1 and "from parallel" in err and "--snap 0.006" in err, err
+    assert not (tmp_path / "out2").exists()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import typer
@@ -18,8 +19,10 @@ def import_openshc(robot: Path, gait: Path | None, auto_pose: Path | None, out: 
 
 
 def import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tip: list[str] | None,
-                clearance: float | None, reach: float | None, snap: float, arguments: list[str] | None) -> None:
-    """A URDF or xacro → an shc robot file and a joint map; ``arguments`` are xacro's ``NAME=VALUE``."""
+                clearance: float | None, reach: float | None, snap: float, arguments: list[str] | None,
+                forward: str | None = None) -> None:
+    """A URDF or xacro → an shc robot file with its servo map; ``arguments`` are xacro's ``NAME=VALUE``, ``forward``
+    the base_link axis the robot walks along (``+x``, ``+y``, ``-x``, ``-y``; None: the import decides)."""
     from shc_cli.interop.urdf_import import import_urdf as convert
 
     mappings = {}
@@ -28,11 +31,14 @@ def import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tip: 
         if not sep:
             raise SpecError([Issue(None, None, "--arg", f"'{item}' is not NAME=VALUE", "e.g. --arg prefix=robot_")])
         mappings[key] = value
-    result = convert(file, out, name, legs, tip, clearance, reach, snap, mappings)
+    turns = {"+x": 0.0, "+y": math.pi / 2, "-x": math.pi, "-y": -math.pi / 2}
+    if forward is not None and forward not in turns:
+        raise SpecError([Issue(None, None, "--forward", f"'{forward}' is not an axis", "give +x, +y, -x or -y")])
+    result = convert(file, out, name, legs, tip, clearance, reach, snap, mappings,
+                     None if forward is None else turns[forward])
     for note in result.notes:
         typer.echo(f"note: {note}")
     typer.echo(f"forward kinematics: largest tip difference to the URDF {result.fk_error:.2g} m at 200 random joint "
                "vectors per leg" + (f" ({result.fk_error_unsnapped:.2g} m to the URDF before snapping rpy values, "
                                     f"largest snap {result.snap:.2g} rad)" if result.snap > 0 else ""))
     typer.echo(f"wrote {result.robot_path}")
-    typer.echo(f"wrote {result.joint_map_path}")

@@ -209,7 +209,9 @@ def poses_from_openshc(params: dict[str, Any]) -> dict[str, dict[str, Any]]:
 
 def import_openshc(robot_yaml: Path, gait_yaml: Path | None, pose_yaml: Path | None, out: Path) -> list[Path]:
     """Write ``out/robots/NAME.toml`` (+ ``out/gaits/*.toml``, ``out/poses/*.toml``); returns the files, each
-    checked by loading it back. The robot is named after the YAML file."""
+    checked by loading it back. The robot is named after the YAML file; its ``[hardware.servos]`` is the servo map
+    of :mod:`shc_cli.interop.servo_map` (ids numbered, to check)."""
+    from shc_cli.interop.servo_map import servo_table, with_check_note
     from shc_cli.outputs import write_text
     from shc_cli.spec.loading import load_robot
     from shc_cli.validation import check_robot
@@ -235,6 +237,9 @@ def import_openshc(robot_yaml: Path, gait_yaml: Path | None, pose_yaml: Path | N
             tree["walker"]["gait"] = f"../gaits/{tree['walker']['gait']}.toml"
     robot_path = out / "robots" / f"{name}.toml"
     write_text(robot_path, "\n".join(header) + "\n" + dump_toml(tree))
+    legs = {leg: list(spec.joints) for leg, spec in load_robot(robot_path).robot.legs.items()}
+    tree["hardware"] = servo_table(legs)  # the servo map (OpenSHC keeps it elsewhere): numbered, to check
+    write_text(robot_path, "\n".join(header) + "\n" + with_check_note(dump_toml(tree)))
     loaded = load_robot(robot_path)
     problems = check_robot(loaded)
     if problems:

@@ -1,4 +1,4 @@
-"""``shc import urdf``: a legged robot's URDF (or xacro) → an shc robot file and a joint map.
+"""``shc import urdf``: a legged robot's URDF (or xacro) → an shc robot file with its servo map.
 
 * **Body**: the URDF's root link and every link fixed to it. shc's ``base_link`` is the URDF link
   ``base_link`` if it is one of them, else the root; the body's mass, centre of mass and principal moments
@@ -9,7 +9,14 @@
   of leaves on the same joints the one with a sphere (else the deepest) is the foot. Fixed joints fold into
   the transforms. ``--legs LINK,…`` (or ``ID=LINK,…``) names the tip links instead, ``--tip PATTERN[@X,Y,Z]``
   names tip links by glob pattern and the tip point in their frame.
-* **Tip**: the centre of the tip link's first collision sphere, else its frame origin (``--tip`` names it).
+* **Tip**: the centre of the tip link's first collision sphere, else its frame origin (``--tip`` names it); a
+  frame origin on the last joint's axis (a tibia frame on the knee and no foot frame) is replaced by the point of
+  the link's mesh farthest from that axis, else the import is refused with the ``--tip`` that would fix it.
+* **What is not a leg** (:mod:`shc_cli.interop.urdf_import_clean`): sensor stand-ins and dummy foot joints are
+  fixed, head and camera chains left out, placeholder inertias and speed limits replaced (and named), and a
+  body frame whose +x points at a leg turned a quarter (``--forward`` chooses). Axes less than
+  :data:`AUTO_SNAP` from parallel are snapped without being asked.
+* **Servo map**: ``[hardware.servos]`` (:mod:`shc_cli.interop.servo_map`): ids numbered, each joint's URDF name.
 * **DH**: :mod:`shc_cli.interop.urdf_import_dh`: exact for any axes; URDF angle = shc angle.
 * **Leg ids** by position (the mean of the leg's joint origins and tip at the zero pose: a joint's origin may
   be anywhere on its axis), clockwise from the front right: with as many legs on the right (y < 0) as on the
@@ -26,15 +33,14 @@
   of the leg's length), the candidates are the zero pose and the body lowered to 0.9 … 0.6 of the feet's depth
   (not the zero pose itself if a leg is straight there: a singular pose). Otherwise, or if none of those is
   reachable, each foot is put 0.5, 0.4, 0.6, 0.3, 0.7 or 0.2 of the leg's length out from its hip (along the
-  zero pose's leg direction) with the body as many shares of a leg's length above the hips. ``--clearance``
+  zero pose's leg direction) with the body as many shares of a leg's length above the hips, then (a knee
+  limit that keeps the leg nearly straight) 0.75, 0.8 or 0.85 out. ``--clearance``
   and ``--reach`` fix either. ``unpacked`` is the pose the IK finds there from every joint at 0.
 """
 
 from __future__ import annotations
 
-import csv
 import fnmatch
-import io
 import itertools
 import math
 import re
@@ -48,6 +54,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shc_cli.errors import Issue, SpecError
+from shc_cli.interop.servo_map import servo_table, with_check_note
+from shc_cli.interop.urdf_import_clean import (
+    ON_AXIS,
+    SERVO_MASS,
+    dummy_tail,
+    forward_turn,
+    leg_chains,
+    placeholders,
+    stub_joints,
+)
 from shc_cli.interop.urdf_import_dh import Axis, NearlyParallel, Row, chain_dh
 from shc_cli.interop.urdf_import_source import SUGGESTED_SNAP, parse_urdf, read_source
 from shc_cli.spec.toml_out import dump_toml
@@ -62,8 +78,14 @@ SWING_SHARE = 0.2
 """Swing height written, as a share of the body clearance; a stance must reach this much higher too."""
 TIE = 0.95
 """Stances whose walkspace is at least this share of the best are as good: the first (most natural) is taken."""
+FRACTIONS = [0.5, 0.4, 0.6, 0.3, 0.7, 0.2]
+"""Shares of the leg's length tried for the stance's reach and the body's height (most natural first)."""
+FAR = [0.75, 0.8, 0.85]
+"""Reaches tried when none of :data:`FRACTIONS` stands (a knee limit that keeps the leg nearly straight)."""
 GAITS = {4: "quad_wave", 6: "tripod", 8: "octo_alternating"}
 """Gait written for a robot with this many legs (others get ``wave``, which fits none but six legs)."""
+AUTO_SNAP = 0.001
+"""Snap tolerance used without being asked when two axes are nearly parallel [rad] (1.57 is 0.0008 from π/2)."""
 FK_SAMPLES = 200
 """Random joint vectors per leg of the forward-kinematics check after writing."""
 UNSUPPORTED = {"prismatic": "slides", "continuous": "has no limits", "planar": "moves in a plane",
@@ -122,6 +144,10 @@ class Imported:
     legs: list[LegChain]
     base_frame: str
     notes: list[str]
+    yaw: float = 0.0
+    """The shc body frame is base_frame turned by this about z [rad]."""
+    refusal: tuple[str, str] | None = None
+    """Why (problem, fix) the robot cannot be written though its chains could be traced."""
 
 
 # -- the URDF as a tree ----------------------------------------------------------------------------------------
@@ -130,8 +156,12 @@ class Imported:
 class Tree:
     """Links and joints of a yourdfpy model with zero-pose transforms in the shc base frame."""
 
-    def __init__(self, model: Any) -> None:
+    def __init__(self, model: Any, fixed: dict[str, str] | None = None, yaw: float = 0.0) -> None:
         self.model = model
+        self.fixed = dict(fixed or {})
+        """Moving joints taken as fixed at 0: ``{name: why}`` (:mod:`shc_cli.interop.urdf_import_clean`)."""
+        self.yaw = yaw
+        """The shc body frame is base_link turned by this about its z axis [rad]."""
         self.joints = {j.name: j for j in model.robot.joints}
         self.links = {link.name: link for link in model.robot.links}
         self.parent_joint = {j.child: j for j in model.robot.joints}
@@ -146,7 +176,7 @@ class Tree:
         self.body = self._fixed_set(self.root)
         self.base_frame = "base_link" if "base_link" in self.body else self.root
         world = self._world()
-        inverse = np.linalg.inv(world[self.base_frame])
+        inverse = turn(yaw).T @ np.linalg.inv(world[self.base_frame])
         self.pose = {name: inverse @ transform for name, transform in world.items()}
 
     def _fixed_set(self, start: str) -> list[str]:
@@ -154,7 +184,7 @@ class Tree:
         while stack:
             link = stack.pop()
             out.append(link)
-            stack += [j.child for j in self.children.get(link, []) if j.type == "fixed"]
+            stack += [j.child for j in self.children.get(link, []) if self.is_fixed(j)]
         return out
 
     def _world(self) -> dict[str, FloatArray]:
@@ -168,6 +198,12 @@ class Tree:
                 world[joint.child] = world[link] @ origin
                 stack.append(joint.child)
         return world
+
+    def is_fixed(self, joint: Any) -> bool:
+        return joint.type == "fixed" or joint.name in self.fixed
+
+    def moving(self, path: list[Any]) -> list[Any]:
+        return [joint for joint in path if not self.is_fixed(joint)]
 
     def path(self, link: str) -> list[Any]:
         """Joints from the body to ``link``, body first."""
@@ -187,6 +223,13 @@ class Tree:
                 if not self.children.get(name) and name not in self.body and name not in self.skipped]
 
 
+def turn(yaw: float) -> FloatArray:
+    """Homogeneous rotation by ``yaw`` about z [rad]."""
+    out = np.eye(4)
+    out[:2, :2] = [[math.cos(yaw), -math.sin(yaw)], [math.sin(yaw), math.cos(yaw)]]
+    return out
+
+
 def _sphere(link: Any) -> tuple[FloatArray, float] | None:
     """Centre (in the link frame) and radius of the link's first collision sphere."""
     for collision in link.collisions or []:
@@ -199,13 +242,9 @@ def _sphere(link: Any) -> tuple[FloatArray, float] | None:
 # -- legs ------------------------------------------------------------------------------------------------------
 
 
-def _moving(path: list[Any]) -> list[Any]:
-    return [joint for joint in path if joint.type != "fixed"]
-
-
 def _auto_ends(tree: Tree, file: Path) -> list[str]:
     """Leaf links ending legs (module docstring)."""
-    sets = {leaf: frozenset(j.name for j in _moving(tree.path(leaf))) for leaf in tree.leaves()}
+    sets = {leaf: frozenset(j.name for j in tree.moving(tree.path(leaf))) for leaf in tree.leaves()}
     sets = {leaf: joints for leaf, joints in sets.items() if joints}
     maximal = {leaf: joints for leaf, joints in sets.items() if not any(joints < other for other in sets.values())}
     by_set: dict[frozenset[str], list[str]] = {}
@@ -233,7 +272,7 @@ def _check_serial(legs: list[LegChain], file: Path) -> None:
 
 def _chain(tree: Tree, end: str, tip: TipSpec | None, file: Path) -> LegChain:
     path = tree.path(end)
-    for joint in path:
+    for joint in tree.moving(path):
         if joint.type in UNSUPPORTED:
             raise _fail(file, f"joint {joint.name} on the leg to {end} is {joint.type} (it {UNSUPPORTED[joint.type]})"
                         ": shc legs have revolute joints only",
@@ -247,7 +286,7 @@ def _chain(tree: Tree, end: str, tip: TipSpec | None, file: Path) -> LegChain:
         if joint.type == "revolute" and not (joint.limit.lower or 0.0) < (joint.limit.upper or 0.0):
             raise _fail(file, f"revolute joint {joint.name} has lower {joint.limit.lower} >= upper "
                         f"{joint.limit.upper}", "give it a range (lower < upper), or make it fixed")
-    moving = _moving(path)
+    moving = tree.moving(path)
     if not moving:
         raise _fail(file, f"no revolute joint between the body and {end}", "name a link of a leg")
     sphere = _sphere(tree.links[end])
@@ -395,7 +434,7 @@ def _dh_values(row: Row) -> dict[str, float]:
 
 def _moved_by(tree: Tree, link: str) -> str | None:
     """The last moving joint between the body and ``link`` (None for body links)."""
-    moving = _moving(tree.path(link))
+    moving = tree.moving(tree.path(link))
     return moving[-1].name if moving else None
 
 
@@ -444,17 +483,20 @@ def choose_stance(robot_tree: dict[str, Any], legs: list[LegChain], clearance: f
     norms = np.linalg.norm(outward, axis=1)
     fallback = hips[:, :2] / np.maximum(np.linalg.norm(hips[:, :2], axis=1), 1e-9)[:, None]
     direction = np.where((norms > 0.1 * lengths)[:, None], outward / np.maximum(norms, 1e-9)[:, None], fallback)
-    fractions = [0.5, 0.4, 0.6, 0.3, 0.7, 0.2]
     length, hip_z = float(np.median(lengths)), float(np.median(hips[:, 2]))
-    for f_reach in [reach] if reach is not None else fractions:
-        for f_height in [None] if clearance is not None else fractions:
-            height = clearance if clearance is not None else f_height * length - hip_z  # type: ignore[operator]
-            if height <= 0.0:
-                continue
-            xy = hips[:, :2] + direction * (f_reach * lengths)[:, None]
-            what = (f"feet {f_reach:g} of the leg's length out from the hips"
-                    + ("" if clearance is not None else f", body {f_height:g} of it above the hips"))
-            candidates.append((xy, float(height), what))
+    for reaches in ([[reach]] if reach is not None else [FRACTIONS, FAR]):
+        for f_reach in reaches:
+            for f_height in [None] if clearance is not None else FRACTIONS:
+                height = clearance if clearance is not None else f_height * length - hip_z  # type: ignore[operator]
+                if height <= 0.0:
+                    continue
+                xy = hips[:, :2] + direction * (f_reach * lengths)[:, None]
+                what = (f"feet {f_reach:g} of the leg's length out from the hips"
+                        + ("" if clearance is not None else f", body {f_height:g} of it above the hips"))
+                candidates.append((xy, float(height), what))
+        if reach is None and reaches is FRACTIONS:
+            candidates = []
+            groups.append(candidates)
     for group in groups:
         scored = [stance for stance in (_try(chains, xy, height, what, time_delta) for xy, height, what in group)
                   if stance is not None]
@@ -500,41 +542,41 @@ def _length(leg: LegChain) -> float:
 
 
 def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: list[TipSpec] | None = None,
-                clearance: float | None = None, reach: float | None = None) -> Imported:
-    """The shc robot table tree of a parsed URDF (module docstring)."""
-    tree = Tree(model)
+                clearance: float | None = None, reach: float | None = None, forward: float | None = None,
+                stubs: dict[str, str] | None = None) -> Imported:
+    """The shc robot table tree of a parsed URDF (module docstring).
+
+    ``forward``: the turn of the shc body frame from base_link about z [rad] (None: π/2 if the legs' layout says
+    the URDF's +x is not forward, :func:`~shc_cli.interop.urdf_import_clean.forward_turn`, else 0)."""
+    stubs = stub_joints(model.robot.joints) if stubs is None else stubs
+    tree = Tree(model, stubs, forward or 0.0)
     found = find_legs(tree, legs, tips or [], file)
-    notes: list[str] = []
+    notes: list[str] = [f"{joint} is taken as fixed: {why}" for joint, why in stubs.items()]
     if tree.skipped:
         notes.append(f"the root {tree.skipped[0]} holds the robot by a free joint: the body starts at {tree.root}")
+    for _, chain in found:
+        _trace(tree, chain, file, notes)
+    if legs == "auto" and not tips:
+        kept = leg_chains([len(c.joints) for _, c in found], [_length(c) for _, c in found])
+        if len(kept) < len(found):
+            notes.append("chains left out as not legs (their links count as body): "
+                         + ", ".join(f"{c.end} ({len(c.joints)} joints)" for i, (_, c) in enumerate(found)
+                                     if i not in kept))
+            found = [found[i] for i in kept]
     chains = [chain for _, chain in found]
-    for chain in chains:
-        axes = []
-        for joint in chain.joints:
-            frame = tree.joint_frame(joint)
-            axis = np.array([1.0, 0.0, 0.0]) if joint.axis is None else np.asarray(joint.axis, dtype=float)
-            if not np.linalg.norm(axis) > 0.0:
-                raise _fail(file, f"joint {joint.name} has the axis (0, 0, 0)",
-                            "give it a direction, e.g. xyz=\"0 0 1\"")
-            axes.append(Axis(frame[:3, 3].copy(), frame[:3, :3] @ (axis / np.linalg.norm(axis))))
-        chain.tip = (tree.pose[chain.end] @ np.append(chain.tip_local, 1.0))[:3]
-        chain.hip = axes[0].point
-        chain.points = [a.point for a in axes[1:]]
-        if len(axes) > 6:
-            raise _fail(file, f"the leg to {chain.end} has {len(axes)} revolute joints; shc legs have 1 to 6",
-                        "name a link nearer the body with --tip")
-        try:
-            chain.base, chain.rows = chain_dh(axes, chain.tip)
-        except NearlyParallel as error:
-            names = ["base_link z", *[j.name for j in chain.joints]]
-            raise _fail(file, f"axes of {names[error.index]} and {names[error.index + 1]} are {error.angle:.2g} rad "
-                        f"from parallel: the DH table would need an offset of {error.offset:.3g} m",
-                        f"snap the URDF's angles with --snap {max(error.angle * 2, SUGGESTED_SNAP):.1g} or fix them")\
-                from None
-    on_axis = [chain.end for chain in chains if abs(chain.rows[-1].r) < 1e-6]
+    on_axis = [chain for chain in chains if abs(chain.rows[-1].r) < ON_AXIS]
+    refusal = None
     if on_axis:
-        notes.append(f"the tips of {', '.join(on_axis)} lie on the axes of their legs' last joints, which then do "
-                     "not move them: name the tips with --tip 'LINK@X,Y,Z' (LINK may be a glob pattern)")
+        refusal = (f"the tip of the leg to {on_axis[0].end} ({on_axis[0].tip_source}) lies on the axis of "
+                   f"{on_axis[0].joints[-1].name}, which then does not move it (a link frame on the joint axis and no "
+                   "foot frame after it)", f"name the tip point with {_tip_hint(tree, on_axis)}")
+    if forward is None and legs == "auto":
+        yaw = forward_turn([np.mean([c.hip, *c.points, c.tip], axis=0) for c in chains])
+        if yaw:
+            again = import_tree(model, file, name, legs, tips, clearance, reach, yaw, stubs)
+            again.notes.append(f"the URDF's +x points at a leg (legs straight ahead and behind): shc's forward is "
+                               f"base_link's {'+y' if yaw > 0 else '-y'} (--forward +x keeps the URDF's)")
+            return again
     ids, order = leg_ids([np.mean([chain.hip, *chain.points, chain.tip], axis=0) for chain in chains])
     for (given, chain), leg_id in zip(found, ids, strict=True):
         chain.leg_id = given or leg_id
@@ -561,10 +603,21 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
         else:
             extra.append(link)
     for joint in tree.joints.values():
-        if joint.type != "fixed" and joint.name not in leg_joints:
+        if not tree.is_fixed(joint) and joint.name not in leg_joints:
             unused.append(joint.name)
     body, body_notes = _body(tree, extra, [c.hip for c in chains])
     notes += body_notes
+    parts = [p for p in (_inertial(tree, link) for link in tree.links) if p is not None]
+    found_placeholders = placeholders(
+        [p[0] for p in parts], [float(np.linalg.eigvalsh(p[2]).max()) for p in parts], [_length(c) for c in chains],
+        [float(j.limit.velocity) for c in chains for j in c.joints if j.limit.velocity])
+    notes += found_placeholders.notes
+    if found_placeholders.masses:
+        for chain in chains:
+            chain.masses = [SERVO_MASS] * len(chain.joints)
+        body.pop("com", None)
+        body.pop("inertia", None)
+        body["mass"] = _round(SERVO_MASS * sum(len(c.joints) for c in chains), 6)
     if unused:
         notes.append(f"URDF joints in no leg (their links count as body): {', '.join(sorted(unused))}")
     efforts = Counter(j.limit.effort for c in chains for j in c.joints if j.limit.effort)
@@ -577,13 +630,17 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
                          "servo.stall_torque is the most common")
     if speeds:
         servo["no_load_speed"] = float(speeds.most_common(1)[0][0])
+    if found_placeholders.speed is not None:
+        servo["no_load_speed"] = found_placeholders.speed
     legs_out: dict[str, Any] = {}
     for chain in chains:
         joints = {}
         for joint_name, joint, row, mass in zip(chain.names, chain.joints, chain.rows, chain.masses, strict=True):
             entry: dict[str, Any] = {**_dh_values(row), "min": float(joint.limit.lower or 0.0),
                                      "max": float(joint.limit.upper or 0.0)}
-            if joint.limit.velocity:
+            if found_placeholders.speed is not None:
+                entry["max_vel"] = found_placeholders.speed
+            elif joint.limit.velocity:
                 entry["max_vel"] = float(joint.limit.velocity)
             entry["mass"] = _round(mass, 6)
             joints[joint_name] = entry
@@ -600,15 +657,144 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
     tree_out: dict[str, Any] = {"name": name, "description": f"imported from {file.name} by shc import urdf",
                                 "time_delta": 0.01, "body": body, "walker": {"gait": gait}, "servo": servo,
                                 "legs": legs_out}
-    return Imported(tree_out, chains, tree.base_frame, notes)
+    return Imported(tree_out, chains, tree.base_frame, notes, tree.yaw, refusal)
+
+
+def _trace(tree: Tree, chain: LegChain, file: Path, notes: list[str]) -> None:
+    """The chain's axes, tip and DH rows; dummy joints at its foot become fixed (``tree.fixed``)."""
+    axes = []
+    for joint in chain.joints:
+        frame = tree.joint_frame(joint)
+        axis = np.array([1.0, 0.0, 0.0]) if joint.axis is None else np.asarray(joint.axis, dtype=float)
+        if not np.linalg.norm(axis) > 0.0:
+            raise _fail(file, f"joint {joint.name} has the axis (0, 0, 0)", "give it a direction, e.g. xyz=\"0 0 1\"")
+        axes.append(Axis(frame[:3, 3].copy(), frame[:3, :3] @ (axis / np.linalg.norm(axis))))
+    chain.tip = (tree.pose[chain.end] @ np.append(chain.tip_local, 1.0))[:3]
+    dummies = dummy_tail([a.point for a in axes], [a.direction for a in axes], chain.tip)
+    if dummies:
+        for joint in chain.joints[-dummies:]:
+            tree.fixed[joint.name] = "a joint at the foot whose axis passes through the tip (it moves nothing)"
+        notes.append(f"{', '.join(j.name for j in chain.joints[-dummies:])} at the foot of the leg to {chain.end} "
+                     "pass through the tip: taken as fixed")
+        chain.joints, axes = chain.joints[:-dummies], axes[:-dummies]
+    if chain.tip_source.startswith("the origin of") and _off_axis(chain.tip, axes[-1]) < ON_AXIS:
+        found = _mesh_tip(tree, chain.end, axes[-1], file)
+        if found is not None:
+            chain.tip, chain.tip_source = found
+            chain.tip_local = (np.linalg.inv(tree.pose[chain.end]) @ np.append(chain.tip, 1.0))[:3]
+    chain.hip = axes[0].point
+    chain.points = [a.point for a in axes[1:]]
+    if len(axes) > 6:
+        raise _fail(file, f"the leg to {chain.end} has {len(axes)} revolute joints; shc legs have 1 to 6",
+                    "name a link nearer the body with --tip")
+    try:
+        chain.base, chain.rows = chain_dh(axes, chain.tip)
+    except NearlyParallel as error:
+        names = ["base_link z", *[j.name for j in chain.joints]]
+        raise NeedsSnap(f"axes of {names[error.index]} and {names[error.index + 1]} are {error.angle:.2g} rad from "
+                        f"parallel: the DH table would need an offset of {error.offset:.3g} m",
+                        max(error.angle * 2, SUGGESTED_SNAP)) from None
+
+
+def _off_axis(point: FloatArray, axis: Axis) -> float:
+    """Distance of ``point`` from the line of ``axis`` [m]."""
+    offset = point - axis.point
+    return float(np.linalg.norm(offset - np.dot(offset, axis.direction) * axis.direction))
+
+
+def _mesh_tip(tree: Tree, link: str, axis: Axis, file: Path) -> tuple[FloatArray, str] | None:
+    """The vertex of ``link``'s collision (else visual) meshes farthest from ``axis`` (in base_link, with how it
+    was found), for a leg whose link frame sits on its last joint's axis; None if no mesh file is found."""
+    import trimesh
+
+    from shc_cli.interop.urdf_import_source import find_package
+
+    best: tuple[float, FloatArray, str] | None = None
+    for shape in [*(tree.links[link].collisions or []), *(tree.links[link].visuals or [])]:
+        mesh = shape.geometry.mesh if shape.geometry is not None else None
+        if mesh is None or not mesh.filename:
+            continue
+        name = str(mesh.filename)
+        path: Path | None
+        if name.startswith("package://"):
+            package, _, rest = name[len("package://"):].partition("/")
+            folder = find_package(package, file.resolve().parent)
+            path = folder / rest if folder is not None else None
+        else:
+            path = file.parent / name.removeprefix("file://")
+        if path is None or not path.is_file():
+            continue
+        try:
+            loaded = trimesh.load(str(path), force="mesh")
+        except (ValueError, OSError):
+            continue
+        vertices = np.asarray(getattr(loaded, "vertices", np.zeros((0, 3))), dtype=np.float64)
+        if vertices.size == 0:
+            continue
+        scale = np.ones(3) if mesh.scale is None else np.broadcast_to(np.asarray(mesh.scale, dtype=float), (3,))
+        origin = np.eye(4) if shape.origin is None else np.asarray(shape.origin, dtype=float)
+        placed = (tree.pose[link] @ origin @ np.column_stack([vertices * scale, np.ones(len(vertices))]).T).T[:, :3]
+        offsets = placed - axis.point
+        distance = np.linalg.norm(offsets - np.outer(offsets @ axis.direction, axis.direction), axis=1)
+        k = int(np.argmax(distance))
+        if best is None or distance[k] > best[0]:
+            best = (float(distance[k]), placed[k], f"the point of {link}'s mesh {path.name} farthest from its joint's "
+                                                   "axis (the link's frame is on the axis)")
+    return None if best is None or best[0] < ON_AXIS else (best[1], best[2])
+
+
+class NeedsSnap(Exception):
+    """Two axes of a leg are nearly parallel: the URDF needs snapping (by at least ``snap`` rad) to import."""
+
+    def __init__(self, problem: str, snap: float) -> None:
+        super().__init__(problem)
+        self.problem, self.snap = problem, snap
+
+
+def _tip_hint(tree: Tree, legs: list[LegChain]) -> str:
+    """The ``--tip`` option that names the far end of the legs' last links (from their collision or visual
+    geometry, else twice their centre of mass), with a glob pattern when the links' names share an end."""
+    leg = legs[0]
+    link = tree.links[leg.end]
+    joint = leg.joints[-1]
+    axis = np.array([1.0, 0.0, 0.0]) if joint.axis is None else np.asarray(joint.axis, dtype=float)
+    axis = axis / np.linalg.norm(axis)
+    candidates: list[FloatArray] = []
+    for shape in [*(link.collisions or []), *(link.visuals or [])]:
+        origin = np.eye(4) if shape.origin is None else np.asarray(shape.origin, dtype=float)
+        geometry = shape.geometry
+        half = None
+        if geometry is not None and geometry.cylinder is not None:
+            half = np.array([0.0, 0.0, float(geometry.cylinder.length) / 2])
+        elif geometry is not None and geometry.box is not None:
+            size = np.asarray(geometry.box.size, dtype=float)
+            half = np.where(size == size.max(), size / 2, 0.0)
+        if half is not None:
+            candidates += [(origin @ np.append(sign * half, 1.0))[:3] for sign in (1.0, -1.0)]
+    if not candidates and link.inertial is not None and link.inertial.origin is not None:
+        candidates.append(2.0 * np.asarray(link.inertial.origin, dtype=float)[:3, 3])
+    names = [chain.end for chain in legs]
+    suffix = names[0]
+    while suffix and not all(n.endswith(suffix) for n in names):
+        suffix = suffix[1:]
+    pattern = f"*{suffix}" if len(names) > 1 and len(suffix) >= 3 else names[0]
+    if not candidates:
+        return f"--tip '{pattern}@X,Y,Z' (the foot's point in {leg.end}'s frame, metres: measure it)"
+    best = max(candidates, key=lambda p: float(np.linalg.norm(p - np.dot(p, axis) * axis)))
+    return (f"--tip '{pattern}@{best[0]:.4g},{best[1]:.4g},{best[2]:.4g}' (the far end of {leg.end}'s geometry; "
+            "check it, in metres in that link's frame)")
 
 
 def _finish(imported: Imported, clearance: float | None, reach: float | None, file: Path) -> None:
     """Add the stance, clearance, unpacked pose and swing height to the tree."""
     stance = choose_stance(imported.tree, imported.legs, clearance, reach, imported.tree["time_delta"])
+    if stance is None and (clearance is not None or reach is not None):
+        raise _fail(file, *_why_not(imported, clearance, reach))
     if stance is None:
-        raise _fail(file, "no standing pose found that every leg reaches within its joint limits",
-                    "give one with --clearance M and --reach FRACTION (of the leg's length, from the hip)")
+        raise _fail(file, "no standing pose found that every leg reaches within its joint limits, with the feet "
+                    f"{min(FRACTIONS):g}–{max(FAR):g} of the leg's length out and the body "
+                    f"{min(FRACTIONS):g}–{max(FRACTIONS):g} of it above the hips",
+                    "check the legs' joint limits, or give a stance with --clearance M and --reach FRACTION")
     walker = imported.tree["walker"]
     walker["body_clearance"] = stance.clearance
     swing = round(min(max(SWING_SHARE * stance.clearance, 0.01), 0.2), 3)
@@ -621,6 +807,59 @@ def _finish(imported: Imported, clearance: float | None, reach: float | None, fi
     imported.notes.insert(0, f"stance and body clearance: {stance.how}")
     imported.notes.insert(1, f"gait {walker['gait']}, swing height {swing:g} m (a fifth of the clearance), control "
                              "period 0.01 s, everything else shc's defaults")
+
+
+def _why_not(imported: Imported, clearance: float | None, reach: float | None) -> tuple[str, str]:
+    """Problem and fix of a stance the user asked for that a leg cannot take: the leg, the joint limit in the
+    way, and the range of the other value (or of the one given) that stands."""
+    from shc_cli.model.chains import Chains
+    from shc_cli.model.ik import solve
+    from shc_cli.spec.robot import Robot
+
+    legs = imported.legs
+    stub = {**imported.tree, "legs": {leg.leg_id: {**imported.tree["legs"][leg.leg_id],
+                                                   "stance": {"x": 0.0, "y": 0.0}} for leg in legs}}
+    chains = Chains.from_robot(Robot.model_validate(stub))
+    lengths = np.array([_length(leg) for leg in legs])
+    hips = np.array([leg.hip for leg in legs])
+    outward = np.array([leg.tip[:2] - leg.hip[:2] for leg in legs])
+    norms = np.linalg.norm(outward, axis=1)
+    fallback = hips[:, :2] / np.maximum(np.linalg.norm(hips[:, :2], axis=1), 1e-9)[:, None]
+    direction = np.where((norms > 0.1 * lengths)[:, None], outward / np.maximum(norms, 1e-9)[:, None], fallback)
+    hip_z = float(np.median(hips[:, 2]))
+    length = float(np.median(lengths))
+
+    def attempt(f_reach: float, height: float) -> tuple[FloatArray, FloatArray]:
+        targets = np.column_stack([hips[:, :2] + direction * (f_reach * lengths)[:, None],
+                                   np.full(len(legs), -height)])
+        return solve(chains, chains.default_joints(), targets, tolerance=1e-5, max_steps=600)
+
+    f_reach = reach if reach is not None else 0.5
+    height = clearance if clearance is not None else 0.3 * length - hip_z
+    q, error = attempt(f_reach, height)
+    worst = int(np.argmax(error))
+    leg = legs[worst]
+    lower, upper = chains.lower[worst], chains.upper[worst]
+    at = [k for k in range(len(leg.joints)) if min(abs(q[worst, k] - lower[k]), abs(q[worst, k] - upper[k])) < 1e-3]
+    limit = (", ".join(f"{leg.names[k]} at its {'lower' if abs(q[worst, k] - lower[k]) < 1e-3 else 'upper'} limit "
+                       f"{lower[k] if abs(q[worst, k] - lower[k]) < 1e-3 else upper[k]:.3g} rad" for k in at)
+             or "out of reach")
+    asked = " and ".join(part for part in (f"clearance {clearance:g} m" if clearance is not None else "",
+                                           f"reach {reach:g}" if reach is not None else "") if part)
+    problem = f"leg {leg.leg_id} cannot stand with {asked} ({limit}, {error[worst] * 1000:.0f} mm short)"
+    works: list[float] = []
+    if clearance is not None:
+        for share in np.arange(0.1, 0.96, 0.05):
+            if (attempt(float(share), clearance)[1] < 1e-4).all():
+                works.append(float(share))
+        if works:
+            return problem, (f"with clearance {clearance:g} m every leg stands at --reach {min(works):.2g} to "
+                             f"{max(works):.2g}")
+    heights = [float(h) for h in np.arange(0.01, 1.5 * length, 0.005)]
+    works = [h for h in heights if (attempt(f_reach, h)[1] < 1e-4).all()]
+    if works:
+        return problem, f"with reach {f_reach:g} every leg stands at --clearance {min(works):.3g} to {max(works):.3g} m"
+    return problem, "give a smaller --reach or --clearance, or widen that joint's limits"
 
 
 def factor_legs(legs: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
@@ -643,19 +882,8 @@ def factor_legs(legs: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
     return templates, {leg_id: out[leg_id] for leg_id in legs}
 
 
-def joint_map_csv(legs: list[LegChain]) -> str:
-    """``urdf_joint,leg,joint,offset,direction``: URDF angle = offset + direction × shc angle [rad]."""
-    buffer = io.StringIO()
-    writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(["urdf_joint", "leg", "joint", "offset", "direction"])
-    for chain in legs:
-        for joint, name in zip(chain.joints, chain.names, strict=True):
-            writer.writerow([joint.name, chain.leg_id, name, 0.0, 1])
-    return buffer.getvalue()
-
-
 def fk_error(model: Any, legs: list[LegChain], base_frame: str, robot: Any, samples: int = FK_SAMPLES,
-             seed: int = 0) -> float:
+             seed: int = 0, yaw: float = 0.0) -> float:
     """Largest tip distance between the robot's DH chains and the URDF model (yourdfpy) at random joint
     vectors inside the limits, every leg [m]."""
     from shc_cli.model.chains import Chains
@@ -672,7 +900,8 @@ def fk_error(model: Any, legs: list[LegChain], base_frame: str, robot: Any, samp
         model.update_cfg(cfg)
         ours = chains.tips(q)
         for i, chain in enumerate(legs):
-            transform = np.asarray(model.get_transform(frame_to=chain.end, frame_from=base_frame), dtype=float)
+            transform = turn(yaw).T @ np.asarray(model.get_transform(frame_to=chain.end, frame_from=base_frame),
+                                                 dtype=float)
             theirs = (transform @ np.append(chain.tip_local, 1.0))[:3]
             worst = max(worst, float(np.linalg.norm(ours[i] - theirs)))
     return worst
@@ -691,7 +920,6 @@ class Result:
     """Files written and figures of one import."""
 
     robot_path: Path
-    joint_map_path: Path
     notes: list[str]
     fk_error: float
     fk_error_unsnapped: float
@@ -700,15 +928,16 @@ class Result:
 
 def import_urdf(file: Path, out: Path | None = None, name: str | None = None, legs: str = "auto",
                 tips: list[str] | None = None, clearance: float | None = None, reach: float | None = None,
-                snap: float = 0.0, args: dict[str, str] | None = None) -> Result:
-    """Write ``OUT/robots/NAME.toml`` and ``OUT/joint_map.csv`` from a URDF or xacro file; check the robot
+                snap: float = 0.0, args: dict[str, str] | None = None, forward: float | None = None) -> Result:
+    """Write ``OUT/robots/NAME.toml`` (its ``[hardware.servos]`` the servo map, to check) from a URDF or xacro
+    file; check the robot
     (``shc validate``'s checks) and its forward kinematics against the URDF before returning.
 
     A URDF that yourdfpy reads but whose numbers or structure the import cannot use (a link outside the tree, a
     zero-length chain, values the robot model refuses) is one line naming the file (found by
     ``tests/test_fuzz_inputs.py``)."""
     try:
-        return _import_urdf(file, out, name, legs, tips, clearance, reach, snap, args)
+        return _import_urdf(file, out, name, legs, tips, clearance, reach, snap, args, forward)
     except (ValueError, LookupError, ArithmeticError) as error:  # pydantic's ValidationError is a ValueError
         lines = str(error).strip().splitlines()
         raise _fail(file, f"cannot import it: {type(error).__name__}: {lines[0] if lines else ''}",
@@ -716,7 +945,8 @@ def import_urdf(file: Path, out: Path | None = None, name: str | None = None, le
 
 
 def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips: list[str] | None,
-                 clearance: float | None, reach: float | None, snap: float, args: dict[str, str] | None) -> Result:
+                 clearance: float | None, reach: float | None, snap: float, args: dict[str, str] | None,
+                 forward: float | None) -> Result:
     from shc_cli.outputs import write_text
     from shc_cli.spec.loading import load_robot
     from shc_cli.validation import check_robot
@@ -725,22 +955,46 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
     model = parse_urdf(file, source.snapped_text)
     robot_name = name or re.sub(r"[^A-Za-z0-9_-]", "_", str(model.robot.name or file.stem))
     out = out if out is not None else Path("imported") / robot_name
-    imported = import_tree(model, file, robot_name, legs, [TipSpec.parse(t) for t in tips or []], clearance, reach)
+    tip_specs = [TipSpec.parse(t) for t in tips or []]
+    try:
+        imported = import_tree(model, file, robot_name, legs, tip_specs, clearance, reach, forward)
+    except NeedsSnap as needed:
+        if snap > 0.0 or needed.snap > AUTO_SNAP:
+            raise _fail(file, needed.problem, f"snap the URDF's angles with --snap {needed.snap:.1g} or fix them")\
+                from None
+        snap = AUTO_SNAP
+        source = read_source(file, args or {}, snap)
+        model = parse_urdf(file, source.snapped_text)
+        try:
+            imported = import_tree(model, file, robot_name, legs, tip_specs, clearance, reach, forward)
+        except NeedsSnap as still:
+            raise _fail(file, still.problem, "fix the URDF's angles (snapping them by "
+                        f"{AUTO_SNAP:g} rad did not make the axes parallel)") from None
+        imported.notes.append(f"{needed.problem}: angles within {AUTO_SNAP:g} rad of a multiple of pi/2 snapped "
+                              "(--snap)")
+    if imported.refusal is not None:
+        raise _fail(file, *imported.refusal)
     _finish(imported, clearance, reach, file)
     imported.tree["templates"], imported.tree["legs"] = factor_legs(imported.tree["legs"])
+    imported.tree["hardware"] = servo_table(
+        {c.leg_id: c.names for c in imported.legs}, imported.tree["servo"].get("stall_torque"),
+        {f"{c.leg_id}_{name}": joint.name for c in imported.legs for name, joint in zip(c.names, c.joints,
+                                                                                      strict=True)})
     tree = {key: imported.tree[key] for key in ("name", "description", "time_delta", "body", "walker", "servo",
-                                                "templates", "legs")}
+                                                "templates", "legs", "hardware")}
     header = [f"# Imported by `shc import urdf` from {file.name}. Units: m, rad, s, kg.",
-              f"# base_link is the URDF link '{imported.base_frame}'. Joint angles are the URDF's (joint_map.csv).",
+              f"# base_link is the URDF link '{imported.base_frame}'"
+              + (f" turned {math.degrees(imported.yaw):g} deg about z (forward)" if imported.yaw else "")
+              + ". Joint angles are the URDF's; [hardware.servos] names each joint's URDF joint.",
               *_tip_lines(imported.legs),
               *(f"# Note: {note}." for note in imported.notes)]
     if source.snap > 0.0:
         header.append(f"# rpy values within {snap:g} rad of a multiple of pi/2 snapped to it (largest change "
                       f"{source.snap:.2g} rad).")
-    header.append("# Not read: visuals, meshes, transmissions, gazebo tags, dynamics (damping, friction).")
+    header.append("# Not read: visuals, meshes (but a foot's, when its link frame is on the knee axis), transmissions, "
+                  "gazebo tags, dynamics (damping, friction).")
     robot_path = out / "robots" / f"{robot_name}.toml"
-    map_path = out / "joint_map.csv"
-    text = "\n".join(header) + "\n" + dump_toml(tree)
+    text = "\n".join(header) + "\n" + with_check_note(dump_toml(tree))
     with tempfile.TemporaryDirectory() as folder:  # checked before anything is written
         draft = Path(folder) / robot_path.name
         draft.write_text(text, encoding="utf-8")
@@ -748,10 +1002,10 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
         problems = check_robot(loaded)
         if problems:
             raise SpecError(problems)
-    error = fk_error(model, imported.legs, imported.base_frame, loaded.robot)
+    error = fk_error(model, imported.legs, imported.base_frame, loaded.robot, yaw=imported.yaw)
     unsnapped = error
     if source.snap > 0.0:
-        unsnapped = fk_error(parse_urdf(file, source.text), imported.legs, imported.base_frame, loaded.robot)
+        unsnapped = fk_error(parse_urdf(file, source.text), imported.legs, imported.base_frame, loaded.robot,
+                             yaw=imported.yaw)
     write_text(robot_path, text)
-    write_text(map_path, joint_map_csv(imported.legs))
-    return Result(robot_path, map_path, imported.notes, error, unsnapped, source.snap)
+    return Result(robot_path, imported.notes, error, unsnapped, source.snap)

@@ -10,7 +10,7 @@ The base row runs from ``base_link``'s z axis (the line through its origin) to j
 last row goes from joint ``n``'s axis to the tip point: ``d`` along the axis, ``r`` and ``θ`` to the point, α 0.
 
 Each frame's z axis points along its joint's URDF axis, so a URDF joint angle equals the shc joint angle
-(``joint_map.csv``: offset 0, direction +1); the angle of the zero pose is held in ``θ``.
+(the servo map needs no offset or sign for it); the angle of the zero pose is held in ``θ``.
 
 Choices where the construction is free: parallel axes take the common normal through the URDF joint's origin
 (so ``d`` is that origin's height along the axis); coinciding axes keep the previous x axis; intersecting

@@ -7,9 +7,10 @@ colcon workspace). An included file that does not exist under the resolved path 
 the file that includes it (a package's files copied flat into one folder, as ``shared/reference/bullet_syropod``).
 
 With ``--snap TOL``, angles in ``<origin rpy>`` within TOL of a multiple of π/2 are snapped to it before
-parsing (``1.57`` meant as π/2). Off by default, since it moves the tips (by up to TOL × the leg's length):
-it is needed only when two axes meant to be parallel are not quite, which the import reports (the common
-normal of nearly parallel axes is far away, and the DH offsets with it).
+parsing (``1.57`` meant as π/2), and so are joint axes within TOL of a frame axis (their small components go).
+It moves the tips (by up to TOL × the leg's length), so ``shc import urdf`` snaps only when two axes meant to be
+parallel are not quite (the common normal of nearly parallel axes is far away, and the DH offsets with it): by
+0.001 rad on its own, more only when asked.
 """
 
 from __future__ import annotations
@@ -115,7 +116,8 @@ def expand_xacro(path: Path, args: dict[str, str]) -> str:
 
 
 def snap_rpy(text: str, tolerance: float) -> tuple[str, float]:
-    """The URDF text with every ``origin rpy`` value within ``tolerance`` of a multiple of π/2 snapped to it.
+    """The URDF text with every ``origin rpy`` value within ``tolerance`` of a multiple of π/2 snapped to it, and
+    every ``axis xyz`` component below ``tolerance`` of the axis' length set to 0.
 
     Returns the new text and the largest change [rad]."""
     root = ET.fromstring(text)  # also the well-formedness check: yourdfpy would recover from broken XML
@@ -135,6 +137,16 @@ def snap_rpy(text: str, tolerance: float) -> tuple[str, float]:
                 value = nearest
             out.append(repr(value))
         origin.set("rpy", " ".join(out))
+    for axis in root.iter("axis"):  # a joint axis a hair off a frame axis: its small components go
+        xyz = axis.get("xyz")
+        if xyz is None:
+            continue
+        vector = [float(v) for v in xyz.split()]
+        norm = math.sqrt(sum(v * v for v in vector))
+        small = [abs(v) / norm for v in vector if 0.0 < abs(v) <= tolerance * norm] if norm > 0.0 else []
+        if small and len(small) < len(vector):
+            largest = max(largest, math.asin(min(math.sqrt(sum(v * v for v in small)), 1.0)))
+            axis.set("xyz", " ".join(repr(0.0 if 0.0 < abs(v) <= tolerance * norm else v) for v in vector))
     return ET.tostring(root, encoding="unicode"), largest
 
 

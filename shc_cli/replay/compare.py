@@ -30,6 +30,15 @@ def joint_names(robot: Robot) -> list[str]:
     return [f"{leg}_{joint}_joint" for leg, spec in robot.legs.items() for joint in spec.joints]
 
 
+def robot_joint_names(robot: Robot) -> list[str]:
+    """The joints' names on the robot, in leg order: ``[hardware.servos]``'s ``joint`` where given (an imported
+    URDF's joint names), else OpenSHC's (:func:`joint_names`)."""
+    servos = robot.hardware.servos
+    return [servos[f"{leg}_{joint}"].joint or f"{leg}_{joint}_joint"
+            if f"{leg}_{joint}" in servos else f"{leg}_{joint}_joint"
+            for leg, spec in robot.legs.items() for joint in spec.joints]
+
+
 @dataclass
 class Comparison:
     """Per-cycle differences (NaN where nothing was compared), the worst of each quantity and its cycle, and the
@@ -63,6 +72,9 @@ class Comparer:
 
     def __init__(self, recorded: Recorded, robot: Robot) -> None:
         names = joint_names(robot)
+        own = robot_joint_names(robot)
+        if own != names and all(name in recorded.joint_names for name in own):
+            names = own  # recorded on the robot under its own (URDF) joint names
         missing = [name for name in names if name not in recorded.joint_names]
         extra = [name for name in recorded.joint_names if name not in names]
         if missing or extra:

@@ -344,6 +344,8 @@ class Servo(Strict):
 class ServoMap(Strict):
     """Where one joint's servo is on the bus and how its ticks map to the joint angle."""
 
+    joint: str | None = Field(None, description="the joint's name on the robot (its URDF joint, the name in "
+                              "/joint_states) when it is not <LEG>_<joint>_joint; recordings with it replay")
     id: Annotated[int, Field(ge=0, le=252)] = Field(description="Dynamixel ID")
     bus: Annotated[int, Field(ge=0)] = Field(0, description="bus index (one port per bus; `run-hw --port` is bus 0)")
     model: str | None = Field(None, description="servo model, default hardware.model (e.g. 'MX-106', 'AX-12A', "

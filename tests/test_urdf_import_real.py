@@ -1,0 +1,203 @@
+"""``shc import urdf`` on third-party descriptions (tests/data/robots, see its README) and on the classes of
+description they stand for: each imports with no options, has the URDF's forward kinematics (yourdfpy's, the
+reference), validates and plans."""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from shc_cli.model.chains import Chains
+from shc_cli.spec.loading import load_robot
+
+from .test_cli import run
+from .urdf_robots import Element, LegSpec, insect_leg, robot_urdf
+
+pytest.importorskip("yourdfpy", reason="shc import urdf needs the 'urdf' extra")
+
+DATA = Path(__file__).parent / "data" / "robots"
+DESCRIPTIONS = {
+    "phantomx": (DATA / "phantomx_description" / "urdf" / "phantomx.urdf", 6),
+    "pxmark4": (DATA / "pxmark4_interbotix.urdf", 6),
+    "hexapod_olli_io": (DATA / "hexapod_olli_io.urdf", 6),
+    "anymal_b": (DATA / "anymal_b_anybotics.urdf", 4),
+}
+
+
+def _import(path: Path, out: Path, capsys, monkeypatch, *options: str) -> tuple[int, str, str, Path | None]:  # type: ignore[no-untyped-def]
+    code, stdout, err = run(["import", "urdf", str(path), "--out", str(out), *options], capsys, monkeypatch)
+    written = next(iter((out / "robots").glob("*.toml")), None) if code == 0 else None
+    return code, stdout, err, written
+
+
+def _fk_worst(urdf_text: str, path: Path, robot_file: Path, yaw: float = 0.0, samples: int = 50,
+              legs_text: str | None = None) -> float:
+    """Largest tip distance between the robot file's chains and yourdfpy's FK of ``urdf_text`` at random angles,
+    the URDF joints found through [hardware.servos]'s ``joint`` names [m]; the tip links and points are those the
+    import chose (from ``legs_text``, default ``urdf_text``)."""
+    from shc_cli.interop.urdf_import import import_tree
+    from shc_cli.interop.urdf_import_source import parse_urdf
+
+    model = parse_urdf(path, urdf_text)
+    legs = import_tree(parse_urdf(path, legs_text or urdf_text), path, "x", forward=yaw).legs
+    robot = load_robot(robot_file).robot
+    servos = robot.hardware.servos
+    chains = Chains.from_robot(robot)
+    turn = np.array([[math.cos(yaw), math.sin(yaw), 0.0], [-math.sin(yaw), math.cos(yaw), 0.0], [0.0, 0.0, 1.0]])
+    base = "base_link" if "base_link" in model.link_map else model.base_link
+    rng = np.random.default_rng(3)
+    worst = 0.0
+    ends = {leg.joints[0].name: (leg.end, leg.tip_local) for leg in legs}
+    for _ in range(samples):
+        q = rng.uniform(chains.lower, chains.upper)
+        cfg = {name: 0.0 for name in model.actuated_joint_names}
+        for i, (leg_id, spec) in enumerate(robot.legs.items()):
+            for k, joint in enumerate(spec.joints):
+                cfg[servos[f"{leg_id}_{joint}"].joint] = float(q[i, k])
+        model.update_cfg(cfg)
+        ours = chains.tips(q)
+        for i, (leg_id, spec) in enumerate(robot.legs.items()):
+            end, point = ends[servos[f"{leg_id}_{next(iter(spec.joints))}"].joint]
+            transform = np.asarray(model.get_transform(frame_to=end, frame_from=base), dtype=float)
+            theirs = turn @ (transform @ np.append(point, 1.0))[:3]
+            worst = max(worst, float(np.linalg.norm(ours[i] - theirs)))
+    return worst
+
+
+@pytest.mark.parametrize("name", list(DESCRIPTIONS))
+def test_third_party_descriptions_import_without_options_with_their_kinematics(
+        name: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    from shc_cli.interop.urdf_import_source import read_source
+
+    path, legs = DESCRIPTIONS[name]
+    code, out, err, robot_file = _import(path, tmp_path, capsys, monkeypatch)
+    assert code == 0, err
+    assert robot_file is not None
+    data = tomllib.loads(robot_file.read_text())
+    assert len(data["legs"]) == legs
+    servos = data["hardware"]["servos"]
+    assert len(servos) == sum(len(data["templates"][leg.get("template", "leg")]["joints"]) for leg in
+                              data["legs"].values())
+    snapped = read_source(path, {}, 0.001 if "snapped" in out else 0.0).snapped_text
+    assert _fk_worst(snapped, path, robot_file) < 1e-6
+    if "snapped" in out:  # PhantomX: base z and coxa axes 8.9e-5 rad apart; the snap moves tips < 0.4 mrad × 0.3 m
+        assert _fk_worst(path.read_text(), path, robot_file, legs_text=snapped) < 1.2e-4
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(DESCRIPTIONS))
+def test_third_party_descriptions_validate_and_plan(name: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    code, _, err, robot_file = _import(DESCRIPTIONS[name][0], tmp_path, capsys, monkeypatch)
+    assert code == 0, err
+    code, _, err = run(["validate", str(robot_file)], capsys, monkeypatch)
+    assert code == 0, err
+    code, out, err = run(["plan", str(robot_file), "--duration", "2", "--no-plots", "--out", str(tmp_path / "run")],
+                         capsys, monkeypatch)
+    assert code == 0, err
+    speed = float(out.split("displacement speed ")[1].split()[0])
+    assert speed > 0.01, out
+
+
+# -- the classes of description, made up -------------------------------------------------------------------------
+
+
+def _hexapod(**leg_options: object) -> list[LegSpec]:
+    return [insect_leg(f"leg{i}", x, y, standing=True)
+            for i, (x, y) in enumerate([(0.12, -0.08), (0.0, -0.1), (-0.12, -0.08),
+                                        (-0.12, 0.08), (0.0, 0.1), (0.12, 0.08)])]
+
+
+def test_stubs_dummy_foot_joints_and_a_pan_tilt_head_are_not_leg_joints(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                        monkeypatch) -> None:
+    """Each leg ends in two zero-length revolute joints at the foot and a force sensor modelled as a prismatic
+    joint of ±0.1 mm; a camera pan/tilt chain hangs off the body: 6 legs of 3 joints, FK the URDF's."""
+    legs = []
+    for leg in _hexapod():
+        extra = [Element("revolute", (0.12, 0.0, 0.0), axis=(0.0, 1.0, 0.0)), Element("revolute", axis=(1.0, 0.0, 0.0)),
+                 Element("prismatic", axis=(1.0, 0.0, 0.0), lower=-0.0001, upper=0.0001)]
+        legs.append(LegSpec(leg.name, [*leg.elements, *extra], sphere=(0.0, 0.0, 0.0)))
+    legs.append(LegSpec("head", [Element("revolute", (0.15, 0.0, 0.05)),
+                                 Element("revolute", (0.02, 0.0, 0.0), axis=(0.0, 1.0, 0.0)),
+                                 Element("fixed", (0.03, 0.0, 0.0))]))
+    path = tmp_path / "hex.urdf"
+    path.write_text(robot_urdf(legs, name="hex"))
+    code, out, err, robot_file = _import(path, tmp_path / "out", capsys, monkeypatch)
+    assert code == 0, err
+    assert robot_file is not None
+    data = tomllib.loads(robot_file.read_text())
+    assert len(data["legs"]) == 6 and list(data["templates"]["leg"]["joints"]) == ["joint0", "joint1", "joint2"]
+    assert "leg0_joint6 is taken as fixed: prismatic with 0.2 mm of travel" in out
+    assert "leg0_joint4, leg0_joint5 at the foot of the leg to leg0_link6 pass through the tip" in out
+    assert "chains left out as not legs (their links count as body): head_link2 (2 joints)" in out
+    assert _fk_worst(path.read_text(), path, robot_file) < 1e-6
+
+
+def test_a_leg_straight_ahead_turns_forward_a_quarter(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """Six legs every 60° from +x (legs straight ahead and behind): forward becomes base_link's +y, the legs pair
+    up left and right; --forward +x keeps the URDF's."""
+    legs = [LegSpec(f"leg{i}", [Element("revolute", (0.12 * math.cos(a), 0.12 * math.sin(a), 0.0), (0.0, 0.0, a),
+                                        lower=-0.8, upper=0.8),
+                                Element("revolute", (0.04, 0.0, 0.0), (math.pi / 2, 0.0, 0.0)),
+                                Element("revolute", (0.08, 0.0, 0.0), lower=-2.4, upper=2.4),
+                                Element("fixed", (0.0, 0.0, 0.0), (0.0, 0.0, -math.pi / 2))], sphere=(0.12, 0.0, 0.0))
+            for i, a in enumerate(np.arange(6) * math.pi / 3)]
+    path = tmp_path / "round.urdf"
+    path.write_text(robot_urdf(legs, name="round"))
+    code, out, err, robot_file = _import(path, tmp_path / "out", capsys, monkeypatch)
+    assert code == 0, err
+    assert robot_file is not None
+    assert "shc's forward is base_link's +y" in out
+    data = tomllib.loads(robot_file.read_text())
+    assert list(data["legs"]) == ["AR", "BR", "CR", "CL", "BL", "AL"]
+    assert _fk_worst(path.read_text(), path, robot_file, yaw=math.pi / 2) < 1e-6
+    code, out, err, robot_file = _import(path, tmp_path / "kept", capsys, monkeypatch, "--forward", "+x",
+                                         "--clearance", "0.1", "--reach", "0.5")
+    assert code == 0, err
+    assert "shc's forward is" not in out and "turned" not in robot_file.read_text()
+
+
+def test_placeholder_inertials_and_speeds_are_named_and_replaced(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """Total mass 1e-4 kg with 1 kg·m² links and 0.52 rad/s on every joint: named, with plausible values used."""
+    text = robot_urdf([LegSpec(leg.name, leg.elements, leg.sphere, masses=[1e-5] * 4) for leg in _hexapod()],
+                      name="light", body_mass=1e-5)
+    text = text.replace('ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"',
+                        'ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"').replace('velocity="4.0"', 'velocity="0.52"')
+    path = tmp_path / "light.urdf"
+    path.write_text(text)
+    code, out, err, robot_file = _import(path, tmp_path / "out", capsys, monkeypatch)
+    assert code == 0, err
+    assert robot_file is not None
+    assert "inertial data look like placeholders (total mass 0.00025 kg)" in out
+    assert "velocity limit is 0.52 rad/s, which looks like a placeholder" in out
+    data = tomllib.loads(robot_file.read_text())
+    joint = data["templates"]["leg"]["joints"]["joint1"]
+    assert joint["max_vel"] == 5.0 and joint["mass"] == 0.07 and data["body"]["mass"] == pytest.approx(18 * 0.07)
+    assert data["servo"]["no_load_speed"] == 5.0
+
+
+def test_a_tip_on_the_knee_axis_is_refused_with_the_tip_that_fixes_it(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                     monkeypatch) -> None:
+    """The tibia link's frame is on the knee axis and nothing follows it: refused, naming a --tip pattern and a
+    point (twice the tibia's centre of mass, 0.01 m out, with nothing else to go by); that --tip imports."""
+    legs = [LegSpec(leg.name, leg.elements[:3]) for leg in _hexapod()]
+    path = tmp_path / "knee.urdf"
+    path.write_text(robot_urdf(legs, name="knee"))
+    code, _, err, _ = _import(path, tmp_path / "out", capsys, monkeypatch)
+    assert code == 2 and err.count("\n") == 1
+    assert "lies on the axis of leg" in err and "--tip '*_link2@0.02,0,0'" in err, err
+    code, _, err, _ = _import(path, tmp_path / "out", capsys, monkeypatch, "--tip", "*_link2@0.12,0,0")
+    assert code == 0, err
+
+
+def test_a_stance_the_limits_forbid_names_the_leg_the_limit_and_what_works(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                          monkeypatch) -> None:
+    path = tmp_path / "hex.urdf"
+    path.write_text(robot_urdf(_hexapod(), name="hex"))
+    code, _, err, _ = _import(path, tmp_path / "out", capsys, monkeypatch, "--clearance", "0.4")
+    assert code == 2 and err.count("\n") == 1, err
+    assert "cannot stand with clearance 0.4 m" in err and "limit" in err and "--clearance" in err, err
+    assert not (tmp_path / "out").exists()
