@@ -67,9 +67,10 @@ def _hardware(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
         model = MODELS.get(servo.model or hardware.model)
         ticks = hardware.ticks_per_revolution if model is None or model.name == "generic" else model.resolution
         if servo.zero_ticks is not None and servo.zero_ticks >= ticks:
+            span = "one turn" if model is None or model.range_degrees == 360.0 else (
+                f"the {model.name}'s {model.range_degrees:g}° range")
             issues.append(loaded.issue(("hardware", "servos", key, "zero_ticks"),
-                                       f"zero_ticks {servo.zero_ticks} is outside the servo's range",
-                                       f"use 0 … {ticks - 1}"))
+                                       f"zero_ticks {servo.zero_ticks} is outside {span}", f"use 0 … {ticks - 1}"))
         if model is not None:
             family = families.setdefault(servo.bus, (model.family, key))
             if family[0] != model.family:
