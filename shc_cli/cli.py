@@ -163,6 +163,10 @@ def simulate(
     video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
                                                     "render with its defaults).", metavar="FILE")] = None,
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
+    live: Annotated[bool, typer.Option(help="Stream the run while it happens to a Foxglove WebSocket server on "
+                                            "127.0.0.1 (the topics of shc export bag).")] = False,
+    live_port: Annotated[int, typer.Option(help="Port of the --live server (0: any free port).")] = 8765,
+    realtime: Annotated[bool, typer.Option(help="Pace the simulation to the wall clock.")] = False,
 ) -> None:
     """Run the controller on the robot in physics (PyBullet or MuJoCo): terrains, servos, sensors, power, CoT."""
     from shc_cli.commands.run_outputs import check_outputs, finish_outputs
@@ -175,7 +179,8 @@ def simulate(
                                friction=friction, restitution=restitution, seed=seed, imu_noise=imu_noise,
                                start=start, gui=gui, stand=stand, posture=posture, imu_posing=imu_posing,
                                inclination=inclination, admittance=admittance, fail_on_fall=fail_on_fall,
-                               overwrite=overwrite, engine=engine)
+                               overwrite=overwrite, engine=engine, live=live, live_port=live_port,
+                               realtime=realtime)
     run_simulate(options, after=lambda run: finish_outputs(run, bag, video))
 
 

@@ -65,6 +65,9 @@ class SimulationConfig(BaseModel):
         fail_on_fall: the command exits 4 when the robot fell.
         overwrite: replace an existing run directory at ``out`` when the run finishes.
         engine: the physics engine (:data:`~shc_cli.backends.engine_registry.ENGINES`).
+        live: stream the run while it happens on a Foxglove WebSocket server on 127.0.0.1 (``shc_cli.live``).
+        live_port: that server's port (0: any free port).
+        realtime: pace the run to the wall clock (one control period of real time per cycle).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -93,6 +96,9 @@ class SimulationConfig(BaseModel):
     fail_on_fall: bool = False
     overwrite: bool = False
     engine: EngineName = DEFAULT_ENGINE
+    live: bool = False
+    live_port: int = 8765
+    realtime: bool = False
 
     def __init__(self, **options: Any) -> None:
         unknown = [key for key in options if key not in type(self).model_fields]
@@ -270,4 +276,7 @@ class SimulationOptions(TypedDict, total=False):
     admittance: bool | None
     fail_on_fall: bool
     overwrite: bool
+    live: bool
+    live_port: int
+    realtime: bool
     engine: EngineName

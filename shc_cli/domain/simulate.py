@@ -3,6 +3,7 @@ logged and summarised in a run directory. Never prints; the command prints the s
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -12,8 +13,14 @@ from shc_cli.domain.result import RunResult
 
 if TYPE_CHECKING:
     from shc_cli.backends.engine import Reading
-    from shc_cli.control.controller import Command, CycleOutput
+    from shc_cli.control.controller import Command, Controller, CycleOutput
+    from shc_cli.live.foxglove_server import FoxgloveTransport
     from shc_cli.loop.summary import RunSummary
+    from shc_cli.ros.outputs import NodeOutputs
+    from shc_cli.spec.robot import Robot
+
+
+log = logging.getLogger(__name__)
 
 
 def check_display(gui: bool) -> None:
@@ -61,6 +68,15 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
             record = PhysicsRecord(robot, backend, o.airborne)
             counter = None if progress is None else _Progress(progress, inputs.cycles)
             observers: list[Observer[Reading]] = [record] if counter is None else [record, counter]
+            live = _live(o, robot, controller)
+            if live is not None:
+                observers.append(live[1])
+            clock = None
+            if o.realtime:
+                from shc_cli.loop.pacing import WallClock
+
+                clock = WallClock(robot.time_delta)
+                observers.append(clock)
             loop = RunLoop(controller, backend, TimelineInput(inputs.commands()),
                            LogRecorder(run, robot, backend),
                            StartUp.of(robot),
@@ -74,14 +90,19 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
                 return record.summary(run.partial, o.scenario, controller.gait.name, controller).updated(
                     seed=o.seed, terrain=str(world.terrain.spec), engine=world.name, engine_version=world.version,
                     engine_warnings=world.warnings,
-                    versions={"shc": __version__, world.name: world.version, "numpy": np.__version__})
+                    versions={"shc": __version__, world.name: world.version, "numpy": np.__version__},
+                    **(clock.statistics() if clock is not None else {}))
 
             def plot(folder: Path) -> None:
                 from shc_cli.plots import plot_simulation
 
                 plot_simulation(robot, record.plot_series(folder), folder, gait=controller.gait.name)
 
-            path, summary, _ = execute(loop, run, summarise, plot if o.plots else None)
+            try:
+                path, summary, _ = execute(loop, run, summarise, plot if o.plots else None)
+            finally:
+                if live is not None:
+                    live[0].close()
     return RunResult(path, summary)
 
 
@@ -89,6 +110,23 @@ OnProgress = Callable[[int, int], None]
 """Told ``(walked cycles, cycles to walk)`` before the run, every :data:`PROGRESS_EVERY` walking cycles and
 ``(total, total)`` when the run ends (e.g. a progress bar)."""
 PROGRESS_EVERY = 50
+
+
+def _live(o: SimulationConfig, robot: Robot, controller: Controller) -> tuple[FoxgloveTransport, NodeOutputs] | None:
+    """With ``--live``: the Foxglove server and the observer that streams each cycle to it (None without)."""
+    if not o.live:
+        return None
+    from shc_cli.live.foxglove_server import FoxgloveTransport
+    from shc_cli.ros.messages import MessageTypes
+    from shc_cli.ros.outputs import NodeOutputs
+
+    transport = FoxgloveTransport(MessageTypes(), o.live_port)
+    log.warning("live: %s (Foxglove WebSocket)", transport.url)
+    outputs = NodeOutputs(transport, robot, individual=False, combined=True, sensors=True,
+                          walkspace=lambda: controller.walkspace)
+    return transport, outputs
+
+
 
 
 class _Progress:

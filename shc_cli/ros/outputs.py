@@ -13,15 +13,36 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
 from shc_cli.control.controller import Command, CycleOutput, RobotState
 from shc_cli.interop.bag import LEG_STATE_TYPE, Messages, quaternions
 from shc_cli.model.body import leg_names
-from shc_cli.ros.node import Publisher, RosNode
+from shc_cli.ros.messages import MessageTypes
 from shc_cli.spec.robot import Robot
+
+
+class Sender(Protocol):
+    """A topic's publisher (:class:`shc_cli.ros.node.Publisher`, or a live channel)."""
+
+    @property
+    def subscriber_count(self) -> int:
+        ...
+
+    def publish(self, message: object) -> None:
+        ...
+
+
+class Transport(Protocol):
+    """Where topics go: a ROS node (:class:`shc_cli.ros.node.RosNode`) or a live server
+    (:class:`shc_cli.live.foxglove_server.FoxgloveTransport`)."""
+
+    types: MessageTypes
+
+    def advertise(self, topic: str, msgtype: str, latch: bool = False) -> Sender:
+        ...
 
 _RUNNING = RobotState.RUNNING
 _IDENTITY = np.array([0.0, 0.0, 0.0, 1.0])
@@ -31,19 +52,21 @@ class NodeOutputs:
     """Publishes a cycle's outputs on OpenSHC's topics (see the module's text).
 
     Args:
-        node: the ROS node.
+        node: where the topics go: the ROS node, or a live server.
         robot: the robot (leg and joint names, joint offsets).
         individual: publish the per-joint command topics (OpenSHC's ``individual_control_interface``).
         combined: publish ``/desired_joint_states`` (``combined_control_interface``).
         walkspace: gives the controller's walkspace (radius [m] by bearing [°]), published while RUNNING as OpenSHC's
             9 radii at bearings 0, 45, …, 360°; None: not published.
-        after: called after each cycle's publications (the remote input's :meth:`latch`).
+        after: called before each cycle's publications (the remote input's :meth:`latch`).
+        sensors: also publish what a simulated robot's sensors read: ``/joint_states`` (measured), ``/imu/data``,
+            ``/<LEG>/foot_force`` (WrenchStamped) and ``/shc/power`` (Float64, W), as ``shc export bag`` does.
         efforts: the last measured joint efforts ``(L, n)`` [N·m] or None (published as 0).
     """
 
-    def __init__(self, node: RosNode, robot: Robot, individual: bool = True, combined: bool = True,
+    def __init__(self, node: Transport, robot: Robot, individual: bool = True, combined: bool = True,
                  walkspace: Callable[[], dict[int, float]] | None = None,
-                 after: Callable[[], None] | None = None) -> None:
+                 after: Callable[[], None] | None = None, sensors: bool = False) -> None:
         self.m = Messages(node.types.store)
         self.after = after
         self.efforts: np.ndarray | None = None
@@ -57,14 +80,24 @@ class NodeOutputs:
         self.offsets = np.array([joint.offset for leg in robot.legs.values() for joint in leg.joints.values()])
         self.walkspace = walkspace
         self.combined = node.advertise("/desired_joint_states", "sensor_msgs/JointState") if combined else None
-        self.individual: list[Publisher] = [node.advertise(f"/{name}/command", "std_msgs/Float64")
+        self.individual: list[Sender] = [node.advertise(f"/{name}/command", "std_msgs/Float64")
                                             for name in self.joint_ids] if individual else []
         self.leg_states = [node.advertise(f"/shc/{leg}/state", LEG_STATE_TYPE) for leg in self.legs]
         self.velocity = node.advertise("/shc/velocity", "geometry_msgs/Twist")
         self.pose = node.advertise("/shc/pose", "geometry_msgs/Twist")
         self.walkspace_pub = node.advertise("/shc/walkspace", "std_msgs/Float32MultiArray")
         self.tf = node.advertise("/tf", "tf2_msgs/TFMessage")
+        self.sensors = sensors
+        if sensors:
+            self.joint_states = node.advertise("/joint_states", "sensor_msgs/JointState")
+            self.imu = node.advertise("/imu/data", "sensor_msgs/Imu")
+            self.feet = [node.advertise(f"/{leg}/foot_force", "geometry_msgs/WrenchStamped") for leg in self.legs]
+            self.foot_frames = [names[leg].foot for leg in self.legs]
+            self.power = node.advertise("/shc/power", "std_msgs/Float64")
         self.seq = 0
+        self.always = not sensors  # a ROS node publishes whether or not anyone listens, as OpenSHC; a live
+        # stream (with the sensors) builds nothing while no client is connected
+        self.combined_or_any = self.combined if self.combined is not None else self.tf
 
     def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: object) -> str | None:
         """Publish this cycle (an observer of the run loop; never stops the run). The remote input's snapshot is
@@ -72,11 +105,39 @@ class NodeOutputs:
         next cycle uses (OpenSHC's publish-then-spin order, without the time our publishing takes)."""
         if self.after is not None:
             self.after()
-        self.publish(out)
+        if not self.always and not self.combined_or_any.subscriber_count:
+            return None  # nobody listens (a live server without clients): build nothing
+        self.publish(out, cycle=cycle)
+        if self.sensors and reading is not None:
+            self.publish_sensors(reading)
         return None
 
-    def publish(self, out: CycleOutput, stamp: float | None = None) -> None:
-        """Every topic of one cycle, stamped ``stamp`` (seconds since the epoch; default now)."""
+    def publish_sensors(self, reading: Any, stamp: float | None = None) -> None:
+        """A simulated reading's measured joints, IMU, foot forces and electrical power."""
+        T, m = self.m.T, self.m
+        now = time.time() if stamp is None else stamp
+        sec, nanosec = int(now), round((now % 1.0) * 1e9) % 1_000_000_000
+        self.joint_states.publish(T["sensor_msgs/msg/JointState"](
+            header=m.header(sec, nanosec, ""), name=self.joint_ids,
+            position=np.asarray(reading.joints)[self.rows, self.cols].astype(float),
+            velocity=np.asarray(reading.joint_velocities)[self.rows, self.cols].astype(float),
+            effort=np.asarray(reading.joint_efforts)[self.rows, self.cols].astype(float)))
+        zeros9 = np.zeros(9)
+        self.imu.publish(T["sensor_msgs/msg/Imu"](
+            header=m.header(sec, nanosec, "base_link"), orientation=m.quaternion(np.asarray(reading.orientation)),
+            orientation_covariance=zeros9, angular_velocity=m.vector(np.asarray(reading.angular_rate)),
+            angular_velocity_covariance=zeros9, linear_acceleration=m.vector(np.asarray(reading.linear_acceleration)),
+            linear_acceleration_covariance=zeros9))
+        for publisher, frame, force in zip(self.feet, self.foot_frames, np.asarray(reading.foot_forces).tolist(),
+                                           strict=True):
+            publisher.publish(T["geometry_msgs/msg/WrenchStamped"](
+                header=m.header(sec, nanosec, frame), wrench=T["geometry_msgs/msg/Wrench"](
+                    force=m.vector(np.array([0.0, 0.0, force])), torque=m.vector(np.zeros(3)))))
+        self.power.publish(T["std_msgs/msg/Float64"](data=float(np.sum(reading.servo_power))))
+
+    def publish(self, out: CycleOutput, stamp: float | None = None, cycle: int | None = None) -> None:
+        """Every topic of one cycle, stamped ``stamp`` (seconds since the epoch; default now); ``/desired_joint_states``
+        carries the cycle as its header's ``seq`` (default: a count of the published cycles)."""
         T, m = self.m.T, self.m
         now = time.time() if stamp is None else stamp
         sec, nanosec = int(now), round((now % 1.0) * 1e9) % 1_000_000_000
@@ -85,12 +146,13 @@ class NodeOutputs:
         efforts = self.efforts[self.rows, self.cols] if self.efforts is not None else np.zeros_like(joints)
         if self.combined is not None:
             header = m.header(sec, nanosec, "")
-            header.seq = self.seq
+            header.seq = self.seq if cycle is None else cycle
             self.combined.publish(T["sensor_msgs/msg/JointState"](header=header, name=self.joint_ids,
                                                                   position=joints, velocity=velocities,
                                                                   effort=efforts))
-        for publisher, value in zip(self.individual, (joints + self.offsets).tolist(), strict=True):
-            publisher.publish(T["std_msgs/msg/Float64"](data=value))
+        if self.individual:
+            for publisher, value in zip(self.individual, (joints + self.offsets).tolist(), strict=True):
+                publisher.publish(T["std_msgs/msg/Float64"](data=value))
         for i, publisher in enumerate(self.leg_states):
             publisher.publish(self._leg_state(sec, nanosec, out, i))
         vx, vy, wz = out.velocity
