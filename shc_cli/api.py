@@ -150,7 +150,7 @@ def simulate(robot: str | Path | None = None, *, config: SimulationConfig | None
 def run_hardware(config: HardwareConfig) -> Run:
     """``shc run-hw``: the controller on the robot's Dynamixel servos, started, stopped and shut down safely
     (:class:`~shc_cli.domain.hardware.HardwareConfig`); ``summary["fault"]`` names a servo fault. The bus set-up,
-    warnings and faults are logged (logger ``shc_cli.domain.hardware``)."""
+    warnings and faults are events (:mod:`shc_cli.events`)."""
     from shc_cli.domain.hardware import run_hardware as run
 
     result = run(config)

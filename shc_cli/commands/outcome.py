@@ -7,10 +7,6 @@
 
 from __future__ import annotations
 
-import logging
-import sys
-from collections.abc import Iterator
-from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
 import typer
@@ -39,19 +35,3 @@ def exit_if_interrupted(summary: RunSummary) -> None:
     if code is not None:
         raise typer.Exit(code)
 
-
-@contextmanager
-def show_logs(name: str, level: int = logging.INFO) -> Iterator[None]:
-    """Print the records of logger ``name`` (``level`` and above) to stderr as they come, one line each (the
-    message only), while the block runs."""
-    logger = logging.getLogger(name)
-    handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(logging.Formatter("%(message)s"))
-    before = logger.level
-    logger.addHandler(handler)
-    logger.setLevel(level)
-    try:
-        yield
-    finally:
-        logger.removeHandler(handler)
-        logger.setLevel(before)

@@ -15,10 +15,9 @@ __all__ = ["run_hw"]
 def run_hw(config: HardwareConfig) -> Path:
     """Run on the servos, print one line; returns the run directory (exit 3 after a servo fault)."""
     from shc_cli.api import run_hardware
-    from shc_cli.commands.outcome import EXIT_FAULT, show_logs
+    from shc_cli.commands.outcome import EXIT_FAULT
 
-    with show_logs("shc_cli.domain.hardware"):
-        run = run_hardware(config)
+    run = run_hardware(config)
     summary = run.summary
     fault = f", FAULT: {summary.fault}" if summary.fault else ""
     typer.echo(f"{summary.robot} on {summary.port}: {summary.cycles} cycles, cycle time mean "

@@ -18,7 +18,7 @@ The run directory has the ``simulate`` log format (quantities a real robot does 
 foot forces — are 0 and listed in the summary's ``unmeasured``) plus ``cycle_time_ms`` in ``timing.csv``; the
 summary adds cycle-time statistics, overruns and faults. The loop is the one run loop
 (:mod:`shc_cli.loop.run_loop`) on the Dynamixel backend (:mod:`shc_cli.backends.dynamixel`). Never prints: the
-bus set-up, warnings and faults go to ``logging`` (logger ``shc_cli.domain.hardware``).
+bus set-up (NOTICE), warnings and faults are events (:mod:`shc_cli.events`).
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ from pydantic import BaseModel, ConfigDict, field_validator
 
 from shc_cli.domain.result import RunResult
 from shc_cli.errors import Issue, SpecError, check_choice
+from shc_cli.events import NOTICE, event
 from shc_cli.loop.input_sources import STATES
 
 if TYPE_CHECKING:
@@ -147,18 +148,18 @@ def run_hardware(config: HardwareConfig) -> RunResult:
             raise HardwareError(f"{bus.port_name}: refusing to start: " + "; ".join(problems))
         if not c.dry_run:
             for done in bus.configure():
-                log.info("%s", done)
+                event(log, NOTICE, "bus_setup", "%s", done)
         slow = bus.rate_problem(robot.time_delta)  # measured: the adapter's latency and per-servo reads count
         if slow and not c.dry_run:
             raise HardwareError(f"{bus.port_name}: refusing to start: {slow}")
         if slow:
-            log.warning("warning: %s", slow)
+            event(log, logging.WARNING, "bus_rate", "warning: %s", slow)
         bus_time = bus.wire_time()
         if bus_time > robot.time_delta:
-            log.warning("warning: one cycle needs %.1f ms on the bus (packets and return delays at %s baud), more "
-                        "than the %.0f ms period: raise the baud rate, lower Return Delay Time "
-                        "(hardware.return_delay_us) or split the servos over more buses", bus_time * 1e3, bus.baud,
-                        robot.time_delta * 1e3)
+            event(log, logging.WARNING, "bus_time", "warning: one cycle needs %.1f ms on the bus (packets and return "
+                  "delays at %s baud), more than the %.0f ms period: raise the baud rate, lower Return Delay Time "
+                  "(hardware.return_delay_us) or split the servos over more buses", bus_time * 1e3, bus.baud,
+                  robot.time_delta * 1e3)
         directory = c.out or default_run_directory("run-hw")
         run = RunDirectory(directory, c.overwrite)
         backend = DynamixelBackend(robot, bus, c.dry_run, run, c.on_fault, c.on_stop)
@@ -171,7 +172,7 @@ def run_hardware(config: HardwareConfig) -> RunResult:
         loop = RunLoop(controller, backend, source, LogRecorder(run, robot, backend),
                        StartUp.of(robot, hardware=True),
                        ControlledStop(stop, STOP_TIMEOUT_S), flush_every=100,
-                       on_fault=lambda text: log.error("fault: %s — %s", text, action))
+                       on_fault=lambda text: event(log, logging.ERROR, "fault_action", "fault: %s — %s", text, action))
 
         def release(result: LoopResult) -> None:
             nonlocal faulted
@@ -184,8 +185,8 @@ def run_hardware(config: HardwareConfig) -> RunResult:
             cycles = result.cycles
             if len(backend.cycle_times) > 20 and sum(t > dt for t in backend.cycle_times) / len(backend.cycle_times) \
                     > 0.05:
-                log.warning("warning: the loop missed its %.0f ms period in %d of %d cycles", dt * 1e3,
-                            backend.overruns, cycles)
+                event(log, logging.WARNING, "overruns", "warning: the loop missed its %.0f ms period in %d of %d "
+                      "cycles", dt * 1e3, backend.overruns, cycles)
             return RunSummary.model_validate({
                 "robot": robot.name, "gait": controller.gait.name, "scenario": "hardware", "port": bus.port_name,
                 "baud": bus.baud, "dry_run": c.dry_run, "cycles": cycles, "sim_time_s": cycles * dt,
