@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from shc_cli.analysis.progress import cycle_path_length, progress_fields, progress_note
+from shc_cli.loop.summary import RunSummary
 
 from .test_cli import run
 
@@ -60,10 +61,11 @@ def test_progress_counts_the_path_per_gait_cycle_not_the_sway() -> None:
 
     stuck = progress_fields(0.1, commanded_speed_mps=0.05, window_s=20.0)
     assert stuck["no_progress"] and stuck["walked_share"] == pytest.approx(0.1)
-    assert progress_note(stuck) == ", NO PROGRESS (walked 10% of the 1.00 m commanded)"
+    assert progress_note(RunSummary(**stuck)) == ", NO PROGRESS (walked 10% of the 1.00 m commanded)"
     assert not progress_fields(0.9, 0.05, 20.0)["no_progress"]
     standing = progress_fields(0.0, 0.0, 20.0)  # not commanded to walk: nothing to say
-    assert not standing["no_progress"] and standing["walked_share"] is None and progress_note(standing) == ""
+    assert not standing["no_progress"] and standing["walked_share"] is None
+    assert progress_note(RunSummary(**standing)) == ""
     assert not progress_fields(0.0, 0.01, 2.0)["no_progress"]  # 0.02 m commanded: too short to judge
 
 
