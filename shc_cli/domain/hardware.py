@@ -25,9 +25,9 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Literal
 
-from pydantic import BaseModel, ConfigDict, field_validator
+from pydantic import BaseModel, ConfigDict, ValidationInfo, field_validator
 
 from shc_cli.domain.result import RunResult
 from shc_cli.errors import Issue, SpecError, check_choice
@@ -98,7 +98,7 @@ class HardwareConfig(BaseModel):
 
     @field_validator("on_fault", "on_stop", mode="before")
     @classmethod
-    def _hold_or_off(cls, value: object, info: Any) -> object:
+    def _hold_or_off(cls, value: object, info: ValidationInfo) -> object:
         check_choice("--" + str(info.field_name).replace("_", "-"), value, ("hold", "torque-off"),
                      "hold or torque-off")
         return value

@@ -6,7 +6,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from shc_cli.domain.config import SimulationConfig
 from shc_cli.domain.result import RunResult
@@ -15,6 +15,7 @@ if TYPE_CHECKING:
     from shc_cli.backends.engine import Reading
     from shc_cli.control.controller import Command, Controller, CycleOutput
     from shc_cli.live.foxglove_server import FoxgloveTransport
+    from shc_cli.loop.run_loop import LoopResult
     from shc_cli.loop.summary import RunSummary
     from shc_cli.ros.outputs import NodeOutputs
     from shc_cli.spec.robot import Robot
@@ -82,7 +83,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
                            StartUp.of(robot),
                            observers=observers, flush_every=200)
 
-            def summarise(_: Any) -> RunSummary:  # from the finished log (run.partial)
+            def summarise(_: LoopResult) -> RunSummary:  # from the finished log (run.partial)
                 import numpy as np
 
                 if counter is not None:
