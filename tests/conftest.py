@@ -37,7 +37,8 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
 
 @pytest.fixture(scope="session")
 def bullet() -> Robot:
-    robot = load_robot(ROOT / "robots" / "bullet.toml").robot
+    """Bullet as OpenSHC configures it (robots/bullet_openshc.toml): the geometry of the real binary's recordings."""
+    robot = load_robot(ROOT / "robots" / "bullet_openshc.toml").robot
     return robot
 
 

@@ -110,7 +110,7 @@ def test_mammalian_requesting_running_by_time_to_start_walks_into_another_postur
     assert replay(recorded, robot, gait).comparison.worst["joints_rad"] < 2e-6
 
 
-@pytest.mark.parametrize(("name", "robot", "cycles"), [("insectoid", "bullet", 7939),
+@pytest.mark.parametrize(("name", "robot", "cycles"), [("insectoid", "bullet_openshc", 7939),
                                                        ("mammalian_excerpt", "bullet_mammalian", 1100)])
 def test_cli_replay_agrees_within_a_milliradian_and_a_tenth_of_a_millimetre(
         name: str, robot: str, cycles: int, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]

@@ -60,7 +60,7 @@ def bags(head: Recorded, tmp_path_factory: pytest.TempPathFactory) -> dict[str, 
 
 
 def replay_json(source: Path, capsys, monkeypatch, *extra: str) -> dict:  # type: ignore[no-untyped-def]
-    code, out, err = run(["replay", str(source), "--robot", "bullet", "--json", *extra], capsys, monkeypatch)
+    code, out, err = run(["replay", str(source), "--robot", "bullet_openshc", "--json", *extra], capsys, monkeypatch)
     assert (code, err) == (0, ""), err
     report: dict = json.loads(out)
     return report
@@ -96,7 +96,7 @@ def test_a_bag_with_only_the_joints_and_inputs_compares_the_joints(head: Recorde
     bag = write_openshc_bag(head, tmp_path / "joints.bag", ros1=True,
                             topics={"/desired_joint_states", "/syropod_remote/desired_velocity"},
                             more_inputs=("/syropod_remote/gait_selection",))
-    code, out, _ = run(["replay", str(bag), "--robot", "bullet"], capsys, monkeypatch)
+    code, out, _ = run(["replay", str(bag), "--robot", "bullet_openshc"], capsys, monkeypatch)
     assert code == 0
     assert "compared: joints (30)\n" in out
     assert "inputs not replayed (expect differences where they act): /syropod_remote/gait_selection" in out
@@ -109,7 +109,7 @@ def test_a_bag_with_only_the_joints_and_inputs_compares_the_joints(head: Recorde
 
 def test_out_writes_the_per_cycle_differences_and_a_plot(csv_prefix: Path, tmp_path: Path,
                                                          capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    code, out, _ = run(["replay", str(csv_prefix), "--robot", "bullet", "--out", str(tmp_path / "d")],
+    code, out, _ = run(["replay", str(csv_prefix), "--robot", "bullet_openshc", "--out", str(tmp_path / "d")],
                        capsys, monkeypatch)
     assert code == 0
     assert "worst difference:" in out and "joints" in out
@@ -125,10 +125,10 @@ def test_out_writes_the_per_cycle_differences_and_a_plot(csv_prefix: Path, tmp_p
 
 
 def test_tolerance_joints_exit_1_only_when_exceeded(csv_prefix: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    code, _, err = run(["replay", str(csv_prefix), "--robot", "bullet", "--tolerance-joints", "1e-3"], capsys,
+    code, _, err = run(["replay", str(csv_prefix), "--robot", "bullet_openshc", "--tolerance-joints", "1e-3"], capsys,
                        monkeypatch)
     assert (code, err) == (0, "")
-    code, _, err = run(["replay", str(csv_prefix), "--robot", "bullet", "--tolerance-joints", "1e-9"], capsys,
+    code, _, err = run(["replay", str(csv_prefix), "--robot", "bullet_openshc", "--tolerance-joints", "1e-9"], capsys,
                        monkeypatch)
     assert code == 1
     assert "more than --tolerance-joints 1e-09" in err
@@ -177,14 +177,14 @@ def test_a_bag_without_the_joint_topic_is_one_line(head: Recorded, tmp_path: Pat
                                                    capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     bag = write_openshc_bag(head.head(20), tmp_path / "no_joints", ros1=False,
                             topics={"/shc/velocity", "/syropod_remote/desired_velocity"})
-    err = _one_line_exit_2(["replay", str(bag), "--robot", "bullet"], capsys, monkeypatch)
+    err = _one_line_exit_2(["replay", str(bag), "--robot", "bullet_openshc"], capsys, monkeypatch)
     assert "no /desired_joint_states in the bag" in err and "rosbag record" in err
 
 
 def test_a_bag_without_the_velocity_input_is_one_line(head: Recorded, tmp_path: Path,
                                                       capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     bag = write_openshc_bag(head.head(20), tmp_path / "no_input.bag", ros1=True, topics={"/desired_joint_states"})
-    err = _one_line_exit_2(["replay", str(bag), "--robot", "bullet"], capsys, monkeypatch)
+    err = _one_line_exit_2(["replay", str(bag), "--robot", "bullet_openshc"], capsys, monkeypatch)
     assert "no /syropod_remote/desired_velocity in the bag" in err
 
 
@@ -192,7 +192,7 @@ def test_a_bag_without_the_velocity_input_is_one_line(head: Recorded, tmp_path: 
 def test_an_empty_bag_is_one_line(ros1: bool, head: Recorded, tmp_path: Path,
                                   capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     bag = write_openshc_bag(head.head(0), tmp_path / ("empty.bag" if ros1 else "empty"), ros1=ros1)
-    err = _one_line_exit_2(["replay", str(bag), "--robot", "bullet"], capsys, monkeypatch)
+    err = _one_line_exit_2(["replay", str(bag), "--robot", "bullet_openshc"], capsys, monkeypatch)
     assert "the bag is empty" in err
 
 
@@ -207,15 +207,15 @@ def test_another_robots_joints_are_one_line(head: Recorded, tmp_path: Path,
 
 def test_unusable_paths_and_files_are_one_line(csv_prefix: Path, tmp_path: Path,
                                                capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    err = _one_line_exit_2(["replay", str(tmp_path / "nothing"), "--robot", "bullet"], capsys, monkeypatch)
+    err = _one_line_exit_2(["replay", str(tmp_path / "nothing"), "--robot", "bullet_openshc"], capsys, monkeypatch)
     assert "no such bag" in err
     (tmp_path / "notes.txt").write_text("hello\n")
-    err = _one_line_exit_2(["replay", str(tmp_path / "notes.txt"), "--robot", "bullet"], capsys, monkeypatch)
+    err = _one_line_exit_2(["replay", str(tmp_path / "notes.txt"), "--robot", "bullet_openshc"], capsys, monkeypatch)
     assert "not a ROS 1 bag" in err
-    err = _one_line_exit_2(["replay", str(tmp_path), "--robot", "bullet"], capsys, monkeypatch)
+    err = _one_line_exit_2(["replay", str(tmp_path), "--robot", "bullet_openshc"], capsys, monkeypatch)
     assert "without metadata.yaml" in err
     (tmp_path / "fake.bag").write_bytes(b"#ROSBAG V2.0\n" + b"\0" * 20)
-    err = _one_line_exit_2(["replay", str(tmp_path / "fake.bag"), "--robot", "bullet"], capsys, monkeypatch)
+    err = _one_line_exit_2(["replay", str(tmp_path / "fake.bag"), "--robot", "bullet_openshc"], capsys, monkeypatch)
     assert "not a readable ROS 1 bag" in err
     folder = tmp_path / "bad"
     folder.mkdir()
@@ -228,9 +228,9 @@ def test_unusable_paths_and_files_are_one_line(csv_prefix: Path, tmp_path: Path,
             lines[12] = ",".join(cells)
         with gzip.open(folder / f"run_{part}.csv.gz", "wt") as handle:
             handle.write("\n".join(lines) + "\n")
-    err = _one_line_exit_2(["replay", str(folder / "run"), "--robot", "bullet"], capsys, monkeypatch)
+    err = _one_line_exit_2(["replay", str(folder / "run"), "--robot", "bullet_openshc"], capsys, monkeypatch)
     assert "run_joints.csv.gz:13: AR_femur_joint: 'oops' is not a number" in err
-    err = _one_line_exit_2(["replay", str(csv_prefix), "--robot", "bullet", "--tolerance-joints", "-1"],
+    err = _one_line_exit_2(["replay", str(csv_prefix), "--robot", "bullet_openshc", "--tolerance-joints", "-1"],
                            capsys, monkeypatch)
     assert "--tolerance-joints" in err
 

@@ -63,7 +63,7 @@ def test_a_long_stall_before_running_replays_exactly(bullet: Robot, tripod: Gait
 @pytest.fixture(scope="module")
 def sequence_robot(tmp_path_factory: pytest.TempPathFactory) -> Robot:
     robot_file = tmp_path_factory.mktemp("robot") / "sequence.toml"
-    robot_file.write_text('extends = "bullet"\nname = "bullet_sequence"\n[start_up]\nsequence = true\n')
+    robot_file.write_text('extends = "bullet_openshc"\nname = "bullet_sequence"\n[start_up]\nsequence = true\n')
     robot = load_robot(robot_file).robot
     return robot
 

@@ -17,7 +17,7 @@ from .test_cli import run
 GOLDEN_SWEEP = GOLDEN / "sweeps" / "ci_smoke.csv"
 GOLDEN_TABLE4 = GOLDEN / "sweeps" / "ci_table4.csv"
 TOLERANCES = {"cot": 0.05, "mean_speed_mps": 0.05, "mean_power_w": 0.05}
-"""Relative tolerances of the golden CI sweep: PyBullet is deterministic on one machine; these leave room for other
+"""Relative tolerances of the golden CI sweeps (MuJoCo, the default engine): the engines are deterministic on one machine; these leave room for other
 CPUs and library builds while catching real changes of the controller, the physics model or the analysis."""
 TIMING = {"wall_time_s", "physics_time_s"}
 
@@ -68,9 +68,9 @@ def test_engine_is_a_sweepable_option_and_sweep_engine_fills_it_in(tmp_path: Pat
     assert with_engine(both, "mujoco") == both  # the file chooses
     plain = load_sweep(ROOT / "sweeps" / "bullet_cot.toml")
     assert not any("engine" in p.options for p in plain.points)
-    assert {point_config(p).engine for p in plain.points} == {DEFAULT_ENGINE}  # shc simulate's default
-    assert {p.options["engine"] for p in with_engine(plain, "mujoco").points} == {"mujoco"}
-    assert [p.slug for p in with_engine(plain, "mujoco").points] == [p.slug for p in plain.points]
+    assert {point_config(p).engine for p in plain.points} == {DEFAULT_ENGINE} == {"mujoco"}  # simulate's default
+    assert {p.options["engine"] for p in with_engine(plain, "pybullet").points} == {"pybullet"}
+    assert [p.slug for p in with_engine(plain, "pybullet").points] == [p.slug for p in plain.points]
     for name in ("engines_agreement.toml", "engines_agreement_paper.toml"):
         agreement = load_sweep(ROOT / "sweeps" / name)
         assert len(agreement.points) == 12 and {p.options["engine"] for p in agreement.points} == {"pybullet", "mujoco"}

@@ -1,7 +1,7 @@
 """``shc import urdf``: URDF and xacro legs become DH chains with the URDF's forward kinematics.
 
 The reference for every tip position is yourdfpy's own forward kinematics of the URDF (its scene graph), or
-for the Bullet xacro, our hand-written ``robots/bullet.toml`` (from CSIRO's OpenSHC configuration).
+for the Bullet xacro, our hand-written ``robots/bullet_openshc.toml`` (from CSIRO's OpenSHC configuration).
 """
 
 from __future__ import annotations
@@ -315,7 +315,7 @@ def _servo_rows(robot_file: Path) -> list[tuple[str, str, str, int]]:
 
 
 def _through_servo_map(robot_file: Path, ours: Robot, imported: Robot, q: np.ndarray) -> np.ndarray:
-    """Joint angles of robots/bullet.toml → the imported robot's, through [hardware.servos]'s URDF joint names
+    """Joint angles of robots/bullet_openshc.toml → the imported robot's, through [hardware.servos]'s URDF joint names
     (OpenSHC drives the URDF joints ``LEG_JOINT_joint`` with its own angles; a URDF angle is the shc angle)."""
     rows = _servo_rows(robot_file)
     assert len(rows) == 30
@@ -336,7 +336,7 @@ def test_bullet_xacro_gives_bullet_toml_tips(bullet_import) -> None:  # type: ig
     """Same joint angles, same tips: within 10.5 mm, the differences of CSIRO's OpenSHC parameters from its URDF;
     with those values replaced by the URDF's, within 1e-5 m."""
     _, result = bullet_import
-    ours, imported = load_robot("bullet").robot, load_robot(result.robot_path).robot
+    ours, imported = load_robot("bullet_openshc").robot, load_robot(result.robot_path).robot
     assert ours is not None and imported is not None
     assert list(imported.legs) == list(ours.legs)
     rng = np.random.default_rng(7)
@@ -367,12 +367,12 @@ def test_bullet_xacro_gives_bullet_toml_tips(bullet_import) -> None:  # type: ig
 def test_our_own_exported_urdf_comes_back_as_the_robot(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """`shc export urdf bullet` imported: the same legs, joint names, tips (to 1e-9 m), masses and limits."""
     urdf = tmp_path / "bullet.urdf"
-    code, _, err = run(["export", "urdf", "bullet", "--out", str(urdf)], capsys, monkeypatch)
+    code, _, err = run(["export", "urdf", "bullet_openshc", "--out", str(urdf)], capsys, monkeypatch)
     assert code == 0, err
     code, _, err = run(["import", "urdf", str(urdf), "--out", str(tmp_path)], capsys, monkeypatch)
     assert code == 0, err
-    assert "the centre of its leg's last link's collision sphere" in (tmp_path / "robots" / "bullet.toml").read_text()
-    ours, back = load_robot("bullet").robot, load_robot(tmp_path / "robots" / "bullet.toml").robot
+    assert "the centre of its leg's last link's collision sphere" in (tmp_path / "robots" / "bullet_openshc.toml").read_text()
+    ours, back = load_robot("bullet_openshc").robot, load_robot(tmp_path / "robots" / "bullet_openshc.toml").robot
     assert ours is not None and back is not None
     assert list(back.legs) == list(ours.legs)
     assert [list(leg.joints) for leg in back.legs.values()] == [list(leg.joints) for leg in ours.legs.values()]
@@ -389,7 +389,7 @@ def test_our_own_exported_urdf_comes_back_as_the_robot(tmp_path: Path, capsys, m
 
 def test_bullet_import_masses_and_limits(bullet_import) -> None:  # type: ignore[no-untyped-def]
     _, result = bullet_import
-    imported, ours = load_robot(result.robot_path).robot, load_robot("bullet").robot
+    imported, ours = load_robot(result.robot_path).robot, load_robot("bullet_openshc").robot
     assert imported is not None and ours is not None
     assert imported.body.mass == pytest.approx(ours.body.mass)  # 6.0 kg box + 6 x 0.2 kg base motors
     assert imported.total_mass() == pytest.approx(ours.total_mass())

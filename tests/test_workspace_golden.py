@@ -153,10 +153,10 @@ STUDY_FORWARD_LIMITS = [  # robot, gait, r, v_max, a_max, ω_max at bearing 0
     ("bullet_mammalian", "bipod", 0.196, 0.445, 0.225, 1.126),
     ("bullet_mammalian", "tripod", 0.196, 0.284, 0.123, 0.718),
     ("openshc_default", "tripod", 0.060, 0.077, 0.030, 0.513),
-    ("bullet", "wave", 0.160, 0.054, 0.009, 0.117),
-    ("bullet", "ripple", 0.160, 0.125, 0.039, 0.271),
-    ("bullet", "amble", 0.160, 0.125, 0.046, 0.272),
-    ("bullet", "bipod", 0.160, 0.364, 0.184, 0.789),
+    ("bullet_openshc", "wave", 0.160, 0.054, 0.009, 0.117),
+    ("bullet_openshc", "ripple", 0.160, 0.125, 0.039, 0.271),
+    ("bullet_openshc", "amble", 0.160, 0.125, 0.046, 0.272),
+    ("bullet_openshc", "bipod", 0.160, 0.364, 0.184, 0.789),
 ]
 
 

@@ -63,7 +63,7 @@ class EngineOptions:
     start_pose: str = "unpacked"
     gui: bool = False
     stand: bool = False
-    engine: EngineName = "pybullet"
+    engine: EngineName = "mujoco"  # the default engine (engine_registry.DEFAULT_ENGINE)
 
 
 @dataclass(frozen=True)

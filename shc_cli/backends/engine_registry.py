@@ -17,7 +17,7 @@ if TYPE_CHECKING:
 
     from shc_cli.spec.robot import Robot
 
-EngineName = Literal["pybullet", "mujoco"]
+EngineName = Literal["mujoco", "pybullet"]
 """A physics engine's name, as ``--engine`` takes it."""
 ENGINES: tuple[EngineName, ...] = get_args(EngineName)
 """The physics engines ``--engine`` takes; the first is the default."""
@@ -43,7 +43,7 @@ def _open_mujoco(robot: Robot, options: EngineOptions, initial_joints: np.ndarra
     return MujocoWorld(robot, options, initial_joints)
 
 
-OPENERS: dict[EngineName, Opener] = {"pybullet": _open_pybullet, "mujoco": _open_mujoco}
+OPENERS: dict[EngineName, Opener] = {"mujoco": _open_mujoco, "pybullet": _open_pybullet}
 """Engine name → the function that opens it (the same names as :data:`ENGINES`)."""
 assert tuple(OPENERS) == ENGINES
 

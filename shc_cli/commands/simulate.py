@@ -19,20 +19,13 @@ __all__ = ["run_simulate"]
 def run_simulate(config: SimulationConfig, after: Callable[[Path], None] | None = None) -> Path:
     """Simulate, print one line, then ``after(run directory)``; returns the run directory. Exits 130/143 when a
     signal stopped the run, 4 when it fell and ``fail_on_fall`` is set."""
-    from shc_cli.analysis.progress import progress_note
+    from shc_cli.analysis.run_line import simulation_line
     from shc_cli.api import simulate
     from shc_cli.commands.outcome import EXIT_FELL, exit_if_interrupted, interrupted_note
 
     run = simulate(config=config, progress=_Bar())
     path, summary = run.path, run.summary
-    cot = summary.cot if summary.cot is None else round(summary.cot, 3)
-    typer.echo(f"{summary.robot} / {summary.gait} / {summary.scenario} on {config.terrain}: "
-               f"{summary.sim_time_s:.1f} s simulated in {summary.wall_time_s:.1f} s, distance "
-               f"{summary.distance_m:.3f} m, path speed {summary.path_speed_mps:.4f} m/s, displacement speed "
-               f"{summary.displacement_speed_mps:.4f} m/s, mean power "
-               f"{summary.mean_power_w:.1f} W, "
-               f"CoT {cot}"
-               f"{', FELL' if summary.fell else progress_note(summary)}{interrupted_note(summary)} → {path}")
+    typer.echo(simulation_line(summary, config.terrain, path, interrupted_note(summary)))
     for warning in summary.engine_warnings or []:
         hint = "" if "--physics-rate" in warning else " (try a higher --physics-rate)"
         typer.echo(f"note: {summary.engine}: {warning}{hint}", err=True)

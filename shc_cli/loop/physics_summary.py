@@ -86,7 +86,8 @@ class PhysicsRecord:
         rows = np.flatnonzero(finished.running) if finished is not None else np.zeros(0, dtype=np.intp)
         if finished is not None:
             figures = walk_figures(finished, rows, scenario == "WG")
-            progress = window_progress(finished, rows, controller.cycle.period, figures.commanded_speed_mps)
+            progress = window_progress(finished, rows, controller.cycle.period,  # nothing to travel in the air
+                                       0.0 if self.airborne else figures.commanded_speed_mps)
             distance, forward, speed = figures.distance_m, figures.forward_distance_m, figures.displacement_speed_mps
             path_speed, commanded, power = figures.path_speed_mps, figures.commanded_speed_mps, figures.mean_power_w
             mass, cot = figures.mass_kg, figures.cot
@@ -115,8 +116,9 @@ class PhysicsRecord:
             "path_speed_mps": path_speed,
             "commanded_speed_mps": commanded,
             **progress,
-            "mean_power_w": power or 0.0,
+            "mean_power_w": power,  # None: nothing walked to measure
             "mass_kg": mass,
+            "servo_model": robot.servo.model,
             "step_frequency_hz": controller.parameters["step_frequency"],
             "step_period_cycles": controller.cycle.period,
             "cycle_frequency_hz": controller.cycle.frequency,

@@ -38,6 +38,8 @@ class RunSummary(BaseModel):
     # what ran
     robot: str | None = Field(None, description="Robot name (all runs).")
     gait: str | None = Field(None, description="Gait name at the start (all runs).")
+    gaits: list[str] | None = Field(None, description="plan: every gait the run walked, in order (a plan script may "
+                                                      "switch).")
     scenario: str | None = Field(None, description="simulate: WG (walk on the ground), SG (stand on the ground), "
                                                    "WA (walk in the air), SA (stand in the air); run-hw: hardware.")
     cycles: NonNegativeInt | None = Field(None, description="Logged control cycles (plan, run-hw) [cycles].")
@@ -113,6 +115,8 @@ class RunSummary(BaseModel):
                                                                     "window [W].")
     mass_kg: NonNegativeFloat | None = Field(None, description="simulate: mass of the simulated body (body, links, "
                                                                "feet) [kg].")
+    servo_model: str | None = Field(None, description="simulate: the robot's servo model (servo.model; 'generic' "
+                                                      "when its file gives no [servo]: power is then indicative).")
     cot: float | None = Field(None, description="simulate: cost of transport, paper eq. 22: mean power "
                                                            "÷ (mass · g · displacement speed) [dimensionless]; null "
                                                            "when not walking on the ground (scenario other than "

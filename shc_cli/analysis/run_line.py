@@ -1,0 +1,78 @@
+"""The one line a simulated run prints: where it walked, what it drew, its cost of transport — and, where a figure
+cannot be measured, why not.
+
+A figure of a run with too little walking (a 1 ms run, a Ctrl-C during start-up, a robot that did not get
+anywhere) is not a number: the line says "not enough walking to measure" instead of ``CoT None`` or a mean power
+of 0.0 W, and a run flagged NO PROGRESS prints no CoT (dividing its power by a speed near zero gives a figure that
+means nothing). The air and standing scenarios (SA, WA, SG) have no walking by design: their line is the power.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from shc_cli.analysis.progress import progress_note
+
+if TYPE_CHECKING:
+    from shc_cli.loop.summary import RunSummary
+
+NOT_MEASURED = "not enough walking to measure"
+"""What the line says for a figure the run cannot give."""
+GENERIC_SERVOS = "note: generic servos — power is indicative"
+"""Appended once when the robot file gives no ``[servo]``: power and CoT then come from default servo figures."""
+
+
+def generic_servos(robot_servo_model: str | None) -> bool:
+    """Whether the robot's servos are the defaults of a robot file without ``[servo]`` (model ``generic``)."""
+    return robot_servo_model in (None, "generic")
+
+
+def simulation_line(summary: RunSummary, terrain: str, path: Path, note: str = "") -> str:
+    """The summary line of ``shc simulate``.
+
+    Args:
+        summary: the run's summary (:meth:`shc_cli.loop.physics_summary.PhysicsRecord.summary`).
+        terrain: the terrain as given (``flat``, ``ramp:5`` …).
+        path: the run directory.
+        note: appended before the path (e.g. that a signal stopped the run).
+    """
+    parts = [f"{summary.robot} / {summary.gait} / {summary.scenario} on {terrain} ({summary.engine or '?'}): "
+             f"{summary.sim_time_s or 0.0:.1f} s simulated in {summary.wall_time_s or 0.0:.1f} s"]
+    walking = summary.scenario == "WG"
+    window = summary.analysed_time_s or 0.0
+    measured = summary.mean_power_w is not None and window > 0.0
+    if walking:
+        if window > 0.0:
+            parts.append(f"distance {summary.distance_m or 0.0:.3f} m, path speed {summary.path_speed_mps or 0.0:.4f} "
+                         f"m/s, displacement speed {summary.displacement_speed_mps or 0.0:.4f} m/s")
+        else:
+            parts.append(f"speed: {NOT_MEASURED}")
+    parts.append(f"mean power {summary.mean_power_w:.1f} W" if measured and summary.mean_power_w is not None
+                 else f"power: {NOT_MEASURED}")
+    if walking and measured:
+        parts.append(f"CoT {summary.cot:.3f}" if summary.cot is not None and not summary.no_progress
+                     else f"CoT: {NOT_MEASURED}")
+    line = ", ".join(parts)
+    if summary.fell:
+        line += ", FELL"
+    elif walking:
+        line += progress_note(summary)
+    line += note
+    if generic_servos(summary.servo_model):
+        line += f" ({GENERIC_SERVOS})"
+    return f"{line} → {path}"
+
+
+def plan_line(summary: RunSummary, path: Path, note: str = "") -> str:
+    """The summary line of ``shc plan``: cycles, speeds, the stance feet's speed against paper eq. 16 (or that the
+    run had no walking cycle to measure it on), IK deviations and clamps."""
+    if summary.achieved_mean_speed_mps is None or summary.eq16_speed_mps is None:
+        feet = f"stance feet: {NOT_MEASURED}"
+    else:
+        feet = f"stance feet {summary.achieved_mean_speed_mps:.4f} m/s (eq. 16: {summary.eq16_speed_mps:.4f})"
+    gaits = summary.gaits or [summary.gait]
+    return (f"{summary.robot} / {' → '.join(str(g) for g in gaits)}: {summary.cycles} cycles "
+            f"({summary.duration_s or 0.0:.2f} s), path speed {summary.path_speed_mps or 0.0:.4f} m/s, displacement "
+            f"speed {summary.displacement_speed_mps or 0.0:.4f} m/s, {feet}, IK deviations "
+            f"{summary.ik_deviation_count}, clamped {summary.ik_clamp_count}{progress_note(summary)}{note} → {path}")
