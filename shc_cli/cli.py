@@ -85,11 +85,12 @@ def workspace(
     volumetric: Annotated[bool, typer.Option(help="Search a stack of planes (rough-terrain mode).")] = False,
     out: Annotated[Path | None, typer.Option(help="Write workspace.csv, limits.csv and workspace.png here.")] = None,
     json_output: Annotated[bool, typer.Option("--json", help="Print one JSON object and nothing else.")] = False,
+    overwrite: Annotated[bool, typer.Option(help="Replace existing output files at --out.")] = False,
 ) -> None:
     """Per-leg workspaces, the common walkspace and speed/acceleration limits (paper Table II, Fig. 13)."""
     from shc_cli.commands.workspace import run_workspace
 
-    run_workspace(robot, gait, step_frequency, bearings, volumetric, out, json_output)
+    run_workspace(robot, gait, step_frequency, bearings, volumetric, out, json_output, overwrite)
 
 
 @app.command()
@@ -112,7 +113,7 @@ def plan(
     from shc_cli.commands.plan import run_plan
     from shc_cli.commands.run_outputs import check_outputs, finish_outputs
 
-    check_outputs(bag, video)
+    check_outputs(bag, video, overwrite)
     run_plan(robot, gait, velocity, duration, commands, out, plots, after=lambda run: finish_outputs(run, bag, video),
              overwrite=overwrite)
 
@@ -159,7 +160,7 @@ def simulate(
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
     bag: BagOption = None,
     fail_on_fall: Annotated[bool, typer.Option(help="Exit with code 4 when the robot fell.")] = False,
-    engine: Annotated[str, typer.Option(help="Physics engine: mujoco or pybullet.")] = "mujoco",
+    engine: Annotated[str, typer.Option(help="Physics engine: pybullet or mujoco.")] = "pybullet",
     video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
                                                     "render with its defaults).", metavar="FILE")] = None,
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
@@ -168,12 +169,12 @@ def simulate(
     live_port: Annotated[int, typer.Option(help="Port of the --live server (0: any free port).")] = 8765,
     realtime: Annotated[bool, typer.Option(help="Pace the simulation to the wall clock.")] = False,
 ) -> None:
-    """Run the controller on the robot in physics (PyBullet or MuJoCo): terrains, servos, sensors, power, CoT."""
+    """Run the controller on the robot in physics (MuJoCo; PyBullet with --engine): terrains, servos, power, CoT."""
     from shc_cli.commands.run_outputs import check_outputs, finish_outputs
     from shc_cli.commands.simulate import run_simulate
     from shc_cli.domain.config import SimulationConfig
 
-    check_outputs(bag, video)
+    check_outputs(bag, video, overwrite)
     options = SimulationConfig(robot=robot, gait=gait, velocity=velocity, duration=duration, commands=commands,
                                out=out, plots=plots, terrain=terrain, scenario=scenario, physics_rate=physics_rate,
                                friction=friction, restitution=restitution, seed=seed, imu_noise=imu_noise,
@@ -258,11 +259,12 @@ def analyze(
     skip: Annotated[float, typer.Option(help="Seconds of RUNNING to leave out at the start of the window.")] = 0.0,
     steady: Annotated[bool, typer.Option(help="Only cycles whose desired velocity held for a whole gait cycle.")]
     = False,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing analysis.json and plots at --out.")] = False,
 ) -> None:
     """Cost of transport, power, speed, duty factor, slip, stability margins and per-cycle posture of runs."""
     from shc_cli.commands.analyze import run_analyze
 
-    run_analyze(runs, json_output, out, skip, steady)
+    run_analyze(runs, json_output, out, skip, steady, overwrite)
 
 
 @app.command()
@@ -276,7 +278,7 @@ def sweep(
     overwrite: Annotated[bool, typer.Option(help="Delete an existing sweep output at --out first and run it all "
                                                  "again (only shc's own outputs).")] = False,
     engine: Annotated[
-        str | None, typer.Option(help="Physics engine (mujoco or pybullet) of runs the sweep file does not set.")
+        str | None, typer.Option(help="Physics engine (pybullet or mujoco) of runs the sweep file does not set.")
     ] = None,
 ) -> None:
     """Run a grid of simulations in parallel and tabulate CoT, power, speed and stability per run."""
@@ -294,11 +296,12 @@ def render(
     camera: Annotated[str, typer.Option(help="follow (the body, from behind and above), fixed (the whole path) "
                                              "or top (from above, following).")] = "follow",
     speed: Annotated[float, typer.Option(help="Playback speed: 2 = twice real time.")] = 1.0,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing video at --out.")] = False,
 ) -> None:
     """Render a run headless to video: the robot, terrain and feet, with time, speeds and walk state over it."""
     from shc_cli.commands.render import run_render
 
-    run_render(run, out, fps, size, camera, speed)
+    run_render(run, out, fps, size, camera, speed, overwrite)
 
 
 @app.command()
@@ -347,11 +350,12 @@ def replay(
     tolerance_joints: Annotated[
         float | None, typer.Option(metavar="RAD", help="Exit 1 if the joints differ by more than this [rad].")
     ] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace existing differences files at --out.")] = False,
 ) -> None:
     """Replay a recorded OpenSHC run through shc's controller; the worst difference of joints, tips, velocity."""
     from shc_cli.commands.replay import run_replay
 
-    code = run_replay(source, robot, gait, json_output, out, tolerance_joints)
+    code = run_replay(source, robot, gait, json_output, out, tolerance_joints, overwrite)
     if code:
         raise typer.Exit(code)
 
@@ -364,11 +368,12 @@ app.add_typer(export_app, name="export")
 def export_urdf(
     robot: RobotArgument = "bullet",
     out: Annotated[Path | None, typer.Option(help="Write the URDF here (default: print it).")] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing file at --out.")] = False,
 ) -> None:
     """The physics model generated from the robot file, as URDF (what `simulate` loads)."""
     from shc_cli.commands.export import export_urdf as run
 
-    run(robot, out)
+    run(robot, out, overwrite)
 
 
 @export_app.command("bag")
@@ -442,6 +447,21 @@ def warmup() -> None:
     from shc_cli.commands.warmup import run_warmup
 
     run_warmup()
+
+
+def _whole_short_help(typer_app: typer.Typer) -> None:
+    """``shc --help`` lists each command with the whole first paragraph of its docstring, wrapped, instead of
+    click's 45-character cut ending in "…" (a command's own ``--help`` is unchanged)."""
+    for info in typer_app.registered_commands:
+        doc = info.help or (info.callback.__doc__ if info.callback is not None else None)
+        if info.short_help is None and doc:
+            info.short_help = " ".join(doc.strip().split("\n\n")[0].split())
+    for group in typer_app.registered_groups:
+        if group.typer_instance is not None:
+            _whole_short_help(group.typer_instance)
+
+
+_whole_short_help(app)
 
 
 def main() -> None:

@@ -139,10 +139,10 @@ def test_unknown_engine_is_one_line() -> None:
 @pytest.mark.slow  # long simulations
 def test_standing_readings_agree_between_engines(engine: str) -> None:
     """Standing still in the default stance: the feet carry the weight, the IMU reads +g up, the body is level at
-    the standing height — the same in both engines."""
+    the standing height — the same in both engines (OpenSHC's Bullet: stiff position motors, no servo sag)."""
     from shc_cli.control.startup import plan_direct_startup
 
-    robot = robot_named("bullet")
+    robot = robot_named("bullet_openshc")
     chains = Chains.from_robot(robot)
     stance = plan_direct_startup(robot, chains, chains.default_joints())
     world = open_engine(robot, EngineOptions(parse_terrain("flat"), 4, engine=engine), stance)

@@ -26,14 +26,14 @@ def _rows(path: Path) -> list[dict[str, str]]:
 
 def test_plan_writes_the_run_directory(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     out = tmp_path / "run"
-    code, stdout, err = run(["plan", "bullet", "--duration", "8", "--out", str(out)], capsys, monkeypatch)
+    code, stdout, err = run(["plan", "bullet_openshc", "--duration", "8", "--out", str(out)], capsys, monkeypatch)
     assert (code, err) == (0, "")
-    assert "bullet / tripod" in stdout and str(out) in stdout
+    assert "bullet_openshc / tripod" in stdout and str(out) in stdout
     assert {p.name for p in out.iterdir()} == {"joints.csv", "tips.csv", "body.csv", "summary.json", "gait.png",
                                                 "tips.png", "joints.png", "robot.toml", "events.log"}
     from shc_cli.spec.loading import load_robot
 
-    assert load_robot(out / "robot.toml").robot == load_robot("bullet").robot  # the expanded robot, loadable
+    assert load_robot(out / "robot.toml").robot == load_robot("bullet_openshc").robot  # the expanded robot, loadable
     summary = json.loads((out / "summary.json").read_text())
     joints = _rows(out / "joints.csv")
     assert len(joints) == summary["cycles"] == summary["startup_cycles"] + 1 + 800  # + the cycle entering RUNNING
@@ -198,3 +198,20 @@ def test_plan_script_rejects_an_unknown_leg(tmp_path: Path, capsys, monkeypatch)
     script.write_text('[[step]]\nat = 0.0\nleg_toggle = "XX"\n')
     code, _, err = run(["plan", "openshc_default", "--commands", str(script)], capsys, monkeypatch)
     assert code == 2 and "no leg 'XX' on robot 'openshc_default'" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_gait_switch_names_every_gait_and_a_short_run_measures_no_stance_speed(
+        tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """A plan script that switches gait titles the run with both gaits in order (it said the last one); a run
+    without a MOVING cycle says its stance-feet speed cannot be measured (it printed 0.0000 m/s, eq. 16: 0.0000)."""
+    script = tmp_path / "plan.toml"
+    script.write_text("[[step]]\nat = 0.0\nvelocity = [1, 0, 0]\n[[step]]\nat = 1.0\ngait = \"wave\"\n")
+    out = tmp_path / "run"
+    code, stdout, err = run(["plan", "openshc_default", "--commands", str(script), "--duration", "10", "--out",
+                             str(out), "--no-plots"], capsys, monkeypatch)
+    assert (code, err) == (0, "")
+    assert "openshc_default / tripod → wave:" in stdout
+    assert json.loads((out / "summary.json").read_text())["gaits"] == ["tripod", "wave"]
+    code, stdout, _ = run(["plan", "bullet", "--duration", "0.05", "--out", str(tmp_path / "short"), "--no-plots"],
+                          capsys, monkeypatch)
+    assert code == 0 and "stance feet: not enough walking to measure" in stdout and "0.0000 m/s (eq. 16" not in stdout

@@ -73,6 +73,8 @@ def test_stance_in_the_air_holds_the_body_still(engine: str, tmp_path: Path, cap
     (["--physics-rate", "333"], "--physics-rate: 333 Hz is not a whole multiple of the control rate 100 Hz"),
     (["--scenario", "XX"], "--scenario: 'XX' is not a scenario"),
     (["--engine", "ode"], "--engine: 'ode' is not a physics engine"),
+    (["--velocity", "2,0,0"], "--velocity: VX 2 is outside the throttle range −1…1"),
+    (["--velocity", "0,0,-1.5"], "--velocity: WZ -1.5 is outside the throttle range −1…1"),
 ])
 def test_bad_options_are_one_line(tmp_path: Path, args: list[str], message: str, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     code, _, err = run(["simulate", *args, "--out", str(tmp_path / "x")], capsys, monkeypatch)
@@ -131,8 +133,8 @@ def test_readings_are_those_after_the_last_physics_step(substeps: int) -> None:
     from shc_cli.control.controller import Command, Controller, RobotState
     from shc_cli.validation import load_checked
 
-    robot, gait, _ = load_checked("bullet", "tripod")
-    world = open_world(robot, EngineOptions(parse_terrain("flat"), substeps))
+    robot, gait, _ = load_checked("bullet_openshc", "tripod")
+    world = open_world(robot, EngineOptions(parse_terrain("flat"), substeps, engine="pybullet"))
     controller = Controller(robot, gait, joints=world.read().joints)
     try:
         for _ in range(5):
@@ -159,8 +161,8 @@ def test_mean_joint_speed_from_the_displacement_equals_the_mean_of_every_physics
     from shc_cli.control.controller import Command, Controller, RobotState
     from shc_cli.validation import load_checked
 
-    robot, gait, _ = load_checked("bullet", "tripod")
-    world = open_world(robot, EngineOptions(parse_terrain("flat"), 4))
+    robot, gait, _ = load_checked("bullet_openshc", "tripod")  # the position motor's power model
+    world = open_world(robot, EngineOptions(parse_terrain("flat"), 4, engine="pybullet"))
     controller = Controller(robot, gait, joints=world.read().joints)
     recorded: list[list[tuple[float, float]]] = []
 
@@ -251,7 +253,8 @@ def test_a_robot_that_falls_in_its_first_running_cycle_has_no_speed_and_no_cot(
     (tests/test_servo.py) and the fall check ends the run in its first RUNNING cycle: one cycle's displacement is no
     walking speed (it was 7 m/s and a CoT of 0.07, which a sweep's CoT plot would take for the best run)."""
     code, _, summary = simulate_variant(
-        tmp_path, 'extends = "athena"\nname = "athena_dxl"\n[servo]\ncontrol = "dynamixel"\nstall_torque = 1.5\n', [],
+        tmp_path, 'extends = "athena"\nname = "athena_dxl"\n[servo]\ncontrol = "dynamixel"\nstall_torque = 1.5\n',
+        ["--engine", "pybullet"],
         "run", capsys, monkeypatch)
     assert code == 0 and summary["fell"]
     assert summary["analysed_time_s"] == pytest.approx(0.01)

@@ -17,8 +17,9 @@ from .test_cli import run
 GOLDEN_SWEEP = GOLDEN / "sweeps" / "ci_smoke.csv"
 GOLDEN_TABLE4 = GOLDEN / "sweeps" / "ci_table4.csv"
 TOLERANCES = {"cot": 0.05, "mean_speed_mps": 0.05, "mean_power_w": 0.05}
-"""Relative tolerances of the golden CI sweeps (MuJoCo, the default engine): the engines are deterministic on one machine; these leave room for other
-CPUs and library builds while catching real changes of the controller, the physics model or the analysis."""
+"""Relative tolerances of the golden CI sweeps (MuJoCo, the default engine): the engines are deterministic on one
+machine; these leave room for other CPUs and library builds while catching real changes of the controller, the
+physics model or the analysis."""
 TIMING = {"wall_time_s", "physics_time_s"}
 
 
@@ -319,6 +320,8 @@ name = "warned"
 duration = 0.5
 [[grid]]
 robot = ["quadruped", "{tmp_path / 'quad_dxl.toml'}"]
+[fixed]
+engine = "pybullet"
 """)
     out = tmp_path / "out"
     code, stdout, err = run(["sweep", str(path), "--out", str(out), "--workers", "1"], capsys, monkeypatch)

@@ -371,7 +371,8 @@ def test_our_own_exported_urdf_comes_back_as_the_robot(tmp_path: Path, capsys, m
     assert code == 0, err
     code, _, err = run(["import", "urdf", str(urdf), "--out", str(tmp_path)], capsys, monkeypatch)
     assert code == 0, err
-    assert "the centre of its leg's last link's collision sphere" in (tmp_path / "robots" / "bullet_openshc.toml").read_text()
+    written = (tmp_path / "robots" / "bullet_openshc.toml").read_text()
+    assert "the centre of its leg's last link's collision sphere" in written
     ours, back = load_robot("bullet_openshc").robot, load_robot(tmp_path / "robots" / "bullet_openshc.toml").robot
     assert ours is not None and back is not None
     assert list(back.legs) == list(ours.legs)

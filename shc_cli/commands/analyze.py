@@ -48,11 +48,14 @@ def table(results: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def run_analyze(runs: list[Path], as_json: bool, out: Path | None, skip: float, steady: bool) -> None:
+def run_analyze(runs: list[Path], as_json: bool, out: Path | None, skip: float, steady: bool,
+                overwrite: bool = False) -> None:
     from shc_cli.analysis.metrics import analyze_log, public
     from shc_cli.api import open_run
-    from shc_cli.outputs import ensure_dir, write_text
+    from shc_cli.outputs import ensure_dir, refuse_existing, write_text
 
+    if out is not None:  # analysis.json marks an analysis output: its plots are replaced with it or not at all
+        refuse_existing([out / "analysis.json"], overwrite)
     logs = [open_run(path) for path in runs]
     window = Window(skip_s=skip, steady=steady)
     results = [analyze_log(log, window) for log in logs]

@@ -7,12 +7,15 @@ from pathlib import Path
 import typer
 
 
-def export_urdf(robot: str, out: Path | None) -> None:
-    """The URDF generated from the robot file (what ``simulate`` loads), printed or written to ``out``."""
+def export_urdf(robot: str, out: Path | None, overwrite: bool = False) -> None:
+    """The URDF generated from the robot file (what ``simulate`` loads), printed or written to ``out`` (an existing
+    file only with ``overwrite``)."""
     from shc_cli.backends.pybullet_.urdf import robot_urdf
-    from shc_cli.outputs import write_text
+    from shc_cli.outputs import refuse_existing, write_text
     from shc_cli.spec.loading import load_robot
 
+    if out is not None:
+        refuse_existing([out], overwrite)
     text = robot_urdf(load_robot(robot).robot)  # the schema only: a model of any readable robot file
     if out is None:
         typer.echo(text)

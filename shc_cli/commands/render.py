@@ -8,18 +8,22 @@ from pathlib import Path
 import typer
 
 
-def run_render(run_path: Path, out: Path, fps: float, size: str, camera: str, speed: float) -> Path:
-    """Read the run, render it, print one line; returns the video's path."""
+def run_render(run_path: Path, out: Path, fps: float, size: str, camera: str, speed: float,
+               overwrite: bool = False) -> Path:
+    """Read the run, render it, print one line; returns the video's path (an existing ``out`` is refused unless
+    ``overwrite``)."""
     from shc_cli.loop.opening import open_run as read_run  # directories and bags
+    from shc_cli.outputs import refuse_existing
     from shc_cli.view.render import RenderOptions, check_options, parse_size, render_run
 
     width, height = parse_size(size)
     options = RenderOptions(fps=fps, width=width, height=height, camera=camera, speed=speed)
     check_options(out, options)
+    refuse_existing([out], overwrite)
     run = read_run(run_path)
     result = render_run(run, out, options, progress=sys.stderr.isatty())
-    typer.echo(f"wrote {result.path}: {result.frames} frames at {fps:g} fps, {width}x{height}, "
-               f"{result.draw_s + result.encode_s:.1f} s")
+    typer.echo(f"wrote {result.path}: {result.frames / fps:.1f} s of video ({result.frames} frames at {fps:g} fps, "
+               f"{width}x{height}), rendered in {result.draw_s + result.encode_s:.1f} s")
     return result.path
 
 
@@ -28,6 +32,7 @@ DEFAULTS: tuple[float, str, str, float] = (25.0, "960x540", "follow", 1.0)
 
 
 def render_video(run_path: Path, out: Path) -> Path:
-    """``--video FILE``: the finished run rendered as ``shc render RUN --out FILE`` would."""
+    """``--video FILE``: the finished run rendered as ``shc render RUN --out FILE`` would (plan and simulate
+    checked ``--video`` against ``--overwrite`` before the run)."""
     fps, size, camera, speed = DEFAULTS
-    return run_render(run_path, out, fps, size, camera, speed)
+    return run_render(run_path, out, fps, size, camera, speed, overwrite=True)

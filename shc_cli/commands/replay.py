@@ -13,10 +13,10 @@ from shc_cli.errors import Issue, SpecError
 
 
 def run_replay(source: Path, robot_name: str, gait_name: str | None, as_json: bool, out: Path | None,
-               tolerance_joints: float | None) -> int:
+               tolerance_joints: float | None, overwrite: bool = False) -> int:
     """Replay, print, write ``--out``; returns the exit code (1 only when ``--tolerance-joints`` is exceeded)."""
     from shc_cli.loop.run_inputs import pose_sets_for
-    from shc_cli.outputs import ensure_dir, write_text
+    from shc_cli.outputs import ensure_dir, refuse_existing, write_text
     from shc_cli.replay import replay
     from shc_cli.replay.opening import open_source
     from shc_cli.replay.report import differences_csv, plot_differences, summary, text
@@ -26,6 +26,8 @@ def run_replay(source: Path, robot_name: str, gait_name: str | None, as_json: bo
     if tolerance_joints is not None and not (math.isfinite(tolerance_joints) and tolerance_joints >= 0.0):
         raise SpecError([Issue(None, None, "--tolerance-joints", f"{tolerance_joints:g} is not a non-negative "
                                "number of radians", "e.g. --tolerance-joints 0.001")])
+    if out is not None:
+        refuse_existing([out / "differences.csv", out / "differences.png"], overwrite)
     robot, gait, loaded = load_checked(robot_name, gait_name)
     gait_file, _ = loaded.where(("walker", "gait"))
     recorded = open_source(source)

@@ -11,12 +11,17 @@ from shc_cli.errors import Issue, SpecError, check_choice
 BAG_FORMATS = ("mcap", "sqlite3", "ros1")
 
 
-def check_outputs(bag: str | None, video: Path | None) -> None:
-    """Refuse a bad ``--bag`` format or ``--video`` name before the run, not after it."""
+def check_outputs(bag: str | None, video: Path | None, overwrite: bool = False) -> None:
+    """Refuse a bad ``--bag`` format or ``--video`` name, or an existing video without ``overwrite``, before the run,
+    not after it."""
     if bag is not None:
         check_choice("--bag", bag, BAG_FORMATS, "a bag format")
     if video is not None and video.suffix.lower() not in (".mp4", ".gif"):
         raise SpecError([Issue(None, None, "--video", f"'{video}' is neither .mp4 nor .gif", "e.g. --video walk.mp4")])
+    if video is not None:
+        from shc_cli.outputs import refuse_existing
+
+        refuse_existing([video], overwrite, "--video")
 
 
 def finish_outputs(run: Path, bag: str | None, video: Path | None) -> None:

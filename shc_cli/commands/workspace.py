@@ -22,9 +22,13 @@ def run_workspace(
     volumetric: bool,
     out: Path | None,
     json_output: bool,
+    overwrite: bool = False,
 ) -> None:
+    from shc_cli.outputs import refuse_existing
     from shc_cli.validation import load_checked
 
+    if out is not None:
+        refuse_existing([out / "workspace.csv", out / "limits.csv", out / "workspace.png"], overwrite)
     robot, gait, _ = load_checked(robot_name, gait_name)
     if bearing_count < 1 or 360 % bearing_count:
         raise SpecError([_option_issue("--bearings", f"{bearing_count} does not divide 360",

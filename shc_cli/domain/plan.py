@@ -49,7 +49,7 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
     def plot(folder: Path) -> None:
         from shc_cli.plots import plot_plan
 
-        plot_plan(model, record.outputs, folder, gait=inputs.gait.name)
+        plot_plan(model, record.outputs, folder, gait=" → ".join(record.gaits) or inputs.gait.name)
 
     path, summary, _ = execute(loop, writer, lambda _: plan_summary(model, controller, record,
                                                                      time.perf_counter() - started, writer.partial),

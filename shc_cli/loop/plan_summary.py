@@ -29,8 +29,12 @@ class PlanRecord:
         self.controller = controller
         self.outputs: list[CycleOutput] = []
         self.predicted: list[float] = []
+        self.gaits: list[str] = []
+        """The gaits the run walked, in order (a plan script may switch)."""
 
     def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: object) -> str | None:
+        if not self.gaits or self.gaits[-1] != self.controller.gait.name:
+            self.gaits.append(self.controller.gait.name)
         if self.outputs and out.walk_state == WalkState.MOVING:
             self.predicted.append(eq16_speed(self.controller, command.velocity[:2]))
         self.outputs.append(out)
@@ -91,6 +95,7 @@ def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, secon
     return RunSummary.model_validate({
         "robot": robot.name,
         "gait": controller.gait.name,
+        "gaits": record.gaits or [controller.gait.name],
         "cycles": len(outputs),
         "duration_s": len(outputs) * dt,
         "time_delta_s": dt,
@@ -100,12 +105,12 @@ def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, secon
         "step_frequency_hz": controller.parameters["step_frequency"],
         "duty_factor": cycle.duty_factor,
         "moving_cycles": len(predicted),
-        "achieved_mean_speed_mps": float(np.mean(achieved)) if achieved else 0.0,
+        "achieved_mean_speed_mps": float(np.mean(achieved)) if achieved else None,  # None: no MOVING cycle
         "path_speed_mps": path_speed,
         "displacement_speed_mps": displacement_speed,
         "commanded_speed_mps": commanded,
         **progress,
-        "eq16_speed_mps": float(np.mean(predicted)) if predicted else 0.0,
+        "eq16_speed_mps": float(np.mean(predicted)) if predicted else None,
         "odometry_distance_m": distance,
         "odometry_yaw_rad": walker.odometry_yaw if walker else 0.0,
         "ik_deviation_count": sum(o.ik_deviations for o in outputs),

@@ -54,6 +54,17 @@ def parse_velocity(text: str) -> tuple[float, float, float]:
     return values
 
 
+def check_throttle(robot: Robot, velocity: tuple[float, float, float], field: str = "--velocity") -> None:
+    """A one-line error when a throttle velocity input is outside −1…1 (the controller would clamp it silently);
+    robots whose ``walker.velocity_input_mode`` is ``real`` take m/s and rad/s and are not checked."""
+    if robot.walker.velocity_input_mode != "throttle":
+        return
+    over = [f"{name} {value:g}" for name, value in zip(("VX", "VY", "WZ"), velocity, strict=True) if abs(value) > 1.0]
+    if over:
+        raise SpecError([Issue(None, None, field, f"{', '.join(over)} is outside the throttle range −1…1 (fractions "
+                               f"of {robot.name}'s maximum speed)", "e.g. --velocity 1,0,0 for full speed ahead")])
+
+
 def check_duration(duration: float | None) -> None:
     """A one-line error unless ``duration`` is None or a positive number of seconds."""
     if duration is not None and (duration <= 0 or not math.isfinite(duration)):
@@ -157,7 +168,9 @@ def load_inputs(robot_name: str, gait_name: str | None, velocity: str | tuple[fl
         if not walking:
             timeline = constant((0.0, 0.0, 0.0))
         else:
-            timeline = constant(parse_velocity(velocity) if isinstance(velocity, str) else velocity)
+            values = parse_velocity(velocity) if isinstance(velocity, str) else velocity
+            check_throttle(robot, values)
+            timeline = constant(values)
     if check_fit:
         check_timeline(robot, timeline, commands)
     cycles = walk_cycles(timeline, duration, robot.time_delta, commands is not None, default_s=default_s)

@@ -114,6 +114,12 @@ def read_run(path: Path) -> RunLog:
     try:
         data = json.loads((path / "summary.json").read_text(encoding="utf-8"))
     except FileNotFoundError:
+        if (path / "results.csv").is_file() and (path / "runs").is_dir():
+            raise bad_run(path, "a sweep's output, not a run directory",
+                          f"analyse its runs: {path / 'runs' / '*'} (its table is {path / 'results.csv'})") from None
+        if (path / "trials.csv").is_file() or (path / "study.db").is_file():
+            raise bad_run(path, "a study's output, not a run directory",
+                          f"analyse a trial's runs under {path}, or read its trials.csv") from None
         raise bad_run(path, "no summary.json", "give a directory written by shc plan or shc simulate") from None
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
         raise bad_run(path / "summary.json", f"unreadable: {first_line(error)}", "re-run to regenerate it") from None

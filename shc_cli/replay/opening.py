@@ -34,6 +34,9 @@ def open_source(source: Path) -> Recorded:
         from shc_cli.replay.bagfile import read_bag
 
         return read_bag(source)
+    if source.is_dir() and (source / "summary.json").is_file():
+        raise NotFoundError(f"{source}: an shc run, not an OpenSHC recording (replay compares shc with a recording of "
+                            f"OpenSHC; to look at this run: shc view {source}, shc analyze {source})")
     if source.is_dir():
         raise NotFoundError(f"{source}: a directory without metadata.yaml is not a ROS 2 bag (give the bag's "
                             "directory, a ROS 1 .bag file or a recording prefix DIR/NAME)")

@@ -43,6 +43,20 @@ def summary(result: Replay, robot: str, gait: str) -> dict[str, Any]:
     }
 
 
+WRONG_ROBOT_RAD = 0.3
+"""Joint differences above this [rad] are not a controller discrepancy but (almost always) the wrong ``--robot`` or
+``--gait``: the faithful replays differ by micro-radians (tests/test_replay_golden.py)."""
+
+
+def wrong_robot_hint(result: Replay, robot: str) -> str | None:
+    """A hint when the joints differ so much that the recording was most likely made with another robot."""
+    worst = result.comparison.worst.get("joints_rad")
+    if worst is None or worst <= WRONG_ROBOT_RAD:
+        return None
+    return (f"hint: joints differ by up to {worst:.2g} rad — far beyond a controller difference; was the recording "
+            f"made with another robot or gait than {robot}? (give it with --robot, --gait)")
+
+
 def text(result: Replay, robot: str, gait: str) -> str:
     """The terminal report: what was read and compared, the inferred states and the worst difference of each
     quantity with its cycle."""
@@ -66,6 +80,9 @@ def text(result: Replay, robot: str, gait: str) -> str:
     skipped = [f"{LABELS[q][0]} {n}" for q, n in comparison.skipped.items() if n]
     if skipped:
         lines.append(f"skipped (recorded numbers non-finite or beyond ±{ABSURD:g}): {', '.join(skipped)}")
+    hint = wrong_robot_hint(result, robot)
+    if hint is not None:
+        lines.append(hint)
     return "\n".join(lines)
 
 

@@ -540,8 +540,20 @@ def is_run(target: str) -> bool:
     return path.is_dir() or path.suffix == ".bag"
 
 
+def check_target(target: str) -> None:
+    """A missing path that is not a robot (a folder path, not ``*.toml``) is a missing run: say so (one line)
+    instead of "no such robot file"."""
+    path = Path(target)
+    if not path.exists() and path.suffix != ".toml" and (len(path.parts) > 1 or path.suffix == ".bag"):
+        from shc_cli.errors import NotFoundError
+
+        raise NotFoundError(f"{target}: no such run directory or bag (give a run directory written by shc plan, "
+                            "simulate or run-hw, a bag, or a robot file or bundled robot name)")
+
+
 def serve(target: str, host: str, port: int) -> None:
     """Serve ``target`` at ``http://host:port`` until Ctrl-C."""
+    check_target(target)
     try:
         import viser
     except ImportError as error:

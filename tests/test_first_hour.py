@@ -1,0 +1,143 @@
+"""What a new user met in the first hour (issue 26): the defaults, one overwrite rule for every output, figures that
+cannot be measured, refused inputs, and messages that point at the right command."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from .conftest import GOLDEN
+from .test_cli import run
+
+
+def test_simulate_defaults_to_mujoco_the_papers_bullet_and_its_calibrated_servos(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                                  monkeypatch) -> None:
+    out = tmp_path / "walk"
+    code, stdout, err = run(["simulate", "--duration", "1", "--out", str(out), "--no-plots"], capsys, monkeypatch)
+    assert code == 0, err
+    summary = json.loads((out / "summary.json").read_text())
+    assert (summary["engine"], summary["robot"], summary["servo_model"]) == ("mujoco", "bullet", "Dynamixel MX-106")
+    assert summary["mass_kg"] == pytest.approx(10.07, abs=0.005)  # the paper's Table I, arrangement A
+    assert "bullet / tripod / WG on flat (mujoco)" in stdout and "generic servos" not in stdout
+    from shc_cli.spec.loading import load_robot
+
+    robot = load_robot(out / "robot.toml").robot
+    assert robot is not None and robot.servo.control == "dynamixel"
+
+
+def test_a_robot_without_servo_data_says_its_power_is_indicative(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    code, stdout, err = run(["simulate", "openshc_default", "--duration", "1", "--out", str(tmp_path / "r"),
+                             "--no-plots"], capsys, monkeypatch)
+    assert code == 0, err
+    assert stdout.count("note: generic servos — power is indicative") == 1
+
+
+@pytest.mark.parametrize("scenario", ["SA", "WA", "SG"])
+def test_the_standing_and_air_scenarios_print_their_power_without_cot_or_progress(
+        scenario: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """Walk air is not meant to go anywhere: no NO PROGRESS flag, and no CoT (it printed 'CoT None')."""
+    code, stdout, err = run(["simulate", "--scenario", scenario, "--duration", "1", "--out", str(tmp_path / "r"),
+                             "--no-plots"], capsys, monkeypatch)
+    assert code == 0, err
+    assert "mean power" in stdout and "CoT" not in stdout and "NO PROGRESS" not in stdout and "None" not in stdout
+
+
+def test_figures_without_walking_say_so(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The summary line of a run with no walking window, and of a NO PROGRESS run, never prints a number that cannot
+    be measured (it printed 'CoT None', 'mean power 0.0 W' after a Ctrl-C during start-up, and a NO PROGRESS run's
+    CoT 137.88)."""
+    from shc_cli.analysis.run_line import simulation_line
+
+    base = {"robot": "r", "gait": "tripod", "scenario": "WG", "engine": "mujoco", "sim_time_s": 3.0,
+            "wall_time_s": 1.0, "distance_m": 0.0, "path_speed_mps": 0.0, "displacement_speed_mps": 0.0,
+            "servo_model": "Dynamixel MX-106"}
+    startup = simulation_line({**base, "analysed_time_s": 0.0, "mean_power_w": None, "cot": None}, "flat", Path("x"),
+                              "Dynamixel MX-106", ", stopped by SIGINT")
+    assert "power: not enough walking to measure" in startup and "0.0 W" not in startup and "CoT" not in startup
+    stuck = simulation_line({**base, "analysed_time_s": 5.0, "mean_power_w": 120.0, "cot": 137.88,
+                             "no_progress": True, "walked_share": 0.02, "commanded_distance_m": 1.0}, "flat",
+                            Path("x"), "Dynamixel MX-106")
+    assert "CoT: not enough walking to measure" in stuck and "137.88" not in stuck and "NO PROGRESS" in stuck
+    assert "mean power 120.0 W" in stuck
+
+
+@pytest.mark.parametrize("velocity", ["2,0,0", "0,-1.01,0", "0,0,3"])
+def test_a_throttle_beyond_one_is_refused_not_clamped(velocity: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    code, _, err = run(["plan", "bullet", "--velocity", velocity, "--out", str(tmp_path / "p")], capsys, monkeypatch)
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert "outside the throttle range −1…1" in err and not (tmp_path / "p").exists()
+
+
+def test_every_out_refuses_an_existing_output_without_overwrite(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """One rule for every --out: an existing output is refused before any work (one line, exit 2) and replaced
+    with --overwrite — workspace, analyze, render, replay and export urdf overwrote silently."""
+    out = tmp_path / "ws"
+    assert run(["workspace", "bullet", "--out", str(out)], capsys, monkeypatch)[0] == 0
+    stamp = (out / "workspace.csv").stat().st_mtime_ns
+    code, _, err = run(["workspace", "bullet", "--out", str(out)], capsys, monkeypatch)
+    assert code == 2 and "already exists (add --overwrite" in err and len(err.strip().splitlines()) == 1
+    assert (out / "workspace.csv").stat().st_mtime_ns == stamp
+    assert run(["workspace", "bullet", "--out", str(out), "--overwrite"], capsys, monkeypatch)[0] == 0
+
+    planned = tmp_path / "plan"
+    assert run(["plan", "bullet", "--duration", "1", "--out", str(planned), "--no-plots"], capsys, monkeypatch)[0] == 0
+    analysed = tmp_path / "analysis"
+    assert run(["analyze", str(planned), "--out", str(analysed)], capsys, monkeypatch)[0] == 0
+    code, _, err = run(["analyze", str(planned), "--out", str(analysed)], capsys, monkeypatch)
+    assert code == 2 and "analysis.json: already exists (add --overwrite" in err
+    assert run(["analyze", str(planned), "--out", str(analysed), "--overwrite"], capsys, monkeypatch)[0] == 0
+
+    video = tmp_path / "walk.gif"
+    video.write_bytes(b"GIF89a")
+    code, _, err = run(["render", str(planned), "--out", str(video)], capsys, monkeypatch)
+    assert code == 2 and "walk.gif: already exists (add --overwrite" in err and video.read_bytes() == b"GIF89a"
+    code, _, err = run(["simulate", "--out", str(tmp_path / "s"), "--video", str(video)], capsys, monkeypatch)
+    assert code == 2 and "already exists (add --overwrite" in err and not (tmp_path / "s").exists()
+
+    urdf = tmp_path / "bullet.urdf"
+    urdf.write_text("mine")
+    code, _, err = run(["export", "urdf", "bullet", "--out", str(urdf)], capsys, monkeypatch)
+    assert code == 2 and urdf.read_text() == "mine"
+
+
+def test_render_says_the_video_length_and_the_render_time_apart(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    pytest.importorskip("PIL")
+    planned = tmp_path / "plan"
+    assert run(["plan", "bullet", "--duration", "0.2", "--out", str(planned), "--no-plots"], capsys, monkeypatch)[0] == 0
+    code, stdout, err = run(["render", str(planned), "--out", str(tmp_path / "v.gif"), "--fps", "5", "--size",
+                             "160x90"], capsys, monkeypatch)
+    assert code == 0, err
+    frames = int(stdout.split("(")[1].split()[0])
+    assert f"{frames / 5:.1f} s of video ({frames} frames at 5 fps, 160x90), rendered in " in stdout
+
+
+def test_messages_point_at_the_right_command(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    planned = tmp_path / "walk"
+    assert run(["plan", "bullet", "--duration", "0.2", "--out", str(planned), "--no-plots"], capsys, monkeypatch)[0] == 0
+    code, _, err = run(["replay", str(planned), "--robot", "bullet"], capsys, monkeypatch)
+    assert code == 2 and "an shc run, not an OpenSHC recording" in err and f"shc view {planned}" in err
+
+    sweep = tmp_path / "sweep"
+    (sweep / "runs").mkdir(parents=True)
+    (sweep / "results.csv").write_text("index,slug\n")
+    code, _, err = run(["analyze", str(sweep)], capsys, monkeypatch)
+    assert code == 2 and "a sweep's output, not a run directory" in err and str(sweep / "runs" / "*") in err
+
+    code, _, err = run(["view", str(tmp_path / "runs" / "nothere")], capsys, monkeypatch)
+    assert code == 2 and "no such run directory or bag" in err and "robot file" in err
+
+    code, out, _ = run(["--help"], capsys, monkeypatch)
+    commands = out.split("Commands:")[1]
+    assert code == 0 and "..." not in commands and "…" not in commands
+
+
+def test_replaying_a_recording_on_the_wrong_robot_hints_at_it(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The mammalian recording replayed with the insectoid robot differs by radians: the report says which option is
+    probably wrong; replayed on its own robot it has no hint."""
+    source = str(GOLDEN / "openshc-runs" / "mammalian_excerpt")
+    code, out, _ = run(["replay", source, "--robot", "bullet_openshc", "--gait", "bipod"], capsys, monkeypatch)
+    assert code == 0 and "hint: joints differ by up to" in out and "--robot" in out
+    code, out, _ = run(["replay", source, "--robot", "bullet_mammalian"], capsys, monkeypatch)
+    assert code == 0 and "hint:" not in out
