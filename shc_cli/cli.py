@@ -64,11 +64,13 @@ def _main(
 @app.command()
 def validate(
     files: Annotated[
-        list[str], typer.Argument(help="Robot and gait files (paths or bundled names).", metavar="FILE...")
+        list[str], typer.Argument(help="Robot, gait, auto-pose, sweep, study or plan-script files (paths or bundled "
+                                       "names); each is checked as what it is.", metavar="FILE...")
     ],
     show: Annotated[bool, typer.Option("--show", help="Print each robot fully expanded, as TOML.")] = False,
 ) -> None:
-    """Check robot and gait files: schema, limits, reachability, gait fit. One line per problem."""
+    """Check shc files: robots (schema, limits, reachability, gait fit), gaits, auto-pose sets, plan scripts, and
+    sweeps and studies with every robot variant they would run. One line per problem."""
     from shc_cli.commands.validate import run_validate
 
     run_validate(files, show=show)

@@ -66,7 +66,8 @@ def test_validate_all_shipped_files(capsys, monkeypatch) -> None:  # type: ignor
         str(p) for p in (ROOT / "gaits").glob("*.toml"))
     code, out, err = run(["validate", *files], capsys, monkeypatch)
     assert (code, err) == (0, "")
-    assert "bullet: 6 legs, 5 DOF per leg, 30 joints, mass 13.37 kg" in out
+    assert "bullet_openshc: 6 legs, 5 DOF per leg, 30 joints, mass 13.37 kg" in out
+    assert "bullet: 6 legs, 5 DOF per leg, 30 joints, mass 10.07 kg" in out  # the paper's Table I
     assert "tripod" in out and "0.500   184 cyc    1.84 s (default)" in out
     assert "quadruped: 4 legs" in out and "octopod: 8 legs" in out
 
@@ -85,12 +86,12 @@ def test_validate_show_prints_the_expanded_robot_as_toml(capsys, monkeypatch) ->
 
 def test_validate_reports_every_problem_in_one_line_each(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     bad = tmp_path / "bad.toml"
-    text = (ROOT / "robots" / "bullet.toml").read_text()
+    text = (ROOT / "robots" / "bullet_openshc.toml").read_text()
     bad.write_text(text.replace("time_delta = 0.01", "time_delta = 0.01\nbody_clearence = 0.2"))
     code, out, err = run(["validate", str(bad)], capsys, monkeypatch)
     lines = err.strip().splitlines()
     assert code == 2 and out == ""
-    assert lines == [f"error: {bad}:7: body_clearence: unknown key 'body_clearence' (allowed: name, description, "
+    assert lines == [f"error: {bad}:10: body_clearence: unknown key 'body_clearence' (allowed: name, description, "
                      "time_delta, body, legs, walker, cruise, ik, pose, start_up, posture, manipulation, admittance, "
                      "servo, hardware)"]
 
@@ -101,11 +102,11 @@ def test_missing_robot_is_one_line_with_the_bundled_names(capsys, monkeypatch) -
     assert err.strip().splitlines() == [
         "error: bulet: no such robot file or bundled robot (did you mean 'bullet'? bundled: athena, athena_paper, "
         "bullet, bullet_insectoid_a, bullet_insectoid_b, bullet_mammalian, bullet_mammalian_a, bullet_mammalian_b, "
-        "octopod, openshc_default, quadruped)"]
+        "bullet_openshc, octopod, openshc_default, quadruped)"]
 
 
 def test_workspace_json_has_the_documented_keys_and_nothing_else_on_stdout(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    code, out, err = run(["workspace", "bullet", "--json"], capsys, monkeypatch)
+    code, out, err = run(["workspace", "bullet_openshc", "--json"], capsys, monkeypatch)
     assert code == 0 and err == ""
     document = json.loads(out)
     for key in ("legs", "walkspace", "max_linear_speed", "max_angular_speed", "step_period_cycles",
@@ -135,10 +136,10 @@ def test_workspace_writes_csv_and_png(tmp_path: Path, capsys, monkeypatch) -> No
 
 
 def test_workspace_other_gait_and_frequency_changes_the_limits(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    _, out, _ = run(["workspace", "bullet", "--gait", "wave", "--json"], capsys, monkeypatch)
+    _, out, _ = run(["workspace", "bullet_openshc", "--gait", "wave", "--json"], capsys, monkeypatch)
     wave = json.loads(out)
     assert wave["step_period_cycles"] == 552
-    _, out, _ = run(["workspace", "bullet", "--step-frequency", "2.0", "--json"], capsys, monkeypatch)
+    _, out, _ = run(["workspace", "bullet_openshc", "--step-frequency", "2.0", "--json"], capsys, monkeypatch)
     fast = json.loads(out)
     assert fast["step_period_cycles"] < 184
     assert fast["max_linear_speed"]["0"] > 0.2318

@@ -105,7 +105,8 @@ def test_every_out_refuses_an_existing_output_without_overwrite(tmp_path: Path, 
 def test_render_says_the_video_length_and_the_render_time_apart(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     pytest.importorskip("PIL")
     planned = tmp_path / "plan"
-    assert run(["plan", "bullet", "--duration", "0.2", "--out", str(planned), "--no-plots"], capsys, monkeypatch)[0] == 0
+    code, _, _ = run(["plan", "bullet", "--duration", "0.2", "--out", str(planned), "--no-plots"], capsys, monkeypatch)
+    assert code == 0
     code, stdout, err = run(["render", str(planned), "--out", str(tmp_path / "v.gif"), "--fps", "5", "--size",
                              "160x90"], capsys, monkeypatch)
     assert code == 0, err
@@ -115,7 +116,8 @@ def test_render_says_the_video_length_and_the_render_time_apart(tmp_path: Path, 
 
 def test_messages_point_at_the_right_command(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     planned = tmp_path / "walk"
-    assert run(["plan", "bullet", "--duration", "0.2", "--out", str(planned), "--no-plots"], capsys, monkeypatch)[0] == 0
+    code, _, _ = run(["plan", "bullet", "--duration", "0.2", "--out", str(planned), "--no-plots"], capsys, monkeypatch)
+    assert code == 0
     code, _, err = run(["replay", str(planned), "--robot", "bullet"], capsys, monkeypatch)
     assert code == 2 and "an shc run, not an OpenSHC recording" in err and f"shc view {planned}" in err
 
@@ -141,3 +143,35 @@ def test_replaying_a_recording_on_the_wrong_robot_hints_at_it(capsys, monkeypatc
     assert code == 0 and "hint: joints differ by up to" in out and "--robot" in out
     code, out, _ = run(["replay", source, "--robot", "bullet_mammalian"], capsys, monkeypatch)
     assert code == 0 and "hint:" not in out
+
+
+@pytest.mark.parametrize(("name", "said"), [
+    ("sweeps/ci_smoke.toml", "sweep 'ci_smoke' ok (8 runs, 4 robot variants checked)"),
+    ("studies/bullet_flat.toml", "study 'bullet_flat' ok (5 parameters, 4 robot variants checked"),
+    ("poses/tripod.toml", "auto-pose set 'tripod' ok"),
+    ("gaits/wave.toml", "gait 'wave' ok"),
+])
+def test_validate_checks_every_shc_file_as_what_it_is(name: str, said: str, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """A sweep or study was read as a robot file ("grid: unknown key 'grid'")."""
+    from .conftest import ROOT
+
+    code, out, err = run(["validate", str(ROOT / name)], capsys, monkeypatch)
+    assert (code, err) == (0, "") and said in out
+
+
+def test_validate_checks_a_sweeps_robot_variants_and_a_plan_script(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """Every point's robot variant is checked without running it: a body clearance no leg reaches is an error at
+    its line; a plan script is read as a plan script (its typo named at its line)."""
+    sweep = tmp_path / "sweep.toml"
+    sweep.write_text('name = "high"\nduration = 1.0\n[grid]\n"walker.body_clearance" = [0.2, 0.6]\n'
+                     '[fixed]\nrobot = "bullet"\n')
+    code, _, err = run(["validate", str(sweep)], capsys, monkeypatch)
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert f"{sweep}:4:" in err and "walker.body_clearance = 0.6" in err and "no leg reaches its stance" in err
+    script = tmp_path / "plan.toml"
+    script.write_text('[[step]]\nat = 0.0\nvelocity = [1, 0, 0]\n[[step]]\nat = 2.0\ngait = "wave"\n')
+    code, out, _ = run(["validate", str(script)], capsys, monkeypatch)
+    assert code == 0 and "plan script ok (2 changes)" in out
+    script.write_text('[[step]]\nat = 0.0\nvelocty = [1, 0, 0]\n')
+    code, _, err = run(["validate", str(script)], capsys, monkeypatch)
+    assert code == 2 and "unknown key 'velocty'" in err

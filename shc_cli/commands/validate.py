@@ -1,32 +1,15 @@
-"""``shc validate``: check robot and gait files and summarise the robots."""
+"""``shc validate``: check any shc file as what it is (robot, gait, auto-pose set, sweep, study, plan script,
+timeline; :mod:`shc_cli.spec.kinds`) and summarise the robots."""
 
 from __future__ import annotations
-
-import tomllib
-from pathlib import Path
 
 import typer
 
 from shc_cli.errors import Issue, NotFoundError, ShcError, SpecError
+from shc_cli.spec.kinds import file_kind, validate_file
 from shc_cli.spec.loading import LoadedGait, LoadedRobot, bundled, load_gait, load_robot
 from shc_cli.spec.robot import Robot
 from shc_cli.spec.toml_out import dump_toml
-
-GAIT_KEYS = ("stance_phase", "swing_phase", "offset_multiplier")
-
-
-def _kind(name: str) -> str:
-    """'robot' or 'gait' for a path (by its keys) or a bundled name."""
-    path = Path(name)
-    if path.is_file():
-        try:
-            data = tomllib.loads(path.read_text(encoding="utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError, OSError):
-            return "robot"  # the robot loader reports the syntax error with its line
-        return "gait" if any(key in data for key in GAIT_KEYS) else "robot"
-    if name in bundled("gaits") and name not in bundled("robots"):
-        return "gait"
-    return "robot"
 
 
 def run_validate(files: list[str], *, show: bool) -> None:
@@ -36,10 +19,16 @@ def run_validate(files: list[str], *, show: bool) -> None:
     issues: list[Issue] = []
     robots: list[LoadedRobot] = []
     gaits: list[LoadedGait] = []
+    others: list[str] = []
     for name in files:
         try:
-            if _kind(name) == "gait":
+            kind = file_kind(name)
+            if kind == "gait":
                 gaits.append(load_gait(name))
+            elif kind != "robot":
+                line, found = validate_file(name, kind)
+                issues += found
+                others.append(line)
             else:
                 loaded = load_robot(name)
                 found = check_robot(loaded)
@@ -62,6 +51,8 @@ def run_validate(files: list[str], *, show: bool) -> None:
         typer.echo(summary(loaded.robot, [g for g in gaits if g.gait], _own_gait(loaded)), err=show)
     for gait in gaits:
         typer.echo(f"{gait.path}: gait '{gait.gait.name}' ok (duty factor {gait.gait.duty_factor:.3f})", err=show)
+    for line in others:
+        typer.echo(line, err=show)
 
 
 def _check_gait_against(gait: LoadedGait, robots: list[Robot]) -> list[Issue]:
