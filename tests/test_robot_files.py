@@ -89,14 +89,11 @@ def test_the_default_robot_is_the_papers_bullet_and_its_paper_name_is_the_same_r
     """``bullet`` is the robot the OpenSHC paper measured: Table I's 10.07 kg (arrangement A), Table III's heights, the
     calibrated servo model; ``bullet_insectoid_a`` is the same robot under the paper's name, and the paper's
     arrangement-B robots extend OpenSHC's own Bullet file (``bullet_openshc``), whose legs they keep."""
-    from shc_cli.backends.pybullet_.urdf import link_mass
-
     bullet, paper = load_robot("bullet").robot, load_robot("bullet_insectoid_a").robot
     openshc, b = load_robot("bullet_openshc").robot, load_robot("bullet_insectoid_b").robot
     assert bullet is not None and paper is not None and openshc is not None and b is not None
     assert paper.model_copy(update={"name": bullet.name, "description": bullet.description}) == bullet
-    total = bullet.body.mass + sum(link_mass(j) for leg in bullet.legs.values() for j in leg.joints.values())
-    assert total == pytest.approx(10.07, abs=0.005)  # Table I, arrangement A
+    assert bullet.total_mass() == pytest.approx(10.07, abs=0.005)  # Table I, arrangement A
     assert (bullet.walker.body_clearance, bullet.walker.swing_height.default) == (0.20, 0.15)  # Table III
     assert bullet.servo.control == "dynamixel" and bullet.servo.holding_ratio < 1.0
     assert b.legs["AR"].joints == openshc.legs["AR"].joints
