@@ -145,20 +145,49 @@ def plot_simulation(robot: Robot, series: dict[str, list[Any]], folder: Path, ga
     figure.savefig(folder / "trajectory.png")
     plt.close(figure)
 
-    figure, axes = plt.subplots(figsize=(8, 3.5), dpi=110)
-    axes.plot(t, series["power"], lw=0.8)
-    axes.set_xlabel("time [s]")
-    axes.set_ylabel("electrical power [W]")
-    axes.set_title(f"{title}: total servo power")
-    axes.grid(True, lw=0.3)
-    figure.tight_layout()
-    figure.savefig(folder / "power.png")
-    plt.close(figure)
+    running = np.array(series["running"], dtype=bool) if "running" in series else np.ones(len(t), dtype=bool)
+    _power_plot(t, np.array(series["power"], dtype=float), running, robot.time_delta, f"{title}: total servo power",
+                folder / "power.png")
 
     contact = np.array(series["contact"], dtype=bool)
-    startup = ~np.array(series["running"], dtype=bool) if "running" in series else None
+    startup = ~running if "running" in series else None
     _leg_bars(list(robot.legs), t, robot.time_delta, ~contact, f"{title}: gait diagram (measured foot contacts)",
-              folder / "contacts.png", startup)
+              folder / "contacts.png", startup, off_label="foot off the ground")
+
+
+def _power_plot(t: Any, power: Any, running: Any, dt: float, title: str, path: Path) -> None:
+    """power.png: the total power over time with the start-up shaded, the analysed window (the RUNNING cycles, what
+    the summary's mean power and CoT use) marked by its mean, and the axis scaled to that window — a start-up peak
+    several times higher is clipped and named instead of flattening the walk."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+    from matplotlib.patches import Patch
+
+    figure, axes = plt.subplots(figsize=(8, 3.5), dpi=110)
+    for a, b in _intervals(~running):
+        axes.axvspan(t[a], t[a] + (b - a + 1) * dt, color=STARTUP_COLOUR, lw=0, zorder=0)
+    axes.plot(t, power, lw=0.8, zorder=2)
+    handles: list[Any] = [Patch(facecolor=STARTUP_COLOUR, label="start-up")] if (~running).any() else []
+    if running.any():
+        window = power[running]
+        mean = float(window.mean())
+        rows = np.flatnonzero(running)
+        handles.append(axes.hlines(mean, t[rows[0]], t[rows[-1]], colors="tab:red", lw=1.2, zorder=3,
+                                   label=f"analysed window: mean {mean:.1f} W"))
+        top = float(np.nanmax(window))
+        if float(np.nanmax(power)) > 1.5 * top > 0.0:
+            axes.set_ylim(min(0.0, float(np.nanmin(window))), 1.25 * top)
+            axes.text(0.01, 0.97, f"start-up peak {float(np.nanmax(power)):.0f} W off the scale",
+                      transform=axes.transAxes, fontsize=7, va="top")
+    axes.set_xlabel("time [s]")
+    axes.set_ylabel("electrical power [W]")
+    axes.set_title(title)
+    axes.grid(True, lw=0.3)
+    if handles:
+        axes.legend(handles=handles, fontsize=7, loc="lower right")
+    figure.tight_layout()
+    figure.savefig(path)
+    plt.close(figure)
 
 
 def _intervals(flags: Any) -> list[tuple[int, int]]:
@@ -171,9 +200,12 @@ def _intervals(flags: Any) -> list[tuple[int, int]]:
     return [(int(a), int(b)) for a, b in zip(starts, ends, strict=True)]
 
 
-def _leg_bars(legs: list[str], t: Any, dt: float, swing: Any, title: str, path: Path, startup: Any = None) -> None:
+def _leg_bars(legs: list[str], t: Any, dt: float, swing: Any, title: str, path: Path, startup: Any = None,
+              off_label: str = "swing") -> None:
     """A gait diagram (paper Fig. 5): one row per leg, black where ``swing[:, leg]`` is set, white in stance, the
-    start-up (``startup``, cycles before RUNNING) shaded grey; cycles at times ``t`` [s], ``dt`` apart."""
+    start-up (``startup``, cycles before RUNNING) shaded grey; cycles at times ``t`` [s], ``dt`` apart. ``off_label``
+    names the black bars: a planned swing, or a measured foot off the ground (which need not be a swing: a foot
+    hanging over a ramp's edge is off the ground for seconds)."""
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
 
@@ -188,8 +220,9 @@ def _leg_bars(legs: list[str], t: Any, dt: float, swing: Any, title: str, path: 
     axes.invert_yaxis()
     axes.set_xlabel("time [s]")
     axes.set_title(title)
-    handles = [Patch(facecolor=SWING_COLOUR, label="swing"),
-               Patch(facecolor=STANCE_COLOUR, edgecolor="0.5", label="stance")]
+    handles = [Patch(facecolor=SWING_COLOUR, label=off_label),
+               Patch(facecolor=STANCE_COLOUR, edgecolor="0.5",
+                     label="stance" if off_label == "swing" else "foot on the ground")]
     if startup is not None and startup.any():
         handles.append(Patch(facecolor=STARTUP_COLOUR, label="start-up"))
     axes.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.25), ncols=len(handles), fontsize=7,
@@ -317,10 +350,24 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
                                          folder / "stability.png", f"{_robots_and_gaits([r for r, _ in margined])}: "
                                          "static (CoM) and ZMP stability margins"))
 
-    frequencies = {r["step_frequency_hz"] for r in results}
-    if len(frequencies) > 1:
-        written.append(plot_cot(results, folder / "cot.png"))
+    placed = [{**r, "terrain": r.get("terrain") or run.summary.get("terrain")}
+              for r, run in zip(results, runs, strict=True)]
+    if any(len({p[0] for p in points}) > 1 for points in cot_lines(placed).values()):  # a setting at several
+        written.append(plot_cot(placed, folder / "cot.png"))  # step frequencies: else the lines mean nothing
     return written
+
+
+def cot_lines(results: list[dict[str, Any]]) -> dict[str, list[tuple[float, float | None, float | None]]]:
+    """(step frequency, CoT, speed) per line of :func:`plot_cot`: one line per robot, gait, terrain and group (a
+    sweep's other grid values, else the velocity input) — runs of different robots or terrains are never joined
+    into one CoT-vs-frequency line."""
+    lines: dict[str, list[tuple[float, float | None, float | None]]] = {}
+    for r in results:
+        label = " / ".join(str(x) for x in (r.get("robot"), r.get("gait"), r.get("terrain"), r.get("group") or "")
+                           if x) or "runs"
+        speed = r.get("displacement_speed_mps", r.get("mean_speed_mps"))
+        lines.setdefault(label, []).append((float(r["step_frequency_hz"]), r.get("cot"), speed))
+    return lines
 
 
 def plot_cot(results: list[dict[str, Any]], path: Path) -> Path:
@@ -331,25 +378,25 @@ def plot_cot(results: list[dict[str, Any]], path: Path) -> Path:
     import matplotlib
 
     matplotlib.use("Agg")
+    import textwrap
+
     import matplotlib.pyplot as plt
 
-    lines: dict[str, list[tuple[float, float | None, float | None]]] = {}
-    for r in results:
-        group = r.get("group") or ""
-        label = " / ".join(str(x) for x in (r.get("robot"), r.get("gait"), group) if x)
-        speed = r.get("displacement_speed_mps", r.get("mean_speed_mps"))
-        lines.setdefault(label, []).append((float(r["step_frequency_hz"]), r.get("cot"), speed))
+    lines = cot_lines(results)
     figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6.5), dpi=110, sharex=True)
     for label, points in sorted(lines.items()):
         points.sort()
-        top.plot([p[0] for p in points if p[1] is not None], [p[1] for p in points if p[1] is not None], "o-",
+        style = "o-" if len({p[0] for p in points}) > 1 else "o"  # a single frequency is a point, not a line
+        top.plot([p[0] for p in points if p[1] is not None], [p[1] for p in points if p[1] is not None], style,
                  ms=3, lw=1.0, label=label)
-        bottom.plot([p[0] for p in points if p[2] is not None], [p[2] for p in points if p[2] is not None], "o-",
+        bottom.plot([p[0] for p in points if p[2] is not None], [p[2] for p in points if p[2] is not None], style,
                     ms=3, lw=1.0, label=label)
     top.set_ylabel("CoT (eq. 22)")
     top.grid(True, lw=0.3)
-    top.legend(fontsize=6, ncol=2)
-    top.set_title(f"{_robots_and_gaits(results)}: cost of transport and speed vs step frequency", fontsize=10)
+    if top.get_legend_handles_labels()[0]:
+        top.legend(fontsize=6, ncol=2)
+    title = f"{_robots_and_gaits(results) or 'runs'}: cost of transport and speed vs step frequency"
+    top.set_title(textwrap.fill(title, 80), fontsize=9)
     bottom.set_ylabel("displacement speed [m/s]")
     bottom.set_xlabel("step frequency [Hz]")
     bottom.grid(True, lw=0.3)

@@ -13,7 +13,7 @@ from shc_cli.spec.loading import load_gait, load_robot
 from .conftest import GOLDEN
 from .test_cli import run
 
-PAIRS = [("bullet", "bullet_insectoid"), ("bullet_mammalian", "bullet_mammalian"),
+PAIRS = [("bullet_openshc", "bullet_insectoid"), ("bullet_mammalian", "bullet_mammalian"),
          ("openshc_default", "openshc_default")]
 
 
@@ -49,7 +49,7 @@ def test_legs_share_a_template_and_list_only_their_differences(tmp_path: Path) -
     assert data["legs"]["AR"]["joints"] == {"coxa": {"min": -1.571, "max": 1.571}}  # OpenSHC's AR coxa limits
     assert "base" not in data["legs"]["AR"]
     loaded = load_robot(robot_file).robot
-    ours = load_robot("bullet").robot
+    ours = load_robot("bullet_openshc").robot
     for leg_id, leg in ours.legs.items():  # every kinematic value as in our file
         mine = loaded.legs[leg_id]
         assert (mine.base, mine.stance) == (leg.base, leg.stance)

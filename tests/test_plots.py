@@ -90,7 +90,11 @@ def test_plan_plots_have_titles_black_swing_and_legends_off_the_curves(tmp_path:
         assert box.x0 >= frame.x1 - 1.0
 
 
-def test_measured_contacts_use_the_same_convention(tmp_path: Path, figures: dict[str, Any], bullet: Robot) -> None:
+def test_measured_contacts_use_the_same_convention(tmp_path: Path, figures: dict[str, Any]) -> None:
+    from shc_cli.spec.loading import load_robot
+
+    bullet = load_robot("bullet").robot
+    assert bullet is not None
     n = 200
     t = np.arange(n) * bullet.time_delta
     contact = np.ones((n, len(bullet.legs)), dtype=bool)
@@ -119,3 +123,72 @@ def test_analyze_plots_are_titled_with_robot_and_gait(tmp_path: Path, figures: d
     assert code == 0, err
     for name in ("stability.png", "cycles.png"):
         assert "bullet / tripod" in _titles(figures[name]), name
+
+
+def _legend_texts(figure: Any) -> list[str]:
+    return [text.get_text() for axis in figure.axes if axis.get_legend() for text in axis.get_legend().get_texts()]
+
+
+def _simulated_series(robot: Robot, n: int = 300, startup: int = 100, peak: float = 600.0) -> dict[str, Any]:
+    t = np.arange(n) * robot.time_delta
+    contact = np.ones((n, len(robot.legs)), dtype=bool)
+    contact[150:200, 1] = False
+    power = [peak if i == 10 else (80.0 if i < startup else 120.0) for i in range(n)]
+    return {"t": list(t), "position": [np.array([0.01 * i, 0.0, 0.2]) for i in range(n)], "power": power,
+            "contact": list(contact), "running": [i >= startup for i in range(n)]}
+
+
+def test_power_marks_start_up_and_the_analysed_window_and_contacts_say_off_the_ground(
+        tmp_path: Path, figures: dict[str, Any], bullet: Robot) -> None:
+    """power.png: the analysed window's mean (what the summary prints) is drawn and named, a start-up peak five
+    times higher does not set the axis; contacts.png calls a foot off the ground that, not a swing (issue 26)."""
+    plot_simulation(bullet, _simulated_series(bullet), tmp_path, gait="tripod")
+    power = figures["power.png"]
+    assert "analysed window: mean 120.0 W" in _legend_texts(power) and "start-up" in _legend_texts(power)
+    assert power.axes[0].get_ylim()[1] == pytest.approx(150.0)
+    assert any("start-up peak 600 W off the scale" in text.get_text() for text in power.axes[0].texts)
+    labels = _legend_texts(figures["contacts.png"])
+    assert "foot off the ground" in labels and "swing" not in labels
+
+
+def test_cot_lines_never_join_different_robots_or_terrains(tmp_path: Path, figures: dict[str, Any]) -> None:
+    """Two runs of different robots on different terrains at different step frequencies are two points, not a
+    CoT-vs-frequency line; a sweep without robot or gait in its grid plots without matplotlib's "No artists with
+    labels" warning, and a long title is wrapped, not cut."""
+    import warnings
+
+    from shc_cli.plots import cot_lines, plot_cot
+
+    results = [{"robot": "bullet", "gait": "tripod", "terrain": "flat", "step_frequency_hz": 1.0, "cot": 6.0,
+                "displacement_speed_mps": 0.2},
+               {"robot": "athena", "gait": "tripod", "terrain": "ramp:10", "step_frequency_hz": 1.5, "cot": 9.0,
+                "displacement_speed_mps": 0.1}]
+    assert all(len(points) == 1 for points in cot_lines(results).values()) and len(cot_lines(results)) == 2
+    plain = [{"step_frequency_hz": f, "cot": 5.0 + f, "displacement_speed_mps": 0.1 * f} for f in (0.8, 1.2)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        plot_cot(plain, tmp_path / "cot.png")
+    many = [{**plain[0], "robot": f"robot_with_a_long_name_{k}", "gait": "tripod"} for k in range(4)]
+    plot_cot(many, tmp_path / "many.png")
+    title = figures["many.png"].axes[0].get_title()
+    assert "\n" in title and all(len(line) <= 80 for line in title.splitlines())
+
+
+def test_pareto_projection_of_three_objectives_draws_no_front_line(tmp_path: Path, figures: dict[str, Any]) -> None:
+    """A 3-objective front seen in two of them is points, not a line; the trials non-dominated in the plotted two
+    are named separately (a front trial worst in both plotted objectives was drawn 'on the front')."""
+    from shc_cli.domain.optimize.plots import _front_2d, plot_pareto_pairs
+    from shc_cli.spec.study import Study
+
+    study = Study(path=tmp_path / "s.toml", name="s", description="", robot="bullet", engine="mujoco", seeds=(0,),
+                  skip=0.0, trials=None, fixed={}, space=[],
+                  objectives={"cot": "minimize", "mean_speed_mps": "maximize", "stability_margin_median_m": "maximize"},
+                  constraints=[], sampler="nsga2", sampler_seed=1, population=None)
+    front = [{"trial": n, "state": "complete", "feasible": True, "cot": c, "mean_speed_mps": v,
+              "stability_margin_median_m": m} for n, (c, v, m) in enumerate([(3.0, 0.5, 0.01), (5.0, 0.3, 0.1),
+                                                                             (6.0, 0.2, 0.2)])]
+    assert [p[2] for p in _front_2d([(3.0, 0.5, 0), (5.0, 0.3, 1), (6.0, 0.2, 2)], "minimize", "maximize")] == [0]
+    plot_pareto_pairs(study, front, front, tmp_path)
+    labels = _legend_texts(figures["pareto_cot__mean_speed_mps.png"])
+    assert any("on the 3-objective Pareto front" in label for label in labels)
+    assert "non-dominated in cot and mean_speed_mps (1)" in labels

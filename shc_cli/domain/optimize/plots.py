@@ -41,6 +41,16 @@ def _label(study: Study, key: str) -> str:
     return f"{key}{arrow}"
 
 
+def _front_2d(points: list[tuple[float, float, Any]], sense_a: str, sense_b: str) -> list[tuple[float, float, Any]]:
+    """The points no other point beats in both plotted objectives (each minimised or maximised as the study says),
+    in order of the first."""
+    sign_a = 1.0 if sense_a == "minimize" else -1.0
+    sign_b = 1.0 if sense_b == "minimize" else -1.0
+    kept = [p for p in points if not any(sign_a * q[0] <= sign_a * p[0] and sign_b * q[1] <= sign_b * p[1]
+                                         and (q[0], q[1]) != (p[0], p[1]) for q in points)]
+    return sorted(kept, key=lambda p: p[0])
+
+
 def plot_pareto_pairs(study: Study, rows: list[Row], front: list[Row], out: Path) -> list[Path]:
     """``pareto_A__B.png`` for each pair of objectives: feasible trials, infeasible ones, the front (joined in
     order of A); one objective: ``history.png``, its value per trial. Returns the files written."""
@@ -57,11 +67,19 @@ def plot_pareto_pairs(study: Study, rows: list[Row], front: list[Row], out: Path
             points = [(x, y) for x, y in points if x is not None and y is not None]
             if points:
                 axes.scatter(*zip(*points, strict=True), s=14, lw=0.8, **style)
-        line = sorted((_number(r[a]), _number(r[b]), r["trial"]) for r in front)
-        line = [(x, y, n) for x, y, n in line if x is not None and y is not None]
+        values = [(_number(r[a]), _number(r[b]), r["trial"]) for r in front]
+        line = sorted((x, y, n) for x, y, n in values if x is not None and y is not None)
         if line:
             xs, ys, _ = zip(*line, strict=True)
-            axes.plot(xs, ys, "o-", color="tab:red", ms=6, lw=1.0, label=f"Pareto front ({len(front)} trials)")
+            if len(keys) == 2:  # the front of these two objectives: a line in order of A
+                axes.plot(xs, ys, "o-", color="tab:red", ms=6, lw=1.0, label=f"Pareto front ({len(front)} trials)")
+            else:  # a projection of a front in more objectives: no line, and its trials may be dominated here
+                axes.plot(xs, ys, "o", color="tab:red", ms=6, mfc="none",
+                          label=f"on the {len(keys)}-objective Pareto front ({len(front)} trials; may be "
+                                "dominated in these two)")
+                shown = _front_2d(line, study.objectives[a], study.objectives[b])
+                axes.plot([p[0] for p in shown], [p[1] for p in shown], "-", color="tab:red", lw=0.8, alpha=0.6,
+                          label=f"non-dominated in {a} and {b} ({len(shown)})")
             for x, y, n in line:
                 axes.annotate(str(n), (x, y), textcoords="offset points", xytext=(4, 3), fontsize=6, color="tab:red")
         axes.set_xlabel(_label(study, a))
@@ -171,6 +189,11 @@ def importances(study: Study, trials: list[optuna.trial.FrozenTrial]) -> dict[st
     return out
 
 
+FEW_TRIALS = 20
+"""Below this many complete trials importance.png says its shares are not to be trusted (the best 10 % is one or two
+trials)."""
+
+
 def plot_importance(study: Study, trials: list[optuna.trial.FrozenTrial], path: Path) -> None:
     """``importance.png``: a bar per parameter and objective (PED-ANOVA importance, each objective sums to 1)."""
     plt = _pyplot()
@@ -186,8 +209,13 @@ def plot_importance(study: Study, trials: list[optuna.trial.FrozenTrial], path: 
     axes.invert_yaxis()
     axes.set_xlabel("importance for reaching the best 10 % of the objective (PED-ANOVA, sums to 1)")
     complete = sum(1 for t in trials if t.state.name == "COMPLETE")
+    few = complete < FEW_TRIALS
     axes.set_title(f"{study.name}: parameter importance over {complete} complete trials"
                    + ("" if values else " (too few to tell)"))
+    if values and few:
+        axes.text(0.5, 0.02, f"only {complete} trials (fewer than {FEW_TRIALS}): the best 10 % is "
+                  f"{max(1, complete // 10)} trial(s) — these shares are not to be trusted", transform=axes.transAxes,
+                  ha="center", va="bottom", fontsize=8, color="tab:red")
     if values:
         axes.legend(fontsize=8)
     axes.grid(True, axis="x", lw=0.3)
