@@ -49,16 +49,17 @@ def test_figures_without_walking_say_so(capsys, monkeypatch) -> None:  # type: i
     be measured (it printed 'CoT None', 'mean power 0.0 W' after a Ctrl-C during start-up, and a NO PROGRESS run's
     CoT 137.88)."""
     from shc_cli.analysis.run_line import simulation_line
+    from shc_cli.loop.summary import RunSummary
 
     base = {"robot": "r", "gait": "tripod", "scenario": "WG", "engine": "mujoco", "sim_time_s": 3.0,
             "wall_time_s": 1.0, "distance_m": 0.0, "path_speed_mps": 0.0, "displacement_speed_mps": 0.0,
             "servo_model": "Dynamixel MX-106"}
-    startup = simulation_line({**base, "analysed_time_s": 0.0, "mean_power_w": None, "cot": None}, "flat", Path("x"),
-                              "Dynamixel MX-106", ", stopped by SIGINT")
+    startup = simulation_line(RunSummary.model_validate({**base, "analysed_time_s": 0.0, "mean_power_w": None,
+                                                         "cot": None}), "flat", Path("x"), ", stopped by SIGINT")
     assert "power: not enough walking to measure" in startup and "0.0 W" not in startup and "CoT" not in startup
-    stuck = simulation_line({**base, "analysed_time_s": 5.0, "mean_power_w": 120.0, "cot": 137.88,
-                             "no_progress": True, "walked_share": 0.02, "commanded_distance_m": 1.0}, "flat",
-                            Path("x"), "Dynamixel MX-106")
+    stuck = simulation_line(RunSummary.model_validate({**base, "analysed_time_s": 5.0, "mean_power_w": 120.0,
+                                                       "cot": 137.88, "no_progress": True, "walked_share": 0.02,
+                                                       "commanded_distance_m": 1.0}), "flat", Path("x"))
     assert "CoT: not enough walking to measure" in stuck and "137.88" not in stuck and "NO PROGRESS" in stuck
     assert "mean power 120.0 W" in stuck
 

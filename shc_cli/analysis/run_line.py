@@ -71,8 +71,8 @@ def plan_line(summary: RunSummary, path: Path, note: str = "") -> str:
         feet = f"stance feet: {NOT_MEASURED}"
     else:
         feet = f"stance feet {summary.achieved_mean_speed_mps:.4f} m/s (eq. 16: {summary.eq16_speed_mps:.4f})"
-    gaits = summary.gaits or [summary.gait]
-    return (f"{summary.robot} / {' → '.join(str(g) for g in gaits)}: {summary.cycles} cycles "
+    gaits = " → ".join(summary.gaits) if summary.gaits else str(summary.gait)
+    return (f"{summary.robot} / {gaits}: {summary.cycles} cycles "
             f"({summary.duration_s or 0.0:.2f} s), path speed {summary.path_speed_mps or 0.0:.4f} m/s, displacement "
             f"speed {summary.displacement_speed_mps or 0.0:.4f} m/s, {feet}, IK deviations "
             f"{summary.ik_deviation_count}, clamped {summary.ik_clamp_count}{progress_note(summary)}{note} → {path}")
