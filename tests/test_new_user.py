@@ -21,7 +21,7 @@ from .test_cli import run
 def test_plan_and_analyze_give_the_same_path_and_displacement_speeds(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
                                                                      monkeypatch) -> None:
     out = tmp_path / "arc"
-    code, stdout, err = run(["plan", "bullet", "--velocity", "0.5,0,0.2", "--duration", "20", "--out", str(out),
+    code, stdout, err = run(["plan", "bullet_openshc", "--velocity", "0.5,0,0.2", "--duration", "20", "--out", str(out),
                              "--no-plots"], capsys, monkeypatch)
     assert code == 0, err
     summary = json.loads((out / "summary.json").read_text())

@@ -158,3 +158,32 @@ def test_plot_cursor_moves_with_time(bullet: Robot) -> None:
     start, middle, end = cursor_x(0.0), cursor_x(2.0), cursor_x(3.99)
     assert start < middle < end
     assert abs((middle - start) / (end - start) - 2.0 / 3.99) < 0.02
+
+
+def test_the_commanded_path_starts_where_running_starts(bullet: Robot) -> None:
+    """During start-up nothing is commanded and the body only rises: the path starts at the first RUNNING cycle
+    (it began with a vertical line from the spawn height)."""
+    from dataclasses import replace
+
+    from shc_cli.view.server import commanded_path
+
+    run = _synthetic_run(bullet)
+    rows = len(run.t)  # type: ignore[attr-defined]
+    running = np.arange(rows) >= 50
+    position = run.position.copy()  # type: ignore[attr-defined]
+    position[:50, 2] = np.linspace(0.05, 0.2, 50)  # rising during start-up
+    started = replace(run, running=running, position=position)  # type: ignore[type-var]
+    path = commanded_path(started)  # type: ignore[arg-type]
+    assert len(path) == rows - 50 and np.allclose(path[0], position[50])
+
+
+def test_a_closed_tabs_late_message_is_not_a_warning() -> None:
+    import warnings
+
+    from shc_cli.view.server import quiet_closed_connections
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        quiet_closed_connections()
+        warnings.warn("Queued a GuiUpdateMessage on a closed connection (e.g. via a handle owned by a disconnected "
+                      "client); it will never be delivered.", stacklevel=1)

@@ -126,6 +126,9 @@ def _setup_scene(client: Any, target: np.ndarray, distance: float) -> None:
     api.set_up_direction("+z")
     api.configure_environment_map(None)  # the default HDRI would be fetched from the network
     api.configure_default_lights(True, cast_shadow=False)
+    # the default lights come from above: vertical faces (legs, the body's sides, feet seen from the side) were
+    # nearly black; a sky/ground hemisphere light gives them a base brightness from every direction
+    api.add_light_hemisphere("/light/fill", sky_color=(255, 255, 255), ground_color=(150, 150, 150), intensity=1.2)
     api.add_grid("/ground", width=6.0, height=6.0, cell_size=0.1, section_size=0.5, plane="xy",
                  position=(0.0, 0.0, -0.0005))
 
@@ -314,14 +317,18 @@ class RunScene:
 
 
 def commanded_path(run: RunLog) -> np.ndarray:
-    """The body path the controller asked for: its desired body-frame velocity integrated from the first logged
-    pose, heading included, ``(N, 3)`` at the logged heights [m]."""
+    """The body path the controller asked for: its desired body-frame velocity integrated from the body's pose at
+    the first RUNNING cycle, heading included, ``(K, 3)`` from that cycle on, at the logged heights [m]. The
+    start-up, where nothing is commanded and the body only rises or settles, is left out: it drew a vertical line."""
+    running = np.flatnonzero(run.running)
+    start = int(running[0]) if len(running) else 0
+    desired, rpy, position = run.desired[start:], run.rpy[start:], run.position[start:]
     dt = run.dt
-    yaw = run.rpy[0, 2] + np.concatenate([[0.0], np.cumsum(run.desired[:-1, 2] * dt)])
-    step = np.stack([run.desired[:, 0] * np.cos(yaw) - run.desired[:, 1] * np.sin(yaw),
-                     run.desired[:, 0] * np.sin(yaw) + run.desired[:, 1] * np.cos(yaw)], axis=1) * dt
-    xy = run.position[0, :2] + np.concatenate([np.zeros((1, 2)), np.cumsum(step[:-1], axis=0)])
-    return np.column_stack([xy, run.position[:, 2]])
+    yaw = rpy[0, 2] + np.concatenate([[0.0], np.cumsum(desired[:-1, 2] * dt)])
+    step = np.stack([desired[:, 0] * np.cos(yaw) - desired[:, 1] * np.sin(yaw),
+                     desired[:, 0] * np.sin(yaw) + desired[:, 1] * np.cos(yaw)], axis=1) * dt
+    xy = position[0, :2] + np.concatenate([np.zeros((1, 2)), np.cumsum(step[:-1], axis=0)])
+    return np.column_stack([xy, position[:, 2]])
 
 
 def run_scene(run: RunLog) -> RunScene:
@@ -423,7 +430,7 @@ class RunPage:
                                        initial_value=float(run.t[0]))
         buttons = gui.add_button_group("playback", ("Play", "Pause"))
         self.speed = gui.add_dropdown("speed", SPEEDS, initial_value="1")
-        self.follow = gui.add_checkbox("camera follows the body", initial_value=False)
+        self.follow = gui.add_checkbox("camera follows the body", initial_value=True)  # else it walks out of view
         self.status = gui.add_markdown("")
         self.plot = gui.add_image(data.plot.at(float(run.t[0])), label="power and contacts", format="jpeg",
                                   jpeg_quality=85)
@@ -577,6 +584,7 @@ def serve(target: str, host: str, port: int) -> None:
             from shc_cli.errors import Issue, SpecError, install_hint
 
             raise SpecError([Issue(None, None, target, "does not load", "shc validate it")])
+    quiet_closed_connections()  # a closed tab's last draw is not worth a warning
     with contextlib.redirect_stdout(io.StringIO()):  # viser's own banner: shc prints one line instead
         server = viser.ViserServer(host=host, port=port, label="shc view", verbose=False)
     pages: dict[int, Any] = {}
@@ -604,6 +612,15 @@ def serve(target: str, host: str, port: int) -> None:
         stop_within(server, STOP_WAIT_S)
 
 
+def quiet_closed_connections() -> None:
+    """Silence viser's "Queued a GuiUpdateMessage on a closed connection" warning: a page's last draw (the replay's
+    playback, a robot page's workspace search) races the closing of its browser tab, and viser then warns about a
+    message nobody will receive — nothing the user did wrong or can act on (it was printed when a tab closed)."""
+    import warnings
+
+    warnings.filterwarnings("ignore", message=r"Queued a \w+ on a closed connection")
+
+
 STOP_WAIT_S = 0.5
 """How long Ctrl-C waits for viser's server to stop [s] before ``shc view`` leaves anyway."""
 
@@ -616,9 +633,7 @@ def stop_within(server: Any, seconds: float) -> None:
     each draw a "Queued a … on a closed connection" warning. Python's exit would then wait for those workers to
     finish every queued callback; ``shc view`` leaves at once instead (:func:`shc_cli.commands.view.run_view`).
     """
-    import warnings
-
-    warnings.filterwarnings("ignore", message=r"Queued a \w+ on a closed connection")
+    quiet_closed_connections()
     stopper = threading.Thread(target=server.stop, name="shc-view-stop", daemon=True)
     stopper.start()
     stopper.join(timeout=seconds)
