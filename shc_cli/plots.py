@@ -350,7 +350,7 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
                                          folder / "stability.png", f"{_robots_and_gaits([r for r, _ in margined])}: "
                                          "static (CoM) and ZMP stability margins"))
 
-    placed = [{**r, "terrain": r.get("terrain") or run.summary.get("terrain")}
+    placed = [{**r, "terrain": r.get("terrain") or run.summary.terrain}
               for r, run in zip(results, runs, strict=True)]
     if any(len({p[0] for p in points}) > 1 for points in cot_lines(placed).values()):  # a setting at several
         written.append(plot_cot(placed, folder / "cot.png"))  # step frequencies: else the lines mean nothing

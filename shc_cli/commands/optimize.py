@@ -20,8 +20,5 @@ def run_optimize(file: Path, trials: int | None, workers: int | None, executor: 
                f"{report.feasible} feasible, {stored - report.complete} failed); {len(report.pareto)} on the Pareto "
                f"front → {report.path / 'pareto.csv'}; search overhead "
                f"{1000 * report.overhead_s / max(report.ran, 1):.0f} ms per trial")
-    from shc_cli.domain.optimize.plots import FEW_TRIALS
-
-    if report.complete < FEW_TRIALS:
-        typer.echo(f"note: only {report.complete} complete trials: importance.png's shares are not to be trusted "
-                   f"below {FEW_TRIALS} (run more with --resume --trials N)", err=True)
+    for note in report.notes:
+        typer.echo(f"note: {note}", err=True)

@@ -75,6 +75,17 @@ class StudyReport:
         return sum(1 for r in self.trials if r["state"] == "complete")
 
     @property
+    def notes(self) -> list[str]:
+        """What the user should know about the result (printed as ``note:`` lines): too few trials to trust
+        importance.png."""
+        from shc_cli.domain.optimize.plots import FEW_TRIALS
+
+        if self.complete >= FEW_TRIALS:
+            return []
+        return [f"only {self.complete} complete trials: importance.png's shares are not to be trusted below "
+                f"{FEW_TRIALS} (run more with --resume --trials N)"]
+
+    @property
     def feasible(self) -> int:
         """Complete trials that meet every constraint."""
         return sum(1 for r in self.trials if r["state"] == "complete" and bool(r["feasible"]))
