@@ -30,8 +30,10 @@ needs_gl = unless_missing(not _has_offscreen_gl(),
 
 @pytest.fixture(scope="module")
 def plan_run(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """OpenSHC's Bullet: its packed legs are in view from the first frame (the paper's arrangement A, the default
+    robot, packs them under its body, where the fixed camera does not see them)."""
     out = tmp_path_factory.mktemp("render") / "plan"
-    subprocess.run([sys.executable, "-m", "shc_cli.cli", "plan", "bullet", "--duration", "2", "--out", str(out),
+    subprocess.run([sys.executable, "-m", "shc_cli.cli", "plan", "bullet_openshc", "--duration", "2", "--out", str(out),
                     "--no-plots"], check=True, capture_output=True, cwd=ROOT)
     return out
 

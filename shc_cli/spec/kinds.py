@@ -23,6 +23,9 @@ from shc_cli.spec.loading import bundled, load_robot, resolve
 from shc_cli.spec.robot import Adjustable, Robot
 from shc_cli.spec.sweep import Point, variant_text
 
+DEFAULT_ROBOT = "bullet"
+"""The robot of a point whose file names none (``shc simulate``'s default)."""
+
 Kind = Literal["robot", "gait", "pose set", "sweep", "study", "plan script", "timeline"]
 
 MARKERS: tuple[tuple[Kind, tuple[str, ...]], ...] = (
@@ -96,7 +99,7 @@ def check_variants(file: Path, points: list[Point], line: dict[str, int | None])
     issues: list[Issue] = []
     with tempfile.TemporaryDirectory(prefix="shc-variants-") as folder:
         for point in points:
-            name = str(point.options["robot"])
+            name = str(point.options.get("robot", DEFAULT_ROBOT))
             key = (name, repr(sorted(point.overrides.items())))
             if key in seen:
                 continue
@@ -129,7 +132,8 @@ def _gaits_fit(file: Path, points: list[Point], line: dict[str, int | None]) -> 
     from shc_cli.spec.checks import load_checked
 
     issues: list[Issue] = []
-    for robot, gait in sorted({(str(p.options["robot"]), str(p.options["gait"] or "")) for p in points}):
+    for robot, gait in sorted({(str(p.options.get("robot", DEFAULT_ROBOT)), str(p.options.get("gait") or ""))
+                               for p in points}):
         try:
             load_checked(robot, gait or None)
         except SpecError as error:
