@@ -162,7 +162,7 @@ def simulate(
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
     bag: BagOption = None,
     fail_on_fall: Annotated[bool, typer.Option(help="Exit with code 4 when the robot fell.")] = False,
-    engine: Annotated[str, typer.Option(help="Physics engine: pybullet or mujoco.")] = "pybullet",
+    engine: Annotated[str, typer.Option(help="Physics engine: mujoco or pybullet.")] = "mujoco",
     video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
                                                     "render with its defaults).", metavar="FILE")] = None,
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
@@ -280,7 +280,7 @@ def sweep(
     overwrite: Annotated[bool, typer.Option(help="Delete an existing sweep output at --out first and run it all "
                                                  "again (only shc's own outputs).")] = False,
     engine: Annotated[
-        str | None, typer.Option(help="Physics engine (pybullet or mujoco) of runs the sweep file does not set.")
+        str | None, typer.Option(help="Physics engine (mujoco or pybullet) of runs the sweep file does not set.")
     ] = None,
 ) -> None:
     """Run a grid of simulations in parallel and tabulate CoT, power, speed and stability per run."""
