@@ -1,12 +1,13 @@
 """``shc validate``: check any shc file as what it is (robot, gait, auto-pose set, sweep, study, plan script,
-timeline; :mod:`shc_cli.spec.kinds`) and summarise the robots."""
+timeline; :mod:`shc_cli.spec.kinds`, :mod:`shc_cli.domain.file_checks`) and summarise the robots."""
 
 from __future__ import annotations
 
 import typer
 
+from shc_cli.domain.file_checks import validate_file
 from shc_cli.errors import Issue, NotFoundError, ShcError, SpecError
-from shc_cli.spec.kinds import file_kind, validate_file
+from shc_cli.spec.kinds import file_kind
 from shc_cli.spec.loading import LoadedGait, LoadedRobot, bundled, load_gait, load_robot
 from shc_cli.spec.robot import Robot
 from shc_cli.spec.toml_out import dump_toml
