@@ -201,3 +201,23 @@ def test_a_stance_the_limits_forbid_names_the_leg_the_limit_and_what_works(tmp_p
     assert code == 2 and err.count("\n") == 1, err
     assert "cannot stand with clearance 0.4 m" in err and "limit" in err and "--clearance" in err, err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_knee_limit_that_keeps_the_leg_nearly_straight_stands_far_out(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                        monkeypatch) -> None:
+    """A flat hexapod whose knees bend at most ±0.9 rad: no stance 0.2–0.7 of the leg's length out is reachable
+    with its swing apex (femur to foot is 0.181–0.2 m); the search goes on to 0.75–0.9 and the robot plans."""
+    legs = []
+    for leg in _hexapod():
+        flat = insect_leg(leg.name, leg.elements[0].xyz[0], leg.elements[0].xyz[1], standing=False)
+        elements = list(flat.elements)
+        elements[2] = Element("revolute", (0.08, 0.0, 0.0), lower=-0.9, upper=0.9)
+        legs.append(LegSpec(leg.name, elements, flat.sphere, masses=flat.masses))
+    path = tmp_path / "knee.urdf"
+    path.write_text(robot_urdf(legs, name="knee"))
+    code, out, err, robot_file = _import(path, tmp_path / "out", capsys, monkeypatch)
+    assert code == 0, err
+    assert "feet 0.85 of the leg's length out from the hips" in out
+    code, out, err = run(["plan", str(robot_file), "--duration", "2", "--no-plots", "--out", str(tmp_path / "run")],
+                         capsys, monkeypatch)
+    assert code == 0, err

@@ -34,8 +34,10 @@
   (not the zero pose itself if a leg is straight there: a singular pose). Otherwise, or if none of those is
   reachable, each foot is put 0.5, 0.4, 0.6, 0.3, 0.7 or 0.2 of the leg's length out from its hip (along the
   zero pose's leg direction) with the body as many shares of a leg's length above the hips, then (a knee
-  limit that keeps the leg nearly straight) 0.75, 0.8 or 0.85 out. ``--clearance``
-  and ``--reach`` fix either. ``unpacked`` is the pose the IK finds there from every joint at 0.
+  limit that keeps the leg nearly straight) 0.75 … 0.9 out with the body 0.05 … 0.7 of it above the
+  hips. ``--clearance`` and ``--reach`` fix either (a stance they ask for that a leg cannot take is refused
+  naming the leg, the joint limit and the range that stands). ``unpacked`` is the pose the IK finds there
+  from every joint at 0.
 """
 
 from __future__ import annotations
@@ -80,8 +82,10 @@ TIE = 0.95
 """Stances whose walkspace is at least this share of the best are as good: the first (most natural) is taken."""
 FRACTIONS = [0.5, 0.4, 0.6, 0.3, 0.7, 0.2]
 """Shares of the leg's length tried for the stance's reach and the body's height (most natural first)."""
-FAR = [0.75, 0.8, 0.85]
+FAR = [0.75, 0.8, 0.85, 0.9]
 """Reaches tried when none of :data:`FRACTIONS` stands (a knee limit that keeps the leg nearly straight)."""
+HEIGHTS = [round(0.05 * k, 2) for k in range(1, 15)]
+"""Body heights tried with the reaches of :data:`FAR`, as shares of the leg's length (a narrow band may fit)."""
 GAITS = {4: "quad_wave", 6: "tripod", 8: "octo_alternating"}
 """Gait written for a robot with this many legs (others get ``wave``, which fits none but six legs)."""
 AUTO_SNAP = 0.001
@@ -486,7 +490,7 @@ def choose_stance(robot_tree: dict[str, Any], legs: list[LegChain], clearance: f
     length, hip_z = float(np.median(lengths)), float(np.median(hips[:, 2]))
     for reaches in ([[reach]] if reach is not None else [FRACTIONS, FAR]):
         for f_reach in reaches:
-            for f_height in [None] if clearance is not None else FRACTIONS:
+            for f_height in [None] if clearance is not None else FRACTIONS if reaches is FRACTIONS else HEIGHTS:
                 height = clearance if clearance is not None else f_height * length - hip_z  # type: ignore[operator]
                 if height <= 0.0:
                     continue
@@ -793,7 +797,7 @@ def _finish(imported: Imported, clearance: float | None, reach: float | None, fi
     if stance is None:
         raise _fail(file, "no standing pose found that every leg reaches within its joint limits, with the feet "
                     f"{min(FRACTIONS):g}–{max(FAR):g} of the leg's length out and the body "
-                    f"{min(FRACTIONS):g}–{max(FRACTIONS):g} of it above the hips",
+                    f"{min(HEIGHTS):g}–{max(HEIGHTS):g} of it above the hips",
                     "check the legs' joint limits, or give a stance with --clearance M and --reach FRACTION")
     walker = imported.tree["walker"]
     walker["body_clearance"] = stance.clearance
