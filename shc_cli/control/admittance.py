@@ -20,7 +20,8 @@ through one shared state and projects the result onto the last link), and dynami
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from shc_cli.model.jit import njit
 
 MAX_DELTA = 0.2
 """Clamp of the admittance offset [m] (OpenSHC)."""

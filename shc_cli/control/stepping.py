@@ -14,9 +14,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from shc_cli.control.states import WalkState
+from shc_cli.model.jit import njit
 
 # Step states (OpenSHC StepState) and walk states (WalkState).
 SWING, STANCE, FORCE_STANCE, FORCE_STOP = 0, 1, 2, 3

@@ -11,7 +11,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from shc_cli.model.jit import njit
 
 DLS_COEFFICIENT = 0.02
 JOINT_LIMIT_COST_WEIGHT = 0.1
