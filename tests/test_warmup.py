@@ -24,7 +24,6 @@ def test_after_warmup_simulate_and_workspace_compile_nothing(tmp_path: Path) -> 
     env = {**os.environ, "NUMBA_CACHE_DIR": str(cache)}  # an empty cache, as after a fresh install
     done = subprocess.run([*SHC, "warmup"], capture_output=True, text=True, env=env, timeout=900)
     assert done.returncode == 0 and "compiled and cached" in done.stdout, done.stderr
-    assert "compiling shc's kernels" in done.stderr  # a cold cache says why this command is slow
     warmed = _compiled(cache)
     assert len(warmed) >= 15, warmed
     for args in (["simulate", "--duration", "1", "--out", str(tmp_path / "run"), "--no-plots"],
@@ -32,3 +31,23 @@ def test_after_warmup_simulate_and_workspace_compile_nothing(tmp_path: Path) -> 
         done = subprocess.run([*SHC, *args], capture_output=True, text=True, env=env, timeout=900)
         assert done.returncode == 0 and "compiling" not in done.stderr, done.stderr
         assert _compiled(cache) == warmed, f"shc {args[0]} compiled {sorted(_compiled(cache) - warmed)}"
+
+
+def test_a_command_compiling_the_kernels_says_so_once_on_a_terminal(monkeypatch: pytest.MonkeyPatch,
+                                                                    caplog: pytest.LogCaptureFixture) -> None:
+    from types import SimpleNamespace
+
+    from shc_cli.model import jit
+
+    def compiling(module: str) -> SimpleNamespace:
+        return SimpleNamespace(data={"dispatcher": SimpleNamespace(py_func=SimpleNamespace(__module__=module))})
+
+    notice = jit._CompileNotice()
+    monkeypatch.setattr("sys.stderr", SimpleNamespace(isatty=lambda: True))
+    with caplog.at_level("INFO", logger="shc_cli"):
+        notice.on_start(compiling("numpy.something"))  # not one of shc's kernels
+        assert not caplog.records
+        notice.on_start(compiling("shc_cli.control.stepping"))
+        notice.on_start(compiling("shc_cli.model.kernels"))
+    assert [r.getMessage() for r in caplog.records] == [
+        "compiling shc's kernels into numba's cache (once per install, ≈ 10 s; `shc warmup` does it ahead)"]

@@ -3,12 +3,14 @@
 Every kernel module takes ``njit`` from here (``cache=True``: compiled once per install, then loaded from numba's
 cache in milliseconds). Importing this module registers a numba event listener that logs, at the first real
 compilation of one of shc's kernels in a process (a cache miss: a new install that did not run ``shc warmup``,
-edited sources, another numba), a NOTICE saying why the command is slow this once.
+edited sources, another numba), a NOTICE saying why the command is slow this once — on a terminal only (a pipe, a
+test's captured stderr, a sweep's workers stay as they were).
 """
 
 from __future__ import annotations
 
 import logging
+import sys
 from typing import Any
 
 from numba import njit
@@ -29,7 +31,7 @@ class _CompileNotice(event.Listener):
     def on_start(self, ev: Any) -> None:
         dispatcher = (ev.data or {}).get("dispatcher")
         module = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
-        if not self.told and module.startswith("shc_cli"):
+        if not self.told and module.startswith("shc_cli") and sys.stderr.isatty():
             self.told = True
             log.log(NOTICE, "compiling shc's kernels into numba's cache (once per install, ≈ 10 s; `shc warmup` "
                             "does it ahead)")
