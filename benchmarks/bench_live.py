@@ -6,7 +6,7 @@ wall clock.
 
 Prints, per pair, the loop's wall time after RUNNING (summary ``running_wall_time_s``) without and with the stream,
 their medians and the median ratio; then one ``--realtime --live`` run of the same length: simulated over wall time.
-Needs ``npm ci`` in tests/live_client.
+Installs the client's npm packages (``npm ci`` in tests/live_client) when they are missing.
 """
 
 from __future__ import annotations
@@ -51,11 +51,19 @@ def run(duration: float, folder: Path, live: bool, realtime: bool = False) -> di
             "wall_s": wall}
 
 
+def client_ready() -> None:
+    """Install the client's npm packages (pinned by its package-lock.json) if they are not there."""
+    client = ROOT / "tests" / "live_client"
+    if not (client / "node_modules" / "@foxglove" / "ws-protocol").exists():
+        subprocess.run(["npm", "ci", "--no-audit", "--no-fund", "--silent"], cwd=client, check=True, timeout=300)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=20.0)
     parser.add_argument("--pairs", type=int, default=3)
     args = parser.parse_args()
+    client_ready()
     base = Path(tempfile.mkdtemp(prefix="bench-live-"))
     plain, live, ratios = [], [], []
     for i in range(args.pairs):
