@@ -221,3 +221,29 @@ def test_a_knee_limit_that_keeps_the_leg_nearly_straight_stands_far_out(tmp_path
     code, out, err = run(["plan", str(robot_file), "--duration", "2", "--no-plots", "--out", str(tmp_path / "run")],
                          capsys, monkeypatch)
     assert code == 0, err
+
+
+@pytest.mark.slow
+def test_run_hw_reads_the_imported_servo_map(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The PhantomX's [hardware.servos] as imported (ids 11…63, the model guessed from its 2.8 N·m joints) drive a
+    dry run on the emulated bus: every servo is found by the id the map gives."""
+    import subprocess
+    import sys
+
+    from shc_cli.hardware.emulator import BusEmulator
+
+    code, _, err, robot_file = _import(DESCRIPTIONS["phantomx"][0], tmp_path, capsys, monkeypatch)
+    assert code == 0, err
+    assert robot_file is not None
+    hardware = load_robot(robot_file).robot.hardware
+    assert sorted(s.id for s in hardware.servos.values()) == [10 * leg + joint for leg in range(1, 7)
+                                                             for joint in range(1, 4)]
+    for skip in (None, 42):  # all there; then BL's femur (leg 4, joint 2) missing: refused, naming it
+        with BusEmulator({s.id: hardware.model for s in hardware.servos.values() if s.id != skip}) as bus:
+            result = subprocess.run([sys.executable, "-m", "shc_cli.cli", "run-hw", str(robot_file), "--port",
+                                     bus.port, "--out", str(tmp_path / f"dry{skip}"), "--dry-run", "--duration", "0.5",
+                                     "--stop-state", "ready"], capture_output=True, text=True, timeout=120)
+        if skip is None:
+            assert result.returncode == 0, result.stderr
+        else:
+            assert result.returncode != 0 and "42" in result.stderr, result.stderr
