@@ -247,3 +247,33 @@ def test_run_hw_reads_the_imported_servo_map(tmp_path: Path, capsys, monkeypatch
             assert result.returncode == 0, result.stderr
         else:
             assert result.returncode != 0 and "42" in result.stderr, result.stderr
+
+
+def _odd_leg(name: str, x: float, y: float) -> LegSpec:
+    """A hobby hexapod's leg as issue 27 met it: coxa ±0.46 rad, rear coxa frames turned by π (axis down), femur
+    and tibia servos mounted at 45° (frames rolled π/4, axes given in them), the tip in a fixed ``endcap`` link."""
+    side = -1.0 if y < 0 else 1.0
+    rear = x < 0
+    yaw = side * math.pi / 2 + (0.5 if x > 0 else -0.5 if x < 0 else 0.0) * side + (math.pi if rear else 0.0)
+    out = -1.0 if rear else 1.0
+    return LegSpec(name, [
+        Element("revolute", (x, y, 0.0), (0.0, 0.0, yaw), (0.0, 0.0, -1.0 if rear else 1.0), -0.46, 0.46),
+        Element("revolute", (out * 0.05, 0.0, 0.0), (math.pi / 4, 0.0, 0.0), (0.0, 1.0, -1.0), -1.6, 1.6),
+        Element("revolute", (out * 0.07, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 1.0, -1.0), -2.2, 2.2),
+        Element("fixed", (out * 0.08, 0.0, 0.0))], masses=[0.06, 0.08, 0.05, 0.005])
+
+
+def test_odd_mounts_flipped_rear_frames_tight_coxas_and_an_endcap_tip(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                      monkeypatch) -> None:
+    legs = [_odd_leg(f"leg{i}", x, y) for i, (x, y) in
+            enumerate([(0.1, -0.06), (0.0, -0.08), (-0.1, -0.06), (-0.1, 0.06), (0.0, 0.08), (0.1, 0.06)])]
+    path = tmp_path / "odd.urdf"
+    path.write_text(robot_urdf(legs, name="odd").replace('_link3"', '_endcap"'))
+    code, _, err, robot_file = _import(path, tmp_path / "out", capsys, monkeypatch)
+    assert code == 0, err
+    assert robot_file is not None
+    assert "# Tip of every leg: the origin of its leg's last link." in robot_file.read_text()
+    assert _fk_worst(path.read_text(), path, robot_file) < 1e-6
+    code, _, err = run(["plan", str(robot_file), "--duration", "2", "--no-plots", "--out", str(tmp_path / "run")],
+                         capsys, monkeypatch)
+    assert code == 0, err
