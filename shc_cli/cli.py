@@ -230,7 +230,8 @@ def ros(
                                               "from the parameter server (/syropod, as its launch files load them).")]
     = "bullet",
     backend: Annotated[str, typer.Option(help="none: outputs only, as OpenSHC (a hardware node of yours reads "
-                                              "them).")] = "none",
+                                              "them); mujoco or pybullet: the robot simulated in real time, its "
+                                              "sensors published (/joint_states, /imu/data).")] = "none",
     name: Annotated[str, typer.Option(help="Node name.")] = "/shc",
     master: Annotated[str | None, typer.Option(help="ROS master URI (default: $ROS_MASTER_URI).")] = None,
     duration: Annotated[float | None, typer.Option(help="Stop after this many seconds (default: until Ctrl-C).")]
@@ -245,10 +246,10 @@ def ros(
     """Run as OpenSHC's ROS 1 node: its topics, messages and parameters, driven by syropod_remote."""
     from shc_cli.commands.ros import run_ros
     from shc_cli.domain.ros_node import NodeConfig
+    from shc_cli.errors import check_choice
 
-    if backend not in ("none",):
-        raise ShcError(f"--backend: '{backend}' is not a backend here (use none)")
-    run_ros(NodeConfig(robot=robot, backend="none", name=name, master_uri=master, duration=duration, out=out,
+    check_choice("--backend", backend, ("none", "mujoco", "pybullet"), "backend")
+    run_ros(NodeConfig(robot=robot, backend=backend, name=name, master_uri=master, duration=duration, out=out,  # type: ignore[arg-type]
                        individual=individual, combined=combined, overwrite=overwrite, namespace=namespace))
 
 

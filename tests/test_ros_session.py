@@ -101,3 +101,27 @@ def test_server_without_openshc_parameters_is_one_line(ros_env: dict[str, str], 
     assert result.returncode == 2
     assert result.stderr.count("\n") == 1 and "/nothere/parameters" in result.stderr, result.stderr
     assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.slow
+def test_shc_ros_with_mujoco_is_a_gazebo_free_openshc_simulation(ros_env: dict[str, str], tmp_path: Path) -> None:
+    """--backend mujoco: the robot is simulated in real time and its sensors are published as OpenSHC's Gazebo
+    set-up publishes them; driven by the remote it walks."""
+    env = {**ros_env, "PYTHONUNBUFFERED": "1"}
+    node = subprocess.Popen([*SHC, "ros", "bullet", "--backend", "mujoco", "--out", str(tmp_path / "sim")], cwd=ROOT,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        _wait_for(lambda: "/shc" in ros(env, "rosnode", "list"), 90, "the node to register")
+        assert ros(env, "rostopic", "type", "/imu/data").strip() == "sensor_msgs/Imu"
+        driver = subprocess.run(["/usr/bin/python3", str(ROOT / "tests" / "ros_remote_driver.py"), "0.1"], env=env,
+                                capture_output=True, text=True, timeout=240)
+        assert "running" in driver.stdout and "done" in driver.stdout, driver.stdout + driver.stderr
+        imu = ros(env, "rostopic", "echo", "-n", "1", "/imu/data/linear_acceleration/z", timeout=30)
+        assert 9.0 < float(imu.split()[0]) < 10.6  # standing: the IMU feels gravity
+    finally:
+        node.send_signal(signal.SIGINT)
+        _, err = node.communicate(timeout=60)
+    assert node.returncode == 0, err
+    summary = json.loads((tmp_path / "sim" / "summary.json").read_text())
+    assert summary["engine"] == "mujoco" and not summary["fell"]
+    assert summary["distance_m"] > 0.1

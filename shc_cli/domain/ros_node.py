@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any, Literal
 from shc_cli.domain.result import RunResult
 
 if TYPE_CHECKING:
+    from shc_cli.control.controller import Controller
     from shc_cli.loop.summary import RunSummary
     from shc_cli.ros.node import RosNode
     from shc_cli.spec.gait import Gait
@@ -137,52 +138,107 @@ def _robot_from_server(node: RosNode, namespace: str, folder: Path) -> Path:
 
 def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: Any, gaits: dict[str, Gait],
          directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
+    if config.backend == "none":
+        return _run_outputs_only(node, config, robot, gait, pose_sets, gaits, directory, on_ready)
+    return _run_simulated(node, config, robot, gait, pose_sets, gaits, directory, on_ready)
+
+
+class _Session:
+    """What both backends share: the remote input, the outputs, the clock and the stop conditions."""
+
+    def __init__(self, node: RosNode, config: NodeConfig, robot: Robot, controller: Controller,
+                 gaits: dict[str, Gait], sensors: bool) -> None:
+        from shc_cli.loop.pacing import WallClock
+        from shc_cli.ros.outputs import NodeOutputs
+        from shc_cli.ros.remote import RemoteInput
+
+        self.requested: Callable[[], bool] = lambda: False
+        self.limit = None if config.duration is None else time.monotonic() + config.duration
+        self.remote = RemoteInput(node, robot, gaits, stopped=self.stopped)
+        self.outputs = NodeOutputs(node, robot, config.individual, config.combined,
+                                   walkspace=lambda: controller.walkspace, after=self.remote.latch, sensors=sensors,
+                                   always=True)
+        self.clock = WallClock(robot.time_delta)
+
+    def stopped(self) -> bool:
+        """A stop was requested, or the duration passed (also while waiting for OPERATIONAL)."""
+        return self.requested() or (self.limit is not None and time.monotonic() >= self.limit)
+
+    def deadline(self, cycle: int, command: object, out: object, reading: object) -> str | None:
+        """An observer that ends the run when the duration has passed."""
+        return "end" if self.limit is not None and time.monotonic() >= self.limit else None
+
+    def ready(self, node: RosNode, config: NodeConfig, robot: Robot, gait: Gait,
+              on_ready: Callable[[str], None] | None) -> None:
+        if on_ready is not None:
+            on_ready(f"shc ros: {robot.name} / {gait.name} as node {node.name} on {node.master_uri} (backend "
+                     f"{config.backend}); waiting for /syropod_remote/system_state OPERATIONAL; Ctrl-C stops")
+
+
+def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: Any,
+                      gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
+    """Backend none: the controller's targets are taken as reached (OpenSHC with a hardware node of the user's)."""
     from shc_cli.backends.kinematic import KinematicBackend
     from shc_cli.control.controller import Controller
-    from shc_cli.loop.pacing import WallClock
     from shc_cli.loop.plan_summary import PlanRecord, plan_summary
     from shc_cli.loop.run_loop import Observer, RunLoop
     from shc_cli.loop.runlog import RunWriter
     from shc_cli.loop.session import execute
-    from shc_cli.ros.outputs import NodeOutputs
-    from shc_cli.ros.remote import RemoteInput
 
-    if config.backend != "none":
-        from shc_cli.errors import Issue, SpecError
-
-        raise SpecError([Issue(None, None, "--backend", f"'{config.backend}' is not available yet",
-                               "use --backend none")])
     controller = Controller(robot, gait, pose_sets=pose_sets)
     writer = RunWriter(directory, robot, config.overwrite)
     writer.write_robot(robot)
     record = PlanRecord(controller)
-    clock = WallClock(robot.time_delta)
-    holder: dict[str, RunLoop[None]] = {}
-    limit = None if config.duration is None else time.monotonic() + config.duration
-
-    def stopped() -> bool:
-        """A stop was requested, or the duration passed (also while waiting for OPERATIONAL)."""
-        return ("loop" in holder and holder["loop"].requested) or (limit is not None and time.monotonic() >= limit)
-
-    remote = RemoteInput(node, robot, gaits, stopped=stopped)
-    outputs = NodeOutputs(node, robot, config.individual, config.combined, walkspace=lambda: controller.walkspace,
-                          after=remote.latch)
-
-    def deadline(cycle: int, command: object, out: object, reading: object) -> str | None:
-        return "end" if limit is not None and time.monotonic() >= limit else None
-
-    observers: list[Observer[None]] = [record, outputs, clock, deadline]
-    loop = RunLoop(controller, KinematicBackend(), remote, writer, None, observers=observers, flush_every=100)
-    holder["loop"] = loop
-    if on_ready is not None:
-        on_ready(f"shc ros: {robot.name} / {gait.name} as node {node.name} on {node.master_uri} (backend "
-                 f"{config.backend}); waiting for /syropod_remote/system_state OPERATIONAL; Ctrl-C stops")
+    session = _Session(node, config, robot, controller, gaits, sensors=False)
+    observers: list[Observer[None]] = [record, session.outputs, session.clock, session.deadline]
+    loop = RunLoop(controller, KinematicBackend(), session.remote, writer, None, observers=observers,
+                   flush_every=100)
+    session.requested = lambda: loop.requested
+    session.ready(node, config, robot, gait, on_ready)
     started = time.perf_counter()
 
     def summarise(_: object) -> RunSummary:
         summary = plan_summary(robot, controller, record, time.perf_counter() - started, writer.partial)
         return summary.updated(backend=config.backend, ros_master=node.master_uri, node=node.name,
-                               **clock.statistics())
+                               **session.clock.statistics())
 
     path, summary, _ = execute(loop, writer, summarise, None)
+    return RunResult(path, summary)
+
+
+def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: Any,
+                   gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
+    """A physics engine: the robot simulated in real time, its measured joints, IMU, foot forces and power published
+    (``/joint_states``, ``/imu/data``, ``/<LEG>/foot_force``, ``/shc/power``) — OpenSHC's Gazebo set-up without
+    Gazebo. The engine's options are ``shc simulate``'s defaults for the robot (flat ground, 400 Hz)."""
+    from shc_cli.backends.engine import Reading
+    from shc_cli.backends.simulated import SimulatedBackend, open_world
+    from shc_cli.control.controller import Controller
+    from shc_cli.domain.config import SimulationConfig
+    from shc_cli.loop.physics_summary import PhysicsRecord
+    from shc_cli.loop.run_loop import Observer, RunLoop
+    from shc_cli.loop.runlog import LogRecorder, RunDirectory
+    from shc_cli.loop.session import execute
+
+    sim = SimulationConfig(robot=config.robot, engine=config.backend)
+    with RunDirectory(directory, config.overwrite) as run:
+        world = open_world(robot, sim.engine_options(robot))
+        with SimulatedBackend(robot, world) as backend:
+            controller = Controller(robot, gait, joints=backend.start(), pose_sets=pose_sets)
+            run.write_robot(robot)
+            record = PhysicsRecord(robot, backend, sim.airborne)
+            session = _Session(node, config, robot, controller, gaits, sensors=True)
+            observers: list[Observer[Reading]] = [record, session.outputs, session.clock, session.deadline]
+            loop = RunLoop(controller, backend, session.remote, LogRecorder(run, robot, backend), None,
+                           observers=observers, flush_every=100)
+            session.requested = lambda: loop.requested
+            session.ready(node, config, robot, gait, on_ready)
+
+            def summarise(_: object) -> RunSummary:
+                return record.summary(run.partial, sim.scenario, controller.gait.name, controller).updated(
+                    engine=world.name, engine_version=world.version, engine_warnings=world.warnings,
+                    backend=config.backend, ros_master=node.master_uri, node=node.name,
+                    **session.clock.statistics())
+
+            path, summary, _ = execute(loop, run, summarise, None)
     return RunResult(path, summary)

@@ -59,6 +59,7 @@ class NodeOutputs:
         walkspace: gives the controller's walkspace (radius [m] by bearing [°]), published while RUNNING as OpenSHC's
             9 radii at bearings 0, 45, …, 360°; None: not published.
         after: called before each cycle's publications (the remote input's :meth:`latch`).
+        always: publish also while nobody listens (default: without ``sensors``, as a ROS node does).
         sensors: also publish what a simulated robot's sensors read: ``/joint_states`` (measured), ``/imu/data``,
             ``/<LEG>/foot_force`` (WrenchStamped) and ``/shc/power`` (Float64, W), as ``shc export bag`` does.
         efforts: the last measured joint efforts ``(L, n)`` [N·m] or None (published as 0).
@@ -66,7 +67,8 @@ class NodeOutputs:
 
     def __init__(self, node: Transport, robot: Robot, individual: bool = True, combined: bool = True,
                  walkspace: Callable[[], dict[int, float]] | None = None,
-                 after: Callable[[], None] | None = None, sensors: bool = False) -> None:
+                 after: Callable[[], None] | None = None, sensors: bool = False,
+                 always: bool | None = None) -> None:
         self.m = Messages(node.types.store)
         self.after = after
         self.efforts: np.ndarray | None = None
@@ -95,8 +97,9 @@ class NodeOutputs:
             self.foot_frames = [names[leg].foot for leg in self.legs]
             self.power = node.advertise("/shc/power", "std_msgs/Float64")
         self.seq = 0
-        self.always = not sensors  # a ROS node publishes whether or not anyone listens, as OpenSHC; a live
-        # stream (with the sensors) builds nothing while no client is connected
+        # a ROS node publishes whether or not anyone listens, as OpenSHC; a live stream builds nothing while no
+        # client is connected
+        self.always = not sensors if always is None else always
         self.combined_or_any = self.combined if self.combined is not None else self.tf
 
     def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: object) -> str | None:
