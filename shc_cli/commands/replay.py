@@ -17,9 +17,9 @@ def run_replay(source: Path, robot_name: str, gait_name: str | None, as_json: bo
     """Replay, print, write ``--out``; returns the exit code (1 only when ``--tolerance-joints`` is exceeded)."""
     from shc_cli.loop.run_inputs import pose_sets_for
     from shc_cli.outputs import ensure_dir, refuse_existing, write_text
-    from shc_cli.replay import replay
     from shc_cli.replay.opening import open_source
     from shc_cli.replay.report import differences_csv, plot_differences, summary, text
+    from shc_cli.replay.run import replay
     from shc_cli.spec.timeline import constant
     from shc_cli.validation import load_checked
 

@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from shc_cli.replay import Replay
 from shc_cli.replay.compare import LABELS, QUANTITIES
+from shc_cli.replay.run import Replay
 from shc_cli.replay.source import ABSURD
 
 ISSUE_KEYS = ("joints_rad", "model_tip_m", "walker_tip_m", "poser_tip_m", "velocity", "progress")
