@@ -15,7 +15,7 @@ from shc_cli.spec.loading import load_gait, load_robot
 
 @pytest.fixture(scope="module")
 def running() -> Controller:
-    robot = load_robot("bullet").robot
+    robot = load_robot("bullet_openshc").robot
     gait = load_gait("tripod").gait
     controller = Controller(robot, gait)
     while controller.state != RobotState.RUNNING:
@@ -149,7 +149,7 @@ def test_auto_posing_moves_the_body_with_the_gait_and_lets_it_stop(tmp_path) -> 
     from shc_cli.spec.autopose import load_auto_pose_set
 
     robot_file = tmp_path / "posing.toml"
-    robot_file.write_text('extends = "bullet"\nname = "bullet_posing"\n[pose]\nauto = true\n')
+    robot_file.write_text('extends = "bullet_openshc"\nname = "bullet_posing"\n[pose]\nauto = true\n')
     robot = load_robot(robot_file).robot
     gait = _gait("tripod")
     pose_set = load_auto_pose_set("auto", gait).pose_set

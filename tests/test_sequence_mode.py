@@ -15,7 +15,7 @@ from shc_cli.spec.loading import load_gait, load_robot
 
 def _controller(tmp_path: Path, double: bool = False) -> Controller:
     robot_file = tmp_path / "sequence.toml"
-    robot_file.write_text('extends = "bullet"\nname = "bullet_sequence"\n[start_up]\nsequence = true\n')
+    robot_file.write_text('extends = "bullet_openshc"\nname = "bullet_sequence"\n[start_up]\nsequence = true\n')
     robot = load_robot(robot_file).robot
     gait = load_gait("tripod").gait
     packed, _ = joint_configurations(robot)
@@ -65,7 +65,7 @@ def test_shut_down_takes_the_nominal_time_unless_openshc_speed_is_asked_for(tmp_
 def test_direct_mode_goes_back_down_only_when_asked_for(direct_shutdown: bool) -> None:
     """OpenSHC's direct mode only goes up; ``direct_shutdown`` (run-hw) stops walking and moves the joints back to
     where the robot started, in ``time_to_start``."""
-    robot, gait = load_robot("bullet").robot, load_gait("tripod").gait
+    robot, gait = load_robot("bullet_openshc").robot, load_gait("tripod").gait
     assert robot is not None and gait is not None
     from shc_cli.model.chains import Chains
 

@@ -193,14 +193,15 @@ def test_a_light_robot_with_a_stiff_servo_law_is_warned_and_the_suggested_rate_w
     from .test_simulate import simulate_variant
 
     text = 'extends = "quadruped"\nname = "quad_dxl"\n[servo]\ncontrol = "dynamixel"\n'
-    code, err, summary = simulate_variant(tmp_path, text, [], "a", capsys, monkeypatch)
+    code, err, summary = simulate_variant(tmp_path, text, ["--engine", "pybullet"], "a", capsys, monkeypatch)
     assert code == 0 and summary["fell"]
     [warning] = summary["engine_warnings"]
     assert "too stiff for 400 Hz physics" in warning
     [note] = [line for line in err.splitlines() if line.startswith("note: pybullet: ")]
     rate = note.split("--physics-rate ")[1].split()[0]
     assert int(rate) > 400
-    code, err, summary = simulate_variant(tmp_path, text, ["--physics-rate", rate], "b", capsys, monkeypatch)
+    code, err, summary = simulate_variant(tmp_path, text, ["--engine", "pybullet", "--physics-rate", rate], "b",
+                                          capsys, monkeypatch)
     assert code == 0 and not summary["fell"] and summary["engine_warnings"] == []
     assert "note: pybullet" not in err
 

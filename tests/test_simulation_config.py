@@ -14,7 +14,7 @@ from shc_cli.errors import SpecError
 def test_defaults_are_the_command_lines() -> None:
     config = SimulationConfig()
     assert (config.robot, config.velocity, config.terrain, config.scenario, config.physics_rate, config.engine) == (
-        "bullet", "1,0,0", "flat", "WG", 400.0, "pybullet")
+        "bullet", "1,0,0", "flat", "WG", 400.0, "mujoco")
     assert config.walking and not config.airborne
 
 
@@ -34,7 +34,7 @@ def test_replace_validates_again_and_keeps_the_rest() -> None:
 
 
 @pytest.mark.parametrize(("options", "message"), [
-    ({"engine": "ode"}, "--engine: 'ode' is not a physics engine (use pybullet or mujoco)"),
+    ({"engine": "ode"}, "--engine: 'ode' is not a physics engine (use mujoco or pybullet)"),
     ({"scenario": "xx"}, "--scenario: 'XX' is not a scenario"),
     ({"inclination": "up"}, "--inclination: 'up' is not a mode"),
     ({"posture": "kz=2"}, "--posture: kz='2' is not a gain in [0, 1]"),

@@ -109,7 +109,7 @@ def test_masses(name: str, tmp_path: Path) -> None:
 
 def test_bullet_mass_is_the_openshc_urdf_mass() -> None:
     """Bullet: 7.2 kg body (6 kg box + 6 base motors) + 6 x 1.028 kg legs = 13.37 kg (study §13.2)."""
-    robot = robot_named("bullet")
+    robot = robot_named("bullet_openshc")
     assert robot.total_mass() == pytest.approx(13.36821)
     assert model.body_mass(robot) == pytest.approx(13.36821 + 6 * model.FOOT_MASS)
 
@@ -124,7 +124,7 @@ def test_body_mass_counts_default_links_and_feet() -> None:
 
 def test_inertias_in_bullet(tmp_path: Path) -> None:
     """PyBullet reads the inertias of the file: the body box, a capsule about its midpoint, the foot sphere."""
-    robot = robot_named("bullet")
+    robot = robot_named("bullet_openshc")
     leg = robot.legs["AR"]
     names = model.leg_names(robot)["AR"]
     with loaded(robot, tmp_path, fixed=False) as (client, body):

@@ -43,7 +43,8 @@ def test_a_command_compiling_the_kernels_says_so_once_on_a_terminal(monkeypatch:
         return SimpleNamespace(data={"dispatcher": SimpleNamespace(py_func=SimpleNamespace(__module__=module))})
 
     notice = jit._CompileNotice()
-    monkeypatch.setattr("sys.stderr", SimpleNamespace(isatty=lambda: True))
+    terminal = SimpleNamespace(isatty=lambda: True, write=lambda text: len(text), flush=lambda: None)
+    monkeypatch.setattr("sys.stderr", terminal)
     with caplog.at_level("INFO", logger="shc_cli"):
         notice.on_start(compiling("numpy.something"))  # not one of shc's kernels
         assert not caplog.records
