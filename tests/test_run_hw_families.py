@@ -221,3 +221,18 @@ def test_sixty_seconds_of_walking_hold_the_rate(model: str, tmp_path: Path) -> N
           f"{np.percentile(times, 99):.2f} ms, max {times.max():.2f} ms, {summary['overruns']} overruns")
     assert summary["fault"] is None and summary["sim_time_s"] > 60.0
     assert np.percentile(times, 50) < period_ms
+
+
+@pytest.mark.parametrize("model", ["AX-12A", "STS3215", "XM430-W350"])
+def test_a_port_that_is_not_there_is_one_line_naming_it(model: str, tmp_path: Path) -> None:
+    """Every family opens its ports the same way (hardware.bus.open_port): a missing adapter is one line that names
+    the port and how to give it, exit 2, nothing written."""
+    robot = _robot(tmp_path, "AX-12A")
+    robot.write_text(robot.read_text().replace('model = "AX-12A"', f'model = "{model}"'))
+    result = subprocess.run([*SHC, "run-hw", str(robot), "--port", "/dev/ttyNOTHERE0", "--out", str(tmp_path / "run")],
+                            capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2, result.stderr
+    assert result.stderr.strip().splitlines() == [
+        "error: /dev/ttyNOTHERE0: cannot open the serial port: no such device (give the servo bus adapter with "
+        "--port, e.g. /dev/ttyUSB0)"], result.stderr
+    assert not (tmp_path / "run").exists()

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -41,6 +42,22 @@ PROFILE_ADDRESS = 112
 class HardwareError(ShcError):
     """The bus or a servo is missing, wrong or failing (one line, exit 2)."""
 
+
+def open_port(port: Any, name: str, baud: int, close: Callable[[], None]) -> Any:
+    """Open an SDK port handler (dynamixel-sdk's or feetech-servo-sdk's ``PortHandler``) at ``baud``; on failure
+    ``close()`` (the bus's other ports) and a one-line :class:`HardwareError` naming the port and the fix."""
+    try:
+        opened = port.openPort()
+    except Exception as error:  # pyserial raises several types; all mean "cannot open"
+        reason = "no such device" if not os.path.exists(name) else str(error) or type(error).__name__
+        close()
+        raise HardwareError(f"{name}: cannot open the serial port: {reason} "
+                            "(give the servo bus adapter with --port, e.g. /dev/ttyUSB0)") from None
+    if not opened or not port.setBaudRate(baud):
+        close()
+        raise HardwareError(f"{name}: cannot open the serial port at {baud} baud "
+                            "(check --port and --baud or hardware.baud)")
+    return port
 
 @dataclass(frozen=True)
 class Slot:
@@ -142,18 +159,7 @@ class ServoBus:
 
         self._handler = PacketHandler(2.0)
         for line in self.lines:
-            port = PortHandler(line.name)
-            try:
-                opened = port.openPort()
-            except Exception as error:  # pyserial raises several types; all mean "cannot open"
-                reason = "no such device" if not os.path.exists(line.name) else str(error) or type(error).__name__
-                self.close()
-                raise HardwareError(f"{line.name}: cannot open the serial port: {reason} "
-                                    "(give the servo bus adapter with --port, e.g. /dev/ttyUSB0)") from None
-            if not opened or not port.setBaudRate(self.baud):
-                self.close()
-                raise HardwareError(f"{line.name}: cannot open the serial port at {self.baud} baud "
-                                    "(check --port and --baud or hardware.baud)")
+            port = open_port(PortHandler(line.name), line.name, self.baud, self.close)
             line.port = port
             line.ids = [self.slots[i].servo_id for i in line.slots]
             line.state_reader = GroupSyncRead(port, self._handler, STATE_ADDRESS, STATE_LENGTH)

@@ -27,13 +27,12 @@ from __future__ import annotations
 
 import logging
 import math
-import os
 import time
 from typing import Any
 
 import numpy as np
 
-from shc_cli.hardware.bus import BusState, HardwareError, ServoBus, _Line
+from shc_cli.hardware.bus import BusState, HardwareError, ServoBus, _Line, open_port
 from shc_cli.hardware.models import (
     FAMILY_NAMES,
     PROTOCOL1_HARDWARE,
@@ -103,18 +102,7 @@ class Protocol1Bus(ServoBus):
         self._sdk = self._import()
         self._handler = self._make_handler()
         for line in self.lines:
-            port = self._make_port(line.name)
-            try:
-                opened = port.openPort()
-            except Exception as error:  # pyserial raises several types; all mean "cannot open"
-                reason = "no such device" if not os.path.exists(line.name) else str(error) or type(error).__name__
-                self.close()
-                raise HardwareError(f"{line.name}: cannot open the serial port: {reason} "
-                                    "(give the servo bus adapter with --port, e.g. /dev/ttyUSB0)") from None
-            if not opened or not port.setBaudRate(self.baud):
-                self.close()
-                raise HardwareError(f"{line.name}: cannot open the serial port at {self.baud} baud "
-                                    "(check --port and --baud or hardware.baud)")
+            port = open_port(self._make_port(line.name), line.name, self.baud, self.close)
             port.ser.timeout = READ_WAIT_S  # the SDKs poll with timeout 0: a spinning host starves a busy computer
             line.port = port
             line.ids = [self.slots[i].servo_id for i in line.slots]
