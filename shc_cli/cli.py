@@ -248,7 +248,7 @@ def ros(
     from shc_cli.domain.ros_node import NodeConfig
     from shc_cli.errors import check_choice
 
-    check_choice("--backend", backend, ("none", "mujoco", "pybullet"), "backend")
+    check_choice("--backend", backend, ("none", "mujoco", "pybullet"), "a backend")
     run_ros(NodeConfig(robot=robot, backend=backend, name=name, master_uri=master, duration=duration, out=out,  # type: ignore[arg-type]
                        individual=individual, combined=combined, overwrite=overwrite, namespace=namespace))
 
