@@ -110,6 +110,10 @@ def plan(
     video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
                                                     "render with its defaults).", metavar="FILE")] = None,
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
+    live: Annotated[bool, typer.Option(help="Stream the run while it happens to a Foxglove WebSocket server on "
+                                            "127.0.0.1 (the topics of shc export bag).")] = False,
+    live_port: Annotated[int, typer.Option(help="Port of the --live server (0: any free port).")] = 8765,
+    realtime: Annotated[bool, typer.Option(help="Pace the run to the wall clock.")] = False,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
     from shc_cli.commands.plan import run_plan
@@ -117,7 +121,7 @@ def plan(
 
     check_outputs(bag, video, overwrite)
     run_plan(robot, gait, velocity, duration, commands, out, plots, after=lambda run: finish_outputs(run, bag, video),
-             overwrite=overwrite)
+             overwrite=overwrite, live=live, live_port=live_port, realtime=realtime)
 
 
 @app.command()
@@ -242,6 +246,9 @@ def ros(
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-ros).")] = None,
     namespace: Annotated[str, typer.Option(help="Parameter tree read for the robot 'server'.")] = "/syropod",
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
+    live: Annotated[bool, typer.Option(help="Stream the run while it happens to a Foxglove WebSocket server on "
+                                            "127.0.0.1 (the topics of shc export bag).")] = False,
+    live_port: Annotated[int, typer.Option(help="Port of the --live server (0: any free port).")] = 8765,
 ) -> None:
     """Run as OpenSHC's ROS 1 node: its topics, messages and parameters, driven by syropod_remote."""
     from shc_cli.commands.ros import run_ros
@@ -250,7 +257,8 @@ def ros(
 
     check_choice("--backend", backend, ("none", "mujoco", "pybullet"), "a backend")
     run_ros(NodeConfig(robot=robot, backend=backend, name=name, master_uri=master, duration=duration, out=out,  # type: ignore[arg-type]
-                       individual=individual, combined=combined, overwrite=overwrite, namespace=namespace))
+                       individual=individual, combined=combined, overwrite=overwrite, namespace=namespace,
+                       live=live, live_port=live_port))
 
 
 @app.command()

@@ -32,6 +32,58 @@ def _client_ready() -> None:
     subprocess.run(["npm", "ci", "--no-audit", "--no-fund", "--silent"], cwd=CLIENT, check=True, timeout=300)
 
 
+def _live_run(args: list[str], topics: list[str]) -> list[dict[str, object]]:
+    """Run ``shc ARGS --live --live-port 0``, attach the Node client to the printed URL, return its messages."""
+    _client_ready()
+    sim = subprocess.Popen([*SHC, *args, "--live", "--live-port", "0"], cwd=ROOT, stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True)
+    assert sim.stderr is not None
+    url = ""
+    deadline = time.monotonic() + 120
+    while not url and time.monotonic() < deadline:
+        line = sim.stderr.readline()
+        if "live: ws://" in line:
+            url = line.split("live: ", 1)[1].split()[0]
+        elif not line and sim.poll() is not None:
+            break
+    assert url, "no live URL printed"
+    client = subprocess.run(["node", str(CLIENT / "client.mjs"), url, "60", *topics], capture_output=True, text=True,
+                            timeout=120)
+    sim.communicate(timeout=60)
+    assert sim.returncode == 0
+    return [json.loads(line) for line in client.stdout.splitlines()]
+
+
+def _check_joints(joints: list[dict[str, object]], table: Path, suffix: str) -> None:
+    """Every streamed /desired_joint_states equals the run's own table at its cycle (header.seq), and the client got
+    every cycle from its first on."""
+    with table.open(encoding="utf-8", newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    first = joints[0]["message"]
+    assert isinstance(first, dict)
+    columns = [name.removesuffix("_joint") + suffix for name in first["name"]]
+    seqs = []
+    for m in joints:
+        message = m["message"]
+        assert isinstance(message, dict)
+        cycle = int(message["header"]["seq"])
+        seqs.append(cycle)
+        logged = np.array([float(rows[cycle][c]) for c in columns])
+        assert np.allclose(np.array(message["position"], dtype=float), logged, rtol=1e-5, atol=1e-6), cycle
+    assert seqs == list(range(seqs[0], seqs[0] + len(seqs)))
+
+
+@pytest.mark.slow
+def test_a_live_plan_reaches_the_client_cycle_for_cycle(tmp_path: Path) -> None:
+    run = tmp_path / "plan"
+    messages = _live_run(["plan", "--duration", "3", "--realtime", "--out", str(run), "--no-plots"],
+                         ["/desired_joint_states", "/shc/AR/state"])
+    joints = [m for m in messages if m["topic"] == "/desired_joint_states"]
+    legs = [m for m in messages if m["topic"] == "/shc/AR/state"]
+    assert len(joints) > 300 and abs(len(legs) - len(joints)) <= 10
+    _check_joints(joints, run / "joints.csv", "")
+
+
 @pytest.mark.slow
 def test_a_foxglove_client_decodes_the_live_run_and_it_equals_the_log(tmp_path: Path) -> None:
     _client_ready()

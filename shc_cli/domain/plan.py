@@ -5,13 +5,18 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
+from shc_cli.domain.live import open_live, wall_clock
 from shc_cli.domain.result import RunResult
+
+if TYPE_CHECKING:
+    from shc_cli.loop.summary import RunSummary
 
 
 def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0", duration: float | None = None,
          commands: Path | None = None, out: Path | None = None, plots: bool = True,
-         overwrite: bool = False) -> RunResult:
+         overwrite: bool = False, live: bool = False, live_port: int = 8765, realtime: bool = False) -> RunResult:
     """Load, run through the one loop on the kinematic backend, log; returns the run directory and its summary
     (``complete`` false when a signal stopped it).
 
@@ -24,13 +29,15 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
         out: run directory (None: ``runs/<timestamp>-plan``).
         plots: write gait.png, tips.png and joints.png.
         overwrite: replace an existing run directory at ``out`` when the run finishes.
+        live: stream the run while it happens on a Foxglove server on 127.0.0.1:``live_port`` (0: any free port).
+        realtime: pace the run to the wall clock.
     """
     from shc_cli.backends.kinematic import KinematicBackend
     from shc_cli.control.controller import Controller
     from shc_cli.loop.input_sources import TimelineInput
     from shc_cli.loop.plan_summary import PlanRecord, plan_summary
     from shc_cli.loop.run_inputs import load_inputs
-    from shc_cli.loop.run_loop import RunLoop, StartUp
+    from shc_cli.loop.run_loop import Observer, RunLoop, StartUp
     from shc_cli.loop.runlog import RunWriter, default_run_directory
     from shc_cli.loop.session import execute
 
@@ -42,8 +49,15 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
     writer.write_robot(model)
     record = PlanRecord(controller)
     start_up = StartUp.of(model)
+    observers: list[Observer[None]] = [record]
+    stream = open_live(live_port, model, controller, sensors=False) if live else None
+    if stream is not None:
+        observers.append(stream[1])
+    clock = wall_clock(model) if realtime else None
+    if clock is not None:
+        observers.append(clock)
     loop = RunLoop(controller, KinematicBackend(), TimelineInput(inputs.commands()), writer,
-                   start_up, observers=[record], flush_every=500)
+                   start_up, observers=observers, flush_every=500)
     started = time.perf_counter()
 
     def plot(folder: Path) -> None:
@@ -51,7 +65,13 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
 
         plot_plan(model, record.outputs, folder, gait=" → ".join(record.gaits) or inputs.gait.name)
 
-    path, summary, _ = execute(loop, writer, lambda _: plan_summary(model, controller, record,
-                                                                     time.perf_counter() - started, writer.partial),
-                               plot if plots else None)
+    def summarise(_: object) -> RunSummary:
+        summary = plan_summary(model, controller, record, time.perf_counter() - started, writer.partial)
+        return summary.updated(**clock.statistics()) if clock is not None else summary
+
+    try:
+        path, summary, _ = execute(loop, writer, summarise, plot if plots else None)
+    finally:
+        if stream is not None:
+            stream[0].close()
     return RunResult(path, summary)

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
+from shc_cli.domain.live import open_live
 from shc_cli.domain.result import RunResult
 
 if TYPE_CHECKING:
@@ -48,6 +49,7 @@ class NodeConfig:
         combined: publish ``/desired_joint_states``.
         overwrite: replace an existing run directory.
         namespace: the parameter tree read for ``robot = "server"``.
+        live: also stream the session on a Foxglove WebSocket server on 127.0.0.1:``live_port``.
     """
 
     robot: str = "bullet"
@@ -60,6 +62,8 @@ class NodeConfig:
     combined: bool = True
     overwrite: bool = False
     namespace: str = "/syropod"
+    live: bool = False
+    live_port: int = 8765
 
 
 def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) -> RunResult:
@@ -191,6 +195,9 @@ def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gai
     record = PlanRecord(controller)
     session = _Session(node, config, robot, controller, gaits, sensors=False)
     observers: list[Observer[None]] = [record, session.outputs, session.clock, session.deadline]
+    stream = open_live(config.live_port, robot, controller, sensors=False) if config.live else None
+    if stream is not None:
+        observers.insert(2, stream[1])
     loop = RunLoop(controller, KinematicBackend(), session.remote, writer, None, observers=observers,
                    flush_every=100)
     session.requested = lambda: loop.requested
@@ -202,7 +209,11 @@ def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gai
         return summary.updated(backend=config.backend, ros_master=node.master_uri, node=node.name,
                                **session.clock.statistics())
 
-    path, summary, _ = execute(loop, writer, summarise, None)
+    try:
+        path, summary, _ = execute(loop, writer, summarise, None)
+    finally:
+        if stream is not None:
+            stream[0].close()
     return RunResult(path, summary)
 
 
@@ -229,6 +240,9 @@ def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, 
             record = PhysicsRecord(robot, backend, sim.airborne)
             session = _Session(node, config, robot, controller, gaits, sensors=True)
             observers: list[Observer[Reading]] = [record, session.outputs, session.clock, session.deadline]
+            stream = open_live(config.live_port, robot, controller, sensors=True) if config.live else None
+            if stream is not None:
+                observers.insert(2, stream[1])
             loop = RunLoop(controller, backend, session.remote, LogRecorder(run, robot, backend), None,
                            observers=observers, flush_every=100)
             session.requested = lambda: loop.requested
@@ -240,5 +254,9 @@ def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, 
                     backend=config.backend, ros_master=node.master_uri, node=node.name,
                     **session.clock.statistics())
 
-            path, summary, _ = execute(loop, run, summarise, None)
+            try:
+                path, summary, _ = execute(loop, run, summarise, None)
+            finally:
+                if stream is not None:
+                    stream[0].close()
     return RunResult(path, summary)

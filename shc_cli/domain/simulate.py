@@ -9,16 +9,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from shc_cli.domain.config import SimulationConfig
+from shc_cli.domain.live import open_live, wall_clock
 from shc_cli.domain.result import RunResult
 
 if TYPE_CHECKING:
     from shc_cli.backends.engine import Reading
-    from shc_cli.control.controller import Command, Controller, CycleOutput
-    from shc_cli.live.foxglove_server import FoxgloveTransport
+    from shc_cli.control.controller import Command, CycleOutput
     from shc_cli.loop.run_loop import LoopResult
     from shc_cli.loop.summary import RunSummary
-    from shc_cli.ros.outputs import NodeOutputs
-    from shc_cli.spec.robot import Robot
 
 
 log = logging.getLogger(__name__)
@@ -69,14 +67,11 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
             record = PhysicsRecord(robot, backend, o.airborne)
             counter = None if progress is None else _Progress(progress, inputs.cycles)
             observers: list[Observer[Reading]] = [record] if counter is None else [record, counter]
-            live = _live(o, robot, controller)
+            live = open_live(o.live_port, robot, controller, sensors=True) if o.live else None
             if live is not None:
                 observers.append(live[1])
-            clock = None
-            if o.realtime:
-                from shc_cli.loop.pacing import WallClock
-
-                clock = WallClock(robot.time_delta)
+            clock = wall_clock(robot) if o.realtime else None
+            if clock is not None:
                 observers.append(clock)
             loop = RunLoop(controller, backend, TimelineInput(inputs.commands()),
                            LogRecorder(run, robot, backend),
@@ -111,21 +106,6 @@ OnProgress = Callable[[int, int], None]
 """Told ``(walked cycles, cycles to walk)`` before the run, every :data:`PROGRESS_EVERY` walking cycles and
 ``(total, total)`` when the run ends (e.g. a progress bar)."""
 PROGRESS_EVERY = 50
-
-
-def _live(o: SimulationConfig, robot: Robot, controller: Controller) -> tuple[FoxgloveTransport, NodeOutputs] | None:
-    """With ``--live``: the Foxglove server and the observer that streams each cycle to it (None without)."""
-    if not o.live:
-        return None
-    from shc_cli.live.foxglove_server import FoxgloveTransport
-    from shc_cli.ros.messages import MessageTypes
-    from shc_cli.ros.outputs import NodeOutputs
-
-    transport = FoxgloveTransport(MessageTypes(), o.live_port)
-    log.warning("live: %s (Foxglove WebSocket)", transport.url)
-    outputs = NodeOutputs(transport, robot, individual=False, combined=True, sensors=True,
-                          walkspace=lambda: controller.walkspace)
-    return transport, outputs
 
 
 

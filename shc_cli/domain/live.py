@@ -1,0 +1,38 @@
+"""``--live`` and ``--realtime`` for any run of the one loop (plan, simulate, ``shc ros``): a Foxglove server with
+the observer that streams each cycle to it, and the wall-clock pacer."""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from shc_cli.control.controller import Controller
+    from shc_cli.live.foxglove_server import FoxgloveTransport
+    from shc_cli.loop.pacing import WallClock
+    from shc_cli.ros.outputs import NodeOutputs
+    from shc_cli.spec.robot import Robot
+
+log = logging.getLogger(__name__)
+
+
+def open_live(port: int, robot: Robot, controller: Controller, sensors: bool) -> tuple[FoxgloveTransport, NodeOutputs]:
+    """A Foxglove WebSocket server on 127.0.0.1:``port`` (0: any free port; its URL is logged as ``live: URL``) and
+    the observer that streams each cycle's outputs to it (and a simulated reading's sensors when ``sensors``).
+    The caller closes the server when the run ends."""
+    from shc_cli.live.foxglove_server import FoxgloveTransport
+    from shc_cli.ros.messages import MessageTypes
+    from shc_cli.ros.outputs import NodeOutputs
+
+    transport = FoxgloveTransport(MessageTypes(), port)
+    log.warning("live: %s (Foxglove WebSocket)", transport.url)
+    outputs = NodeOutputs(transport, robot, individual=False, combined=True, sensors=sensors, always=False,
+                          walkspace=lambda: controller.walkspace)
+    return transport, outputs
+
+
+def wall_clock(robot: Robot) -> WallClock:
+    """The pacer of ``--realtime``: one control period of wall time per cycle."""
+    from shc_cli.loop.pacing import WallClock
+
+    return WallClock(robot.time_delta)
