@@ -50,6 +50,8 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from types import TracebackType
 
+from shc_cli.hardware.emulator import serve_promptly
+
 # -- protocol constants (e-Manual, Protocol 2.0) ---------------------------------------------------------------
 
 HEADER = bytes([0xFF, 0xFF, 0xFD, 0x00])
@@ -903,6 +905,7 @@ class EManualBus:
     # -- serving -----------------------------------------------------------------------------------------------
 
     def _serve(self) -> None:
+        serve_promptly()
         try:
             while not self._stopping:
                 timeout = self._parser.inter_byte_timeout_s if self._parser.busy else 0.5

@@ -122,9 +122,9 @@ def test_simulate_fail_on_fall_exit_code(tmp_path: Path) -> None:
     """A robot whose servos cannot hold it (0.3 N·m stall torque) collapses: the run stops as fallen and exits 4
     with --fail-on-fall, 0 without."""
     robot = tmp_path / "weak.toml"
-    bullet = Path(__file__).parents[1] / "robots" / "bullet.toml"
+    bullet = Path(__file__).parents[1] / "robots" / "bullet_openshc.toml"
     robot.write_text(f'extends = "{bullet.as_posix()}"\n\n[servo]\nstall_torque = 0.3\n')
-    args = ["simulate", str(robot), "--duration", "2", "--no-plots"]
+    args = ["simulate", str(robot), "--engine", "pybullet", "--duration", "2", "--no-plots"]
     result = subprocess.run([*SHC, *args, "--out", str(tmp_path / "a"), "--fail-on-fall"], capture_output=True,
                             text=True, timeout=300)
     summary = json.loads((tmp_path / "a" / "summary.json").read_text())

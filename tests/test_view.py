@@ -200,7 +200,7 @@ def test_view_run_replays_and_the_timeline_moves_the_robot(plan_run: Path, brows
 @pytest.mark.slow  # a real browser (Chromium) on shc view
 def test_view_robot_reload_shows_the_edited_file(tmp_path: Path, browser: Any) -> None:
     robot = tmp_path / "mine.toml"
-    text = (ROOT / "robots" / "bullet.toml").read_text(encoding="utf-8")
+    text = (ROOT / "robots" / "bullet_openshc.toml").read_text(encoding="utf-8")  # OpenSHC's Bullet: 13.37 kg
     robot.write_text(text, encoding="utf-8")
     with served(str(robot)) as url:
         page = _open(browser, url, "AR coxa")

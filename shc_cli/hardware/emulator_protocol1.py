@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from typing import Literal
 
 from shc_cli.hardware import protocol1 as p1
+from shc_cli.hardware.emulator import serve_promptly
 
 Vendor = Literal["dynamixel", "feetech"]
 
@@ -393,6 +394,7 @@ class Protocol1Emulator:
     # -- the wire ------------------------------------------------------------------------------------------
 
     def _serve(self) -> None:
+        serve_promptly()
         buffer = bytearray()
         while not self._stop:
             ready, _, _ = select.select([self._master, self._wake_r], [], [], 0.5)
