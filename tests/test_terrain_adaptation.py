@@ -14,6 +14,10 @@ from shc_cli.domain.simulate import simulate
 
 pytestmark = pytest.mark.slow  # long simulations on ramps, steps and blocks in both engines
 
+# The Bullet tests were calibrated on OpenSHC's Bullet (arrangement B, its Gazebo position servos and parameters, e.g.
+# the IMU PID gains): pinned to that robot, not the default `bullet` (the paper's robot, with the calibrated servos).
+OPENSHC_BULLET = "bullet_openshc"
+
 ENGINES = ["pybullet", "mujoco"]
 
 
@@ -37,7 +41,7 @@ def test_imu_posing_levels_the_body_on_a_ramp(engine: str, tmp_path: Path) -> No
     tilt out, the small integral gain adds little within seconds (measured −0.176 vs −0.083 rad over 20 s)."""
     pitch = {}
     for name, on in (("off", False), ("imu", True)):
-        rows = _walk(tmp_path, name, "bullet", 8.0, {"imu_posing": on}, engine)
+        rows = _walk(tmp_path, name, OPENSHC_BULLET, 8.0, {"imu_posing": on}, engine)
         on_slope = [float(r["pitch"]) for r in rows if float(r["x"]) > 1.05]  # all feet on the slope
         assert len(on_slope) > 100
         pitch[name] = statistics.median(on_slope)
@@ -69,7 +73,7 @@ def test_athena_posture_control_steadies_the_height_on_the_ramp(engine: str, tmp
 
 
 ADMITTANCE_ROBOT = """
-extends = "bullet"
+extends = "bullet_openshc"  # the geometry and servos the thresholds were measured on
 name = "bullet_admittance"
 [admittance]
 use_joint_effort = false   # foot force sensors
@@ -100,7 +104,7 @@ def test_admittance_keeps_more_feet_on_the_ground_over_a_step(engine: str, tmp_p
 
 
 ROUGH_ROBOT = """
-extends = "bullet"
+extends = "bullet_openshc"  # the geometry and servos the thresholds were measured on
 name = "bullet_rough"
 [walker]
 rough_terrain_mode = true
@@ -117,7 +121,7 @@ def test_rough_terrain_mode_on_flat_ground_walks_as_usual(tmp_path: Path) -> Non
     robot_file = tmp_path / "bullet_rough.toml"
     robot_file.write_text(ROUGH_ROBOT, encoding="utf-8")
     outputs = {}
-    for name in ("bullet", str(robot_file)):
+    for name in (OPENSHC_BULLET, str(robot_file)):  # the rough variant extends bullet_openshc
         robot, gait, _ = load_checked(name, "tripod")
         controller = Controller(robot, gait)
         joints = []
@@ -128,7 +132,7 @@ def test_rough_terrain_mode_on_flat_ground_walks_as_usual(tmp_path: Path) -> Non
         outputs[name] = joints
     import numpy as np
 
-    np.testing.assert_allclose(outputs["bullet"], outputs[str(robot_file)], atol=1e-9)
+    np.testing.assert_allclose(outputs[OPENSHC_BULLET], outputs[str(robot_file)], atol=1e-9)
 
 
 @pytest.mark.parametrize("engine", ENGINES)
@@ -140,7 +144,7 @@ def test_rough_terrain_mode_keeps_more_feet_down_on_blocks(engine: str, tmp_path
     robot.write_text(ROUGH_ROBOT, encoding="utf-8")
     legs = ["AR", "BR", "CR", "CL", "BL", "AL"]
     few = {}
-    for name, robot_name in (("normal", "bullet"), ("rough", str(robot))):
+    for name, robot_name in (("normal", OPENSHC_BULLET), ("rough", str(robot))):
         path, summary = simulate(SimulationConfig(robot=robot_name, gait="tripod", duration=8.0, out=tmp_path / name,
                                                   plots=False, terrain="blocks:0.01,0.05", engine=engine)).pair
         assert summary.fell is False
