@@ -218,7 +218,7 @@ def run_hw(
     = 0.5,
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
 ) -> None:
-    """Run the controller on the robot's Dynamixel servos (Protocol 2.0), safely."""
+    """Run the controller on the robot's servos (Dynamixel Protocol 2.0 or 1.0, Feetech STS), safely."""
     from shc_cli.commands.run_hw import run_hw as run
     from shc_cli.domain.hardware import HardwareConfig
 
