@@ -217,4 +217,6 @@ def test_every_docs_example_runs_in_a_fresh_clone(page: str, tmp_path: Path) -> 
     if sys.prefix != sys.base_prefix:  # the test's environment stands in for the clone's .venv (docs name .venv/bin)
         (where / ".venv").symlink_to(sys.prefix, target_is_directory=True)
     # docs/experiments/optimize.md (a 200-trial study and an 80-run sweep) took 23 min on two shared cores
-    run_script(steps(ROOT / page), where, str(Path(sys.executable).parent), timeout=3600)
+    examples = steps(ROOT / page)
+    assert examples, f"{page}: no example found"  # run_script itself fails on the first example that fails
+    run_script(examples, where, str(Path(sys.executable).parent), timeout=3600)

@@ -182,8 +182,10 @@ def test_a_closed_tabs_late_message_is_not_a_warning() -> None:
 
     from shc_cli.view.server import quiet_closed_connections
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
         quiet_closed_connections()
         warnings.warn("Queued a GuiUpdateMessage on a closed connection (e.g. via a handle owned by a disconnected "
                       "client); it will never be delivered.", stacklevel=1)
+        warnings.warn("another warning", stacklevel=1)
+    assert [str(w.message) for w in caught] == ["another warning"]  # only viser's closed-tab message is dropped
