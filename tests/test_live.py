@@ -88,28 +88,12 @@ def test_a_live_plan_reaches_the_client_cycle_for_cycle(tmp_path: Path) -> None:
 def test_a_foxglove_client_decodes_the_live_run_and_it_equals_the_log(tmp_path: Path) -> None:
     _client_ready()
     run = tmp_path / "walk"
-    sim = subprocess.Popen([*SHC, "simulate", "--engine", "mujoco", "--duration", "4", "--realtime", "--live",
-                            "--live-port", "0", "--out", str(run), "--no-plots"], cwd=ROOT,
-                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert sim.stderr is not None
-    url = ""
-    deadline = time.monotonic() + 120
-    while not url and time.monotonic() < deadline:
-        line = sim.stderr.readline()
-        if "live: ws://" in line:
-            url = line.split("live: ", 1)[1].split()[0]
-        elif not line and sim.poll() is not None:
-            break
-    assert url, "no live URL printed"
-    client = subprocess.run(["node", str(CLIENT / "client.mjs"), url, "60", "/desired_joint_states", "/tf",
-                             "/joint_states"], capture_output=True, text=True, timeout=120)
-    sim.communicate(timeout=60)
-    assert sim.returncode == 0
-    messages = [json.loads(line) for line in client.stdout.splitlines()]
+    messages = _live_run(["simulate", "--engine", "mujoco", "--duration", "4", "--realtime", "--out", str(run),
+                          "--no-plots"], ["/desired_joint_states", "/tf", "/joint_states"])
     joints = [m for m in messages if m["topic"] == "/desired_joint_states"]
     tfs = [m for m in messages if m["topic"] == "/tf"]
     # the topics are subscribed a moment apart
-    assert len(joints) > 500 and abs(len(tfs) - len(joints)) <= 10, (len(joints), len(tfs), client.stderr)
+    assert len(joints) > 500 and abs(len(tfs) - len(joints)) <= 10, (len(joints), len(tfs))
     with (run / "log.csv").open(encoding="utf-8", newline="") as handle:
         rows = list(csv.DictReader(handle))
     names = joints[0]["message"]["name"]
