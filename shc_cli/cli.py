@@ -33,6 +33,9 @@ CommandsOption = Annotated[Path | None, typer.Option(help="Command timeline: CSV
                                                           "script.")]
 BagOption = Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")]
 OVERWRITE_HELP = "Replace an existing run directory at --out (when the new run finishes; only shc's own outputs)."
+LiveOption = Annotated[bool, typer.Option(help="Stream the run while it happens to a Foxglove WebSocket server on "
+                                               "127.0.0.1 (the topics of shc export bag).")]
+LivePortOption = Annotated[int, typer.Option(help="Port of the --live server (0: any free port).")]
 VELOCITY_HELP = ("Constant velocity input VX,VY,WZ: throttle fractions −1..1 of the robot's maximum linear and "
                  "angular speed, unless the robot file's walker.velocity_input_mode is 'real' (then m/s, m/s, rad/s).")
 
@@ -110,9 +113,8 @@ def plan(
     video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
                                                     "render with its defaults).", metavar="FILE")] = None,
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
-    live: Annotated[bool, typer.Option(help="Stream the run while it happens to a Foxglove WebSocket server on "
-                                            "127.0.0.1 (the topics of shc export bag).")] = False,
-    live_port: Annotated[int, typer.Option(help="Port of the --live server (0: any free port).")] = 8765,
+    live: LiveOption = False,
+    live_port: LivePortOption = 8765,
     realtime: Annotated[bool, typer.Option(help="Pace the run to the wall clock.")] = False,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
@@ -170,9 +172,8 @@ def simulate(
     video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
                                                     "render with its defaults).", metavar="FILE")] = None,
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
-    live: Annotated[bool, typer.Option(help="Stream the run while it happens to a Foxglove WebSocket server on "
-                                            "127.0.0.1 (the topics of shc export bag).")] = False,
-    live_port: Annotated[int, typer.Option(help="Port of the --live server (0: any free port).")] = 8765,
+    live: LiveOption = False,
+    live_port: LivePortOption = 8765,
     realtime: Annotated[bool, typer.Option(help="Pace the simulation to the wall clock.")] = False,
 ) -> None:
     """Run the controller on the robot in physics (MuJoCo; PyBullet with --engine): terrains, servos, power, CoT."""
@@ -217,6 +218,8 @@ def run_hw(
     watchdog: Annotated[float, typer.Option(help="stdin: seconds without a line before the velocity goes to 0.")]
     = 0.5,
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
+    live: LiveOption = False,
+    live_port: LivePortOption = 8765,
 ) -> None:
     """Run the controller on the robot's servos (Dynamixel Protocol 2.0 or 1.0, Feetech STS), safely."""
     from shc_cli.commands.run_hw import run_hw as run
@@ -225,7 +228,7 @@ def run_hw(
     run(HardwareConfig(robot=robot, ports=port, baud=baud, gait=gait, on_fault=on_fault, on_stop=on_stop,
                        stop_state=stop_state, input_mode=input_mode, velocity=velocity, duration=duration,
                        commands=commands, out=out, dry_run=dry_run, profile_velocity=profile_velocity,
-                       watchdog=watchdog, overwrite=overwrite))
+                       watchdog=watchdog, overwrite=overwrite, live=live, live_port=live_port))
 
 
 @app.command()
@@ -246,9 +249,8 @@ def ros(
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-ros).")] = None,
     namespace: Annotated[str, typer.Option(help="Parameter tree read for the robot 'server'.")] = "/syropod",
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
-    live: Annotated[bool, typer.Option(help="Stream the run while it happens to a Foxglove WebSocket server on "
-                                            "127.0.0.1 (the topics of shc export bag).")] = False,
-    live_port: Annotated[int, typer.Option(help="Port of the --live server (0: any free port).")] = 8765,
+    live: LiveOption = False,
+    live_port: LivePortOption = 8765,
 ) -> None:
     """Run as OpenSHC's ROS 1 node: its topics, messages and parameters, driven by syropod_remote."""
     from shc_cli.commands.ros import run_ros

@@ -113,3 +113,49 @@ def test_a_foxglove_client_decodes_the_live_run_and_it_equals_the_log(tmp_path: 
     assert 40.0 < summary["rate_hz"] <= 101.0 and 40.0 < rate <= 101.0, (rate, summary["rate_hz"])
     frames = {t["child_frame_id"] for t in tfs[-1]["message"]["transforms"]}
     assert {"base_link", "AR_tip"} <= frames
+
+
+@pytest.mark.slow
+def test_a_live_run_hw_streams_the_servos_it_drives(tmp_path: Path) -> None:
+    """``run-hw --live`` on the emulated servo bus: the client decodes the measured ``/joint_states`` (the bus's
+    sync reads) and ``/desired_joint_states``; both equal the run's ``log.csv`` at their cycle."""
+    import gc
+
+    from shc_cli.hardware.emulator import BusEmulator
+    from shc_cli.spec.loading import load_robot
+
+    robot = load_robot("bullet").robot
+    run = tmp_path / "hw"
+    gc.collect()
+    gc.disable()  # a full collection of this process can stall the emulator's thread (tests/test_run_hw.py)
+    try:
+        with BusEmulator({s.id: "MX-106" for s in robot.hardware.servos.values()}) as bus:
+            messages = _live_run(["run-hw", "bullet", "--port", bus.port, "--velocity", "1,0,0", "--duration", "3",
+                                  "--stop-state", "ready", "--out", str(run)],
+                                 ["/desired_joint_states", "/joint_states", "/tf"])
+    finally:
+        gc.enable()
+    with (run / "log.csv").open(encoding="utf-8", newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    measured = [m for m in messages if m["topic"] == "/joint_states"]
+    desired = [m for m in messages if m["topic"] == "/desired_joint_states"]
+    assert len(measured) > 300 and abs(len(desired) - len(measured)) <= 10, (len(measured), len(desired))
+    names = [name.removesuffix("_joint") for name in measured[0]["message"]["name"]]
+    assert len(names) == len(robot.hardware.servos) == 30
+    for m in measured:
+        message = m["message"]
+        cycle = int(message["header"]["seq"])
+        logged = np.array([float(rows[cycle][name]) for name in names])
+        assert np.allclose(np.array(message["position"], dtype=float), logged, rtol=1e-5, atol=1e-6), cycle
+        torque = np.array([float(rows[cycle][f"{name}_torque"]) for name in names])  # run-hw logs current [A]
+        assert np.allclose(np.array(message["effort"], dtype=float), torque, rtol=1e-5, atol=1e-6), cycle
+    walking = [m for m in desired if rows[int(m["message"]["header"]["seq"])]["walk_state"] != "STOPPED"]
+    assert len(walking) > 300
+    for m in walking:  # walking, the goals sent are the controller's targets (the rate limit does not bite)
+        cycle = int(m["message"]["header"]["seq"])
+        logged = np.array([float(rows[cycle][f"{name}_cmd"]) for name in names])
+        assert np.allclose(np.array(m["message"]["position"], dtype=float), logged, rtol=1e-5, atol=1e-6), cycle
+    seqs = [int(m["message"]["header"]["seq"]) for m in measured]
+    assert seqs == list(range(seqs[0], seqs[0] + len(seqs)))  # every cycle from the client's first, in order
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["fault"] is None and summary["final_state"] == "READY"

@@ -39,6 +39,8 @@ if TYPE_CHECKING:
 
     from shc_cli.backends.base import InputSource
     from shc_cli.control.controller import Command
+    from shc_cli.hardware.bus import BusState
+    from shc_cli.live.foxglove_server import FoxgloveTransport
     from shc_cli.loop.run_loop import LoopResult
     from shc_cli.loop.summary import RunSummary
     from shc_cli.spec.gait import Gait
@@ -75,6 +77,9 @@ class HardwareConfig(BaseModel):
         profile_velocity: also write Profile Velocity.
         watchdog: stdin: seconds without a line before the velocity goes to 0 [s].
         overwrite: replace an existing run directory at ``out`` when the run finishes.
+        live: stream the run while it happens on a Foxglove WebSocket server on 127.0.0.1:``live_port`` (the
+            controller's topics and the measured ``/joint_states``, :mod:`shc_cli.domain.live`).
+        live_port: that server's port (0: any free port).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -95,6 +100,8 @@ class HardwareConfig(BaseModel):
     profile_velocity: bool = False
     watchdog: float = 0.5
     overwrite: bool = False
+    live: bool = False
+    live_port: int = 8765
 
     @field_validator("on_fault", "on_stop", mode="before")
     @classmethod
@@ -123,10 +130,11 @@ def run_hardware(config: HardwareConfig) -> RunResult:
     (``summary["fault"]`` names a servo fault)."""
     from shc_cli.backends.dynamixel import UNMEASURED, DynamixelBackend
     from shc_cli.control.controller import Controller
+    from shc_cli.domain.live import open_live
     from shc_cli.hardware.bus import HardwareError
     from shc_cli.hardware.buses import servo_bus
     from shc_cli.loop.run_inputs import load_inputs
-    from shc_cli.loop.run_loop import ControlledStop, RunLoop, StartUp
+    from shc_cli.loop.run_loop import ControlledStop, Observer, RunLoop, StartUp
     from shc_cli.loop.runlog import LogRecorder, RunDirectory, default_run_directory
     from shc_cli.loop.session import execute
     from shc_cli.loop.summary import RunSummary
@@ -139,6 +147,7 @@ def run_hardware(config: HardwareConfig) -> RunResult:
     bus = servo_bus(robot, c.ports, c.baud, c.profile_velocity)  # the servo models' protocol
     source: InputSource | None = None
     backend: DynamixelBackend | None = None
+    stream: FoxgloveTransport | None = None
     faulted = False
     try:
         source = _source(kind, argument, robot, gait, inputs.commands(), c.watchdog)
@@ -169,9 +178,13 @@ def run_hardware(config: HardwareConfig) -> RunResult:
         dt = robot.time_delta
         stop = STATES[c.stop_state]
         action = "holding" if c.on_fault == "hold" else "torque off"
+        observers: list[Observer[BusState]] = []
+        if c.live:
+            stream, outputs = open_live(c.live_port, robot, controller, sensors=False, joint_states=True)
+            observers.append(outputs)
         loop = RunLoop(controller, backend, source, LogRecorder(run, robot, backend),
                        StartUp.of(robot, hardware=True),
-                       ControlledStop(stop, STOP_TIMEOUT_S), flush_every=100,
+                       ControlledStop(stop, STOP_TIMEOUT_S), observers=observers, flush_every=100,
                        on_fault=lambda text: event(log, logging.ERROR, "fault_action", "fault: %s — %s", text, action))
 
         def release(result: LoopResult) -> None:
@@ -206,6 +219,8 @@ def run_hardware(config: HardwareConfig) -> RunResult:
         if source is not None:
             source.close()
         bus.close()
+        if stream is not None:
+            stream.close()
     return RunResult(path, summary)
 
 

@@ -1,5 +1,5 @@
-"""``--live`` and ``--realtime`` for any run of the one loop (plan, simulate, ``shc ros``): a Foxglove server with
-the observer that streams each cycle to it, and the wall-clock pacer."""
+"""``--live`` and ``--realtime`` for any run of the one loop (plan, simulate, run-hw, ``shc ros``): a Foxglove
+server with the observer that streams each cycle to it, and the wall-clock pacer."""
 
 from __future__ import annotations
 
@@ -16,10 +16,11 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 
-def open_live(port: int, robot: Robot, controller: Controller, sensors: bool) -> tuple[FoxgloveTransport, NodeOutputs]:
+def open_live(port: int, robot: Robot, controller: Controller, sensors: bool,
+              joint_states: bool = False) -> tuple[FoxgloveTransport, NodeOutputs]:
     """A Foxglove WebSocket server on 127.0.0.1:``port`` (0: any free port; its URL is logged as ``live: URL``) and
-    the observer that streams each cycle's outputs to it (and a simulated reading's sensors when ``sensors``).
-    The caller closes the server when the run ends."""
+    the observer that streams each cycle's outputs to it (and a simulated reading's sensors when ``sensors``, a
+    servo bus reading's measured joints when ``joint_states``). The caller closes the server when the run ends."""
     from shc_cli.live.foxglove_server import FoxgloveTransport
     from shc_cli.ros.messages import MessageTypes
     from shc_cli.ros.outputs import NodeOutputs
@@ -27,7 +28,7 @@ def open_live(port: int, robot: Robot, controller: Controller, sensors: bool) ->
     transport = FoxgloveTransport(MessageTypes(), port)
     log.warning("live: %s (Foxglove WebSocket)", transport.url)
     outputs = NodeOutputs(transport, robot, individual=False, combined=True, sensors=sensors, always=False,
-                          walkspace=lambda: controller.walkspace)
+                          walkspace=lambda: controller.walkspace, joint_states=joint_states)
     return transport, outputs
 
 

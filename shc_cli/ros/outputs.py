@@ -62,13 +62,15 @@ class NodeOutputs:
         always: publish also while nobody listens (default: without ``sensors``, as a ROS node does).
         sensors: also publish what a simulated robot's sensors read: ``/joint_states`` (measured), ``/imu/data``,
             ``/<LEG>/foot_force`` (WrenchStamped) and ``/shc/power`` (Float64, W), as ``shc export bag`` does.
+        joint_states: publish the measured ``/joint_states`` only (a robot on servos: its bus reading's positions
+            [rad], velocities [rad/s] and currents as efforts [A], as ``run-hw`` logs them); implied by ``sensors``.
         efforts: the last measured joint efforts ``(L, n)`` [N·m] or None (published as 0).
     """
 
     def __init__(self, node: Transport, robot: Robot, individual: bool = True, combined: bool = True,
                  walkspace: Callable[[], dict[int, float]] | None = None,
                  after: Callable[[], None] | None = None, sensors: bool = False,
-                 always: bool | None = None) -> None:
+                 always: bool | None = None, joint_states: bool = False) -> None:
         self.m = Messages(node.types.store)
         self.after = after
         self.efforts: np.ndarray | None = None
@@ -90,8 +92,10 @@ class NodeOutputs:
         self.walkspace_pub = node.advertise("/shc/walkspace", "std_msgs/Float32MultiArray")
         self.tf = node.advertise("/tf", "tf2_msgs/TFMessage")
         self.sensors = sensors
-        if sensors:
+        self.measured_joints = joint_states and not sensors
+        if sensors or joint_states:
             self.joint_states = node.advertise("/joint_states", "sensor_msgs/JointState")
+        if sensors:
             self.imu = node.advertise("/imu/data", "sensor_msgs/Imu")
             self.feet = [node.advertise(f"/{leg}/foot_force", "geometry_msgs/WrenchStamped") for leg in self.legs]
             self.foot_frames = [names[leg].foot for leg in self.legs]
@@ -113,7 +117,23 @@ class NodeOutputs:
         self.publish(out, cycle=cycle)
         if self.sensors and reading is not None:
             self.publish_sensors(reading)
+        elif self.measured_joints and reading is not None:
+            self.publish_bus_joints(reading, cycle)
         return None
+
+    def publish_bus_joints(self, reading: Any, cycle: int) -> None:
+        """A servo bus reading (:class:`~shc_cli.hardware.bus.BusState`) as ``/joint_states`` (its header's ``seq``
+        the cycle): positions [rad], velocities [rad/s], currents as efforts [A]."""
+        now = time.time()
+        sec, nanosec = int(now), round((now % 1.0) * 1e9) % 1_000_000_000
+        rows, cols = self.rows, self.cols
+        header = self.m.header(sec, nanosec, "")
+        header.seq = cycle
+        self.joint_states.publish(self.m.T["sensor_msgs/msg/JointState"](
+            header=header, name=self.joint_ids,
+            position=np.asarray(reading.positions)[rows, cols].astype(float),
+            velocity=np.asarray(reading.velocities)[rows, cols].astype(float),
+            effort=np.asarray(reading.currents)[rows, cols].astype(float) / 1000.0))
 
     def publish_sensors(self, reading: Any, stamp: float | None = None) -> None:
         """A simulated reading's measured joints, IMU, foot forces and electrical power."""
