@@ -22,13 +22,15 @@ from shc_cli.control.gait import StepCycle, step_cycle
 from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.manipulation import MAX_MANUAL_LEGS as MAX_MANUAL_LEGS
 from shc_cli.control.manipulation import LegManipulation
-from shc_cli.control.pose import Pose, PoseController, PoseReset
+from shc_cli.control.odometry import LegOdometry, euler_yaw_rate, level
+from shc_cli.control.pose import Pose, PoseController, PoseReset, euler_from_matrix
 from shc_cli.control.sensing import (
     ContactDetector,
     ImuPoser,
     PostureController,
     Sensors,
     inclination_pose,
+    quaternion_matrix,
     support_centroid_pose,
 )
 from shc_cli.control.startup import iterations, plan_direct_startup
@@ -105,6 +107,9 @@ class CycleOutput:
         walk_state: walk state after the cycle.
         ik_deviations: legs whose tip missed its target by more than 5 mm this cycle.
         ik_clamped: legs with a joint clamped to a limit this cycle.
+        odometry: the body's estimated planar pose (x [m], y [m], yaw [rad]) in the odom frame (the robot's start
+            pose: origin at its start position, x along its start heading), from leg odometry fused with the IMU
+            (:mod:`shc_cli.control.odometry`); an shc addition, OpenSHC has none.
     """
 
     joints: FloatArray
@@ -120,6 +125,7 @@ class CycleOutput:
     walk_state: WalkState
     ik_deviations: int = 0
     ik_clamped: int = 0
+    odometry: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 @dataclass
@@ -277,6 +283,10 @@ class Controller(LegManipulation):
         """Feet on the ground by the force thresholds (touchdown/lift-off), updated when sensors report forces."""
         self.parameters = {name: getattr(walker_spec, name).default for name in ADJUSTABLE_WALKER}
         self.parameters.update({name: getattr(admittance, name).default for name in ADJUSTABLE_ADMITTANCE})
+        self.odometry = LegOdometry(self.dt)
+        """Leg odometry (an shc addition): read by :attr:`CycleOutput.odometry`."""
+        self._stance_before = np.zeros(len(robot.legs), dtype=bool)
+        self._contact_before: np.ndarray | None = None
 
     # -- inputs ------------------------------------------------------------------------------------------------
 
@@ -327,10 +337,11 @@ class Controller(LegManipulation):
         """Advance one control period and return this cycle's outputs.
 
         ``sensors``: what the backend measured during the last period (IMU, joints, foot forces, body height);
-        only the feedback features (IMU and inclination posing, ATHENA posture control) read it.
+        the feedback features (IMU and inclination posing, ATHENA posture control) read it only when the robot
+        uses them (:attr:`uses_sensors`); the leg odometry reads it every cycle.
         """
         self.cycles += 1
-        self.sensors = sensors
+        self.sensors = sensors if self.uses_sensors else None
         self._receive(command or Command())
         if self.state != _UNKNOWN:
             self._update_pose()
@@ -339,7 +350,37 @@ class Controller(LegManipulation):
             self._transition_state()  # in RUNNING the running cycle handles it first (study §9.4)
         if self.state == _RUNNING:
             deviations, clamped = self._running()
-        return self._output(deviations, clamped)
+        out = self._output(deviations, clamped)
+        out.odometry = self._update_odometry(sensors, out.stance_progress >= 0.0)
+        return out
+
+    def _update_odometry(self, sensors: Sensors | None, stance: np.ndarray) -> tuple[float, float, float]:
+        """One cycle of leg odometry (:mod:`shc_cli.control.odometry`).
+
+        Measured joints (``sensors.joints``) are the feet at the start of this cycle: the motion since the last
+        reading is the previous cycle's, so the feet in stance then are used; commanded joints are this cycle's
+        targets, used with this cycle's stance. Foot contact, where measured, must hold at both readings. Roll and
+        pitch come from the IMU or else the commanded body pose; the gyro's yaw rate, where measured, is fused.
+        """
+        if sensors is not None and sensors.joints is not None:
+            feet = self.model.chains.tips(np.asarray(sensors.joints, dtype=float))
+            use = self._stance_before
+        else:
+            feet, use = self.model.tips, stance
+        self._stance_before = stance
+        if sensors is not None and sensors.foot_contact is not None:
+            contact = np.asarray(sensors.foot_contact, dtype=bool)
+            if self._contact_before is not None:
+                use = use & contact & self._contact_before
+            self._contact_before = contact
+        yaw_rate = None
+        if sensors is not None and sensors.orientation is not None:
+            roll, pitch, _ = euler_from_matrix(quaternion_matrix(sensors.orientation))
+            if sensors.angular_rate is not None:
+                yaw_rate = euler_yaw_rate(roll, pitch, np.asarray(sensors.angular_rate, dtype=float))
+        else:
+            roll, pitch, _ = self.poser.current.euler()
+        return self.odometry.update(level(feet, roll, pitch), use, yaw_rate)
 
     def _update_pose(self) -> None:
         """The body pose of this cycle, from the previous cycle's leg states (OpenSHC ``updateCurrentPose``)."""

@@ -234,7 +234,7 @@ class RunLoop(Generic[ReadingT]):
     def run(self) -> LoopResult:
         """Run until the input is over, a fault, an observer's reason or a stop request."""
         controller, backend, recorder = self.controller, self.backend, self.recorder
-        wanted = controller.uses_sensors
+        wanted = True  # the controller's leg odometry reads the sensors every cycle, whatever the robot uses
         observers, flush_every = self.observers, self.flush_every
         cycle = 0
         robot_state = walk_state = None

@@ -1,0 +1,131 @@
+"""Leg odometry: the body's planar pose (x, y, yaw) in the odom frame from the stance feet, fused with the IMU.
+
+Pure computation (no I/O, no clock), advanced once a control cycle by the controller
+(:meth:`shc_cli.control.controller.Controller.step`). The odom frame is the robot's start pose: origin at the body's
+start position, x along its start heading, z up.
+
+Method (an shc addition; OpenSHC has no odometry):
+
+1. **Feet in a levelled body frame.** Each leg's foot in base_link comes from forward kinematics of the measured
+   joints (``Sensors.joints``), or of the commanded joints on a robot without feedback (``plan``, a servo bus that
+   reads nothing back). The feet are turned by the body's roll and pitch — from the IMU orientation when there is
+   one, else the controller's own commanded body pose — so they are expressed in a frame that moves with the body
+   but stays level (its yaw is the body's).
+2. **Rigid fit of the stance feet.** A foot is used when it stood on the ground through the cycle: in the gait's
+   stance phase during it (a foot that has just landed counts from its first stance cycle, a foot that lifts off no
+   longer does) and, where the backend reports contact, touching at both ends. Feet in stance do not move in the world,
+   so their positions before (``p``) and after (``q``) one cycle satisfy ``p ≈ R(dψ)·q + d`` where ``(d, dψ)`` is
+   the body's motion over the cycle, in the body's previous level frame. The least-squares ``(d, dψ)`` is the 2-D
+   Kabsch/Umeyama solution: ``dψ = atan2(Σ q̃×p̃, Σ q̃·p̃)`` over the centred points, ``d = p̄ − R(dψ)·q̄``. With one
+   foot only ``d`` is found (``dψ`` = 0, or the gyro's); with none the pose holds (or turns with the gyro).
+3. **Yaw fusion (complementary filter).** With an IMU, the heading is ``ψ ← ψ + dψ_gyro + k·(ψ_legs − ψ −
+   dψ_gyro)`` with ``k = dt/τ``: the gyro's yaw increment (body rates turned into the Euler yaw rate
+   ``(ω_y sin φ + ω_z cos φ)/cos θ``) carries the fast part, the legs' integrated heading ``ψ_legs`` the slow part
+   (time constant ``τ`` = :data:`YAW_TIME_CONSTANT`), so neither a gyro bias nor a slipping foot drifts freely.
+4. **Composition.** ``x, y ← x, y + R(ψ)·d``: each increment is rotated by the heading it was walked at.
+
+Compared with CHAMP (``champ/odometry``): CHAMP averages each stance foot's displacement in the body frame and the
+change of each foot's bearing ``atan2(y, x)`` as the yaw increment, with no levelling and no gyro; the averaged
+bearing change is exact only for feet at equal distance from the body origin, and a turn leaks into the
+translation. The rigid fit above is exact for any rigid motion of any number of feet (tested), and uses every
+stance foot. NUbots' anchor-foot method (``SensorFilter``) fixes the world pose of a foot when it lands and reads
+the torso pose through that one foot's kinematics until the next foot lands (fed to a UKF/Mahony filter with the
+IMU): natural for a biped with one support foot, but on a hexapod with 3–5 feet in stance it throws away the other
+feet's information. Per-cycle increments from all stance feet also need no re-anchoring at a support change.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+YAW_TIME_CONSTANT = 2.0
+"""Time constant τ of the complementary yaw filter [s]: leg heading corrects the gyro-integrated heading over τ."""
+
+
+def euler_yaw_rate(roll: float, pitch: float, rate: np.ndarray) -> float:
+    """Rate of the Z-Y-X Euler yaw from the body angular rate ``rate`` (x, y, z) [rad/s] at ``roll``, ``pitch``
+    [rad]."""
+    return float((rate[1] * math.sin(roll) + rate[2] * math.cos(roll)) / max(math.cos(pitch), 1e-6))
+
+
+def level(feet: np.ndarray, roll: float, pitch: float) -> np.ndarray:
+    """Feet ``(L, 3)`` in base_link turned by ``Ry(pitch)·Rx(roll)`` into the body's level frame [m]."""
+    cr, sr, cp, sp = math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch)
+    rotation = np.array([[cp, sp * sr, sp * cr], [0.0, cr, -sr], [-sp, cp * sr, cp * cr]])
+    return np.asarray(np.asarray(feet, dtype=float) @ rotation.T)
+
+
+def rigid_increment(before: np.ndarray, after: np.ndarray) -> tuple[float, float, float]:
+    """Body motion ``(dx, dy, dψ)`` [m, m, rad] over one cycle, in the body's earlier level frame, from the
+    planar positions ``(K, 2)`` of the same K ≥ 1 world-fixed feet before and after (least squares, 2-D Kabsch)."""
+    p_mean, q_mean = before.mean(axis=0), after.mean(axis=0)
+    if len(before) > 1:
+        p, q = before - p_mean, after - q_mean
+        turn = math.atan2(float(np.sum(q[:, 0] * p[:, 1] - q[:, 1] * p[:, 0])),
+                          float(np.sum(q[:, 0] * p[:, 0] + q[:, 1] * p[:, 1])))
+    else:
+        turn = 0.0
+    c, s = math.cos(turn), math.sin(turn)
+    dx = float(p_mean[0] - (c * q_mean[0] - s * q_mean[1]))
+    dy = float(p_mean[1] - (s * q_mean[0] + c * q_mean[1]))
+    return dx, dy, turn
+
+
+class LegOdometry:
+    """The body's planar pose in the odom frame, from stance-foot increments and (optionally) the gyro.
+
+    Args:
+        time_delta: control period [s].
+        yaw_time_constant: τ of the complementary yaw filter [s] (used only with a gyro).
+    """
+
+    def __init__(self, time_delta: float, yaw_time_constant: float = YAW_TIME_CONSTANT) -> None:
+        self.dt = time_delta
+        self.gain = min(time_delta / yaw_time_constant, 1.0) if yaw_time_constant > 0.0 else 1.0
+        self.x = self.y = self.yaw = 0.0
+        self.leg_yaw = 0.0
+        """Heading from the legs alone [rad] (the slow input of the complementary filter)."""
+        self._feet: np.ndarray | None = None
+        self.feet_used = 0
+        """Stance feet in the last increment."""
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        """(x [m], y [m], yaw [rad]) in the odom frame."""
+        return (self.x, self.y, self.yaw)
+
+    def update(self, feet: np.ndarray, stance: np.ndarray, yaw_rate: float | None = None) -> tuple[float, float, float]:
+        """Advance one cycle.
+
+        Args:
+            feet: every foot in the body's level frame ``(L, 3)`` [m] (:func:`level`), now.
+            stance: feet that stood on the ground since the last update ``(L,)``.
+            yaw_rate: the gyro's Euler yaw rate over the cycle [rad/s] (:func:`euler_yaw_rate`), or None.
+
+        Returns:
+            the new pose (x, y, yaw).
+        """
+        feet = np.asarray(feet, dtype=float)
+        stance = np.asarray(stance, dtype=bool)
+        dx = dy = legs_turn = 0.0
+        used = 0
+        if self._feet is not None:
+            used = int(stance.sum())
+            if used:
+                dx, dy, legs_turn = rigid_increment(self._feet[stance, :2], feet[stance, :2])
+        self._feet, self.feet_used = feet, used
+        self.leg_yaw += legs_turn
+        heading = self.yaw
+        if yaw_rate is None:
+            self.yaw += legs_turn
+        else:
+            gyro = yaw_rate * self.dt
+            predicted = self.yaw + gyro
+            self.yaw = predicted + self.gain * (self.leg_yaw - predicted) if used > 1 else predicted
+        mid = heading  # the increment is in the level frame the body had at the start of the cycle
+        c, s = math.cos(mid), math.sin(mid)
+        self.x += c * dx - s * dy
+        self.y += s * dx + c * dy
+        return self.pose
