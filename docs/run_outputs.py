@@ -48,6 +48,10 @@ MEANING: dict[str, str] = {
     "pose_roll": "the controller's body pose: orientation [rad]",
     "pose_pitch": "",
     "pose_yaw": "",
+    "odom_x": "leg odometry: the body's estimated position in the odom frame (its start pose: origin at the start "
+              "position, x along the start heading) [m] — from the stance feet and the IMU, see docs/odometry.md",
+    "odom_y": "",
+    "odom_yaw": "leg odometry: the body's estimated heading in the odom frame [rad]",
     "robot_state": "the controller's robot state (UNKNOWN, PACKED, READY, RUNNING)",
     "walk_state": "the walker's state (STOPPED, STARTING, MOVING, STOPPING)",
     # log.csv

@@ -126,24 +126,16 @@ def plot_simulation(robot: Robot, series: dict[str, list[Any]], folder: Path, ga
     import matplotlib
 
     matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import numpy as np
 
     t = np.array(series["t"])
     position = np.array(series["position"])
-    figure, axes = plt.subplots(figsize=(6, 5), dpi=110)
-    axes.plot(position[:, 0], position[:, 1], lw=1.0)
-    axes.plot(position[0, 0], position[0, 1], "go", label="start")
-    axes.plot(position[-1, 0], position[-1, 1], "rs", label="end")
-    axes.set_aspect("equal", adjustable="datalim")
-    axes.set_xlabel("x [m]")
-    axes.set_ylabel("y [m]")
     title = run_title(robot, gait)
-    axes.set_title(f"{title}: body trajectory")
-    axes.legend(fontsize=8)
-    figure.tight_layout()
-    figure.savefig(folder / "trajectory.png")
-    plt.close(figure)
+    paths = {"ground truth": position[:, :2]}
+    if series.get("odometry") is not None and series.get("yaw") is not None:
+        paths["leg odometry"] = odometry_in_world(np.array(series["odometry"]), position[0, :2],
+                                                  float(np.array(series["yaw"])[0]))
+    plot_trajectory(paths, folder / "trajectory.png", f"{title}: body trajectory")
 
     running = np.array(series["running"], dtype=bool) if "running" in series else np.ones(len(t), dtype=bool)
     _power_plot(t, np.array(series["power"], dtype=float), running, robot.time_delta, f"{title}: total servo power",
@@ -153,6 +145,57 @@ def plot_simulation(robot: Robot, series: dict[str, list[Any]], folder: Path, ga
     startup = ~running if "running" in series else None
     _leg_bars(list(robot.legs), t, robot.time_delta, ~contact, f"{title}: gait diagram (measured foot contacts)",
               folder / "contacts.png", startup, off_label="foot off the ground")
+
+
+def odometry_in_world(odometry: Any, origin: Any, heading: float) -> Any:
+    """Odometry positions ``(N, 2)`` of poses ``(N, 3)`` in the odom frame, placed in the world at the body's start
+    position ``origin`` (x, y) [m] and heading [rad]."""
+    import numpy as np
+
+    c, s = math.cos(heading), math.sin(heading)
+    x, y = odometry[:, 0], odometry[:, 1]
+    return np.column_stack([origin[0] + c * x - s * y, origin[1] + s * x + c * y])
+
+
+TRAJECTORY_STYLES: dict[str, dict[str, Any]] = {
+    "ground truth": {"lw": 1.2, "color": "C0"},
+    "leg odometry": {"lw": 1.0, "ls": "--", "color": "C1"},
+}
+"""Line styles of :func:`plot_trajectory` by path name; other names get matplotlib's next colour."""
+
+
+def plot_trajectory(paths: dict[str, Any], path: Path, title: str,
+                    points: dict[str, Any] | None = None) -> Path:
+    """``trajectory.png``: a top view of planar paths in one frame — the ground truth, the leg odometry and any
+    other (a planned path) — each a ``(N, 2)`` array [m] by name, with the start (circle) and end (square) of
+    the first; ``points`` adds named sets of marked points ``(K, 2)`` (waypoints). Returns ``path``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    figure, axes = plt.subplots(figsize=(6, 5), dpi=110)
+    for name, xy in paths.items():
+        xy = np.asarray(xy, dtype=float)
+        if len(xy):
+            axes.plot(xy[:, 0], xy[:, 1], label=name, **TRAJECTORY_STYLES.get(name, {"lw": 1.0}))
+    first = np.asarray(next(iter(paths.values())), dtype=float) if paths else np.zeros((0, 2))
+    if len(first):
+        axes.plot(first[0, 0], first[0, 1], "go", label="start")
+        axes.plot(first[-1, 0], first[-1, 1], "rs", label="end")
+    for name, xy in (points or {}).items():
+        xy = np.asarray(xy, dtype=float)
+        axes.plot(xy[:, 0], xy[:, 1], "kx", ms=7, label=name)
+    axes.set_aspect("equal", adjustable="datalim")
+    axes.set_xlabel("x [m]")
+    axes.set_ylabel("y [m]")
+    axes.set_title(title, fontsize=10)
+    axes.grid(True, lw=0.3)
+    axes.legend(fontsize=8)
+    figure.tight_layout()
+    _save(figure, path)
+    return path
 
 
 def _power_plot(t: Any, power: Any, running: Any, dt: float, title: str, path: Path) -> None:
@@ -273,6 +316,8 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
       (ATHENA Fig. 10 style);
     * ``stability.png`` — static (CoM) and ZMP margins to the support polygon over time;
     * ``zmp_<run>.png`` — the ZMP (ATHENA eq. 32) and the centre of mass over the support polygons, top view;
+    * ``trajectory.png`` (``trajectory_<run>.png`` for several runs) — ground truth and leg odometry in the odom
+      frame of the window (:func:`plot_trajectory`), runs with both;
     * ``cot.png`` — cost of transport and speed vs step frequency, one line per robot / gait / velocity input
       (OpenSHC paper Fig. 14–16 style), when the runs differ in step frequency.
     """
@@ -349,6 +394,17 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
         written.append(_finish_time_plot(figure, axes, "margin to the support polygon [m]",
                                          folder / "stability.png", f"{_robots_and_gaits([r for r, _ in margined])}: "
                                          "static (CoM) and ZMP stability margins"))
+
+    for result in results:
+        found = result.get("_series", {}).get("tracks")
+        if found is None:
+            continue
+        name = "trajectory.png" if len(results) == 1 else f"trajectory_{_label(result)}.png"
+        drift = result.get("odometry_drift_percent")
+        note = f" (drift {drift:.2f} %)" if drift is not None else ""
+        written.append(plot_trajectory({"ground truth": found.truth[:, :2], "leg odometry": found.odometry[:, :2]},
+                                       folder / name, f"{_label(result)} ({_robots_and_gaits([result])}): "
+                                       f"odom frame{note}"))
 
     placed = [{**r, "terrain": r.get("terrain") or run.summary.terrain}
               for r, run in zip(results, runs, strict=True)]

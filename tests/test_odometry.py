@@ -132,3 +132,42 @@ def test_plan_odometry_follows_the_commanded_walk_and_measured_joints_give_the_s
     assert math.hypot(*commanded[-1][:2]) > 0.3  # it walked
     measured = _walk(900, (1.0, 0.0, 0.3), measured=True)
     assert np.allclose(np.array(measured[1:]), np.array(commanded[:-1]), atol=1e-9)
+
+
+def test_simulate_logs_odometry_and_analyze_measures_its_drift(tmp_path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """End to end on MuJoCo: a short turning walk logs ``odom_*``, its summary has the final odometry and true poses,
+    and ``shc analyze --json`` gives the drift measures, small on flat ground; ``--out`` draws trajectory.png."""
+    import json
+
+    from .test_cli import run
+
+    out = tmp_path / "walk"
+    code, _, err = run(["simulate", "--duration", "6", "--velocity", "1,0,0.3", "--out", str(out)], capsys,
+                       monkeypatch)
+    assert code == 0, err
+    header = (out / "log.csv").read_text().splitlines()[0].split(",")
+    assert {"odom_x", "odom_y", "odom_yaw"} <= set(header)
+    summary = json.loads((out / "summary.json").read_text())
+    odometry, truth = summary["odometry_pose"], summary["true_pose"]
+    assert math.hypot(truth[0], truth[1]) > 0.4 and truth[2] > 0.2  # it walked and turned
+    assert math.dist(odometry[:2], truth[:2]) < 0.05 and abs(odometry[2] - truth[2]) < 0.05
+    code, stdout, err = run(["analyze", str(out), "--json", "--out", str(tmp_path / "analysis")], capsys, monkeypatch)
+    assert code == 0, err
+    result = json.loads(stdout)
+    assert 0.0 <= result["odometry_drift_percent"] < 5.0 and 0.0 <= result["odometry_heading_error_deg"] < 3.0
+    assert (tmp_path / "analysis" / "trajectory.png").stat().st_size > 10_000
+
+
+def test_a_plan_run_has_odometry_columns_and_its_drift_is_small(tmp_path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    import json
+
+    from .test_cli import run
+
+    out = tmp_path / "plan"
+    code, _, err = run(["plan", "--duration", "4", "--velocity", "1,0,0.3", "--no-plots", "--out", str(out)], capsys,
+                       monkeypatch)
+    assert code == 0, err
+    assert "odom_yaw" in (out / "body.csv").read_text().splitlines()[0].split(",")
+    code, stdout, err = run(["analyze", str(out), "--json"], capsys, monkeypatch)
+    result = json.loads(stdout)
+    assert result["odometry_drift_percent"] < 0.5 and result["odometry_heading_error_deg"] < 0.2

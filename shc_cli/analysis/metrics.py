@@ -343,8 +343,13 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
             out["pitch_rate_median_rps"], out["pitch_rate_iqr_rps"] = _median_iqr(pitch)
             cycles.update(roll_rate=roll, pitch_rate=pitch)
         cycles["height"] = height
+    from shc_cli.analysis.odometry import odometry_errors, tracks
+
+    found = tracks(run, rows)
+    if found is not None:
+        out["odometry_drift_percent"], out["odometry_heading_error_deg"] = odometry_errors(found)
     out["_series"] = {"rows": rows, "margin": margins, "zmp": zmp, "zmp_margin": zmp_margin, "feet": feet,
-                      "com": com, "contact": contact, "cycles": cycles}
+                      "com": com, "contact": contact, "cycles": cycles, "tracks": found}
     return out
 
 

@@ -209,7 +209,7 @@ def run_hardware(config: HardwareConfig) -> RunResult:
                 "step_frequency_hz": controller.parameters["step_frequency"],
                 "step_period_cycles": controller.cycle.period, "duty_factor": controller.cycle.duty_factor,
                 "input": c.input_mode, "watchdog_trips": getattr(source, "watchdog_trips", 0),
-                "unmeasured": UNMEASURED,
+                "unmeasured": UNMEASURED, "odometry_pose": list(controller.odometry.pose),
             })
 
         path, summary, _ = execute(loop, run, summarise, after_loop=release)

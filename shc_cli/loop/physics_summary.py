@@ -126,6 +126,7 @@ class PhysicsRecord:
             "cot": cot,
             "max_tilt_rad": self.max_tilt,
             "fell": self.fell,
+            **final_poses(finished),
         })
 
     def plot_series(self, directory: Path) -> dict[str, Any]:
@@ -135,7 +136,21 @@ class PhysicsRecord:
 
         log = self.log if self.log is not None else read_tables(directory, self.robot)
         return {"t": log.t, "position": log.position, "power": log.power, "contact": log.contact,
-                "running": log.running}
+                "running": log.running, "yaw": log.rpy[:, 2], "odometry": log.odometry}
+
+
+def final_poses(log: RunLog | None) -> dict[str, list[float]]:
+    """The summary's ``odometry_pose`` and ``true_pose``: the last row's leg odometry and ground truth, the truth
+    relative to the first row's pose (the odom frame); empty when there is no row or no odometry column."""
+    if log is None or log.odometry is None or not len(log.t):
+        return {}
+    from shc_cli.analysis.odometry import has_ground_truth, relative
+
+    poses = {"odometry_pose": [float(v) for v in log.odometry[-1]]}
+    if has_ground_truth(log):
+        truth = relative(np.column_stack([log.position[:, :2], log.rpy[:, 2]]))
+        poses["true_pose"] = [float(v) for v in truth[-1]]
+    return poses
 
 
 def window_progress(log: RunLog, rows: np.ndarray, period: int, commanded_speed_mps: float) -> dict[str, Any]:

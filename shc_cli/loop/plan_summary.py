@@ -113,6 +113,9 @@ def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, secon
         "eq16_speed_mps": float(np.mean(predicted)) if predicted else None,
         "odometry_distance_m": distance,
         "odometry_yaw_rad": walker.odometry_yaw if walker else 0.0,
+        "odometry_pose": list(outputs[-1].odometry) if outputs else None,
+        "true_pose": ([*(float(v) for v in walker.odometry_position[:2]), walker.odometry_yaw] if walker
+                      else None),
         "ik_deviation_count": sum(o.ik_deviations for o in outputs),
         "ik_clamp_count": sum(o.ik_clamped for o in outputs),
         "wall_time_s": seconds,

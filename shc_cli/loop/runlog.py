@@ -11,11 +11,13 @@ Tables (one row per control cycle, ``cycle`` and time ``t`` [s] first):
   ``<LEG>_poser_{x,y,z}`` and ``<LEG>_model_{x,y,z}`` (base_link) [m], ``<LEG>_stance_progress``,
   ``<LEG>_swing_progress`` (−1 when not in that phase) — the format of the OpenSHC recordings;
 * ``body.csv`` — ``cmd_{vx,vy,wz}`` (input), ``vel_{x,y,wz}`` (desired velocity after limits) [m/s, rad/s],
-  ``pose_{x,y,z,roll,pitch,yaw}`` (body pose in the walk plane) [m, rad], ``robot_state``, ``walk_state``.
+  ``pose_{x,y,z,roll,pitch,yaw}`` (body pose in the walk plane) [m, rad], ``odom_{x,y,yaw}`` (leg odometry in the
+  odom frame) [m, rad], ``robot_state``, ``walk_state``.
 
 Runs on a measuring backend (``simulate``, ``run-hw``) have one table instead, ``log.csv``, whose columns
 :func:`log_columns` defines (the only place): commanded and measured joints, torques, servo power, foot forces
-and contacts, ground-truth body pose and twist, IMU, height, total power, input and desired velocity, states.
+and contacts, ground-truth body pose and twist, IMU, height, total power, input and desired velocity, leg odometry,
+states.
 The column set is the same for every measuring backend so every reader sees one schema; what a backend does
 not measure (a real robot: body pose, IMU, foot forces, power) is written as 0 and listed in the summary's
 ``unmeasured`` (see docs/architecture.md).
@@ -50,6 +52,9 @@ ReadingT = TypeVar("ReadingT")
 PARTIAL_SUFFIX = ".partial"
 ROBOT_FILE = "robot.toml"
 RUNS_FOLDER = Path("runs")
+ODOMETRY_COLUMNS = ["odom_x", "odom_y", "odom_yaw"]
+"""The controller's leg odometry (:attr:`~shc_cli.control.controller.CycleOutput.odometry`): the body's planar pose
+in the odom frame (the start pose) [m, m, rad], in ``log.csv`` and ``body.csv``."""
 """Where runs go without ``--out`` (relative to the working directory)."""
 
 
@@ -193,8 +198,8 @@ def log_columns(robot: Robot) -> list[str]:
     legs = list(robot.legs)
     return (joint_columns(robot, "_cmd") + joint_columns(robot) + joint_columns(robot, "_torque")
             + joint_columns(robot, "_power") + [f"{leg}_force" for leg in legs] + [f"{leg}_contact" for leg in legs]
-            + MEASURED_BODY_COLUMNS + ["cmd_vx", "cmd_vy", "cmd_wz", "vel_x", "vel_y", "vel_wz", "robot_state",
-                                       "walk_state"])
+            + MEASURED_BODY_COLUMNS + ["cmd_vx", "cmd_vy", "cmd_wz", "vel_x", "vel_y", "vel_wz", *ODOMETRY_COLUMNS,
+                                       "robot_state", "walk_state"])
 
 
 class LogRecorder(Generic[ReadingT]):
@@ -231,7 +236,7 @@ class LogRecorder(Generic[ReadingT]):
     def record(self, cycle: int, command: Command, out: CycleOutput, applied: np.ndarray,
                reading: ReadingT) -> None:
         values = np.concatenate((applied[self.rows, self.cols], *self.measured_values(self.measured(reading)),
-                                 command.velocity, out.velocity))
+                                 command.velocity, out.velocity, out.odometry))
         self.handle.write(self.row % (cycle, cycle * self.dt, *values.tolist(), out.robot_state.name,
                                       out.walk_state.name))
 
@@ -266,10 +271,10 @@ class RunWriter(RunDirectory):
         tips = [c for leg in legs for c in (*[t for t in tips if t.startswith(f"{leg}_")],
                                             f"{leg}_stance_progress", f"{leg}_swing_progress")]
         body = ["cmd_vx", "cmd_vy", "cmd_wz", "vel_x", "vel_y", "vel_wz", "pose_x", "pose_y", "pose_z",
-                "pose_roll", "pose_pitch", "pose_yaw", "robot_state", "walk_state"]
+                "pose_roll", "pose_pitch", "pose_yaw", *ODOMETRY_COLUMNS, "robot_state", "walk_state"]
         self._joints = self.table("joints.csv", joints, ["%.9g"] * len(joints))
         self._tips = self.table("tips.csv", tips, ["%.9g"] * len(tips))
-        self._body = self.table("body.csv", body, ["%.9g"] * 12 + ["%s", "%s"])
+        self._body = self.table("body.csv", body, ["%.9g"] * 12 + ["%.12g"] * 3 + ["%s", "%s"])
 
     def record(self, cycle: int, command: Command, out: CycleOutput, applied: np.ndarray,
                reading: object) -> None:
@@ -285,5 +290,5 @@ class RunWriter(RunDirectory):
         handle, row = self._tips
         handle.write(row % (cycle, time, *stages.ravel().tolist()))
         handle, row = self._body
-        handle.write(row % (cycle, time, *command, *out.velocity, *out.pose, out.robot_state.name,
+        handle.write(row % (cycle, time, *command, *out.velocity, *out.pose, *out.odometry, out.robot_state.name,
                             out.walk_state.name))

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from shc_cli.errors import OutputError, SpecError
-from shc_cli.loop.runlog import PARTIAL_SUFFIX, ROBOT_FILE
+from shc_cli.loop.runlog import ODOMETRY_COLUMNS, PARTIAL_SUFFIX, ROBOT_FILE
 from shc_cli.loop.summary import RunSummary
 from shc_cli.spec.robot import Robot
 
@@ -52,6 +52,8 @@ class RunLog:
         progress: stance and swing progress per leg ``(N, L, 2)`` (−1 outside the phase), or ``None``.
         tips: walker, poser and model tips per leg ``(N, L, 3, 3)`` [m] (plan), or ``None``.
         states: robot and walk state names ``(N, 2)``.
+        odometry: the controller's leg odometry (x, y [m], yaw [rad]) in the odom frame (the start pose) ``(N, 3)``,
+            or ``None`` (runs logged before it existed).
     """
 
     path: Path
@@ -78,6 +80,7 @@ class RunLog:
     progress: np.ndarray | None = None
     tips: np.ndarray | None = None
     states: np.ndarray | None = None
+    odometry: np.ndarray | None = None
     extra: dict[str, Any] = field(default_factory=dict)
 
     @property
@@ -265,6 +268,7 @@ def _simulate_run(path: Path, summary: RunSummary, robot: Robot) -> RunLog:
         imu=_stack(c, ["imu_qx", "imu_qy", "imu_qz", "imu_qw", "gyro_x", "gyro_y", "gyro_z", "acc_x", "acc_y",
                        "acc_z"]),
         states=np.column_stack([c["robot_state"], c["walk_state"]]),
+        odometry=_stack(c, ODOMETRY_COLUMNS) if "odom_x" in c else None,
     )
 
 
@@ -298,6 +302,7 @@ def _plan_run(path: Path, summary: RunSummary, robot: Robot) -> RunLog:
         command=_stack(body, ["cmd_vx", "cmd_vy", "cmd_wz"]), desired=desired, position=position, rpy=rpy,
         joints=planned, contact=contact, height=z, commanded=planned, progress=progress, tips=tip_stages,
         states=np.column_stack([body["robot_state"], body["walk_state"]]),
+        odometry=_stack(body, ODOMETRY_COLUMNS) if "odom_x" in body else None,
     )
 
 

@@ -103,6 +103,13 @@ class RunSummary(BaseModel):
     odometry_distance_m: NonNegativeFloat | None = Field(None, description="plan: distance of the walker's ideal "
                                                                            "odometry from the start [m].")
     odometry_yaw_rad: float | None = Field(None, description="plan: yaw of the walker's ideal odometry [rad].")
+    odometry_pose: list[float] | None = Field(None, description="plan, simulate, run-hw: the leg odometry's final "
+                                                                "pose (x [m], y [m], yaw [rad]) in the odom frame "
+                                                                "(the start pose).")
+    true_pose: list[float] | None = Field(None, description="plan, simulate: the final ground-truth pose (x [m], "
+                                                            "y [m], yaw [rad]) in the same odom frame (simulate: "
+                                                            "the engine's body pose relative to the first cycle's; "
+                                                            "plan: the ideal body path).")
     ik_deviation_count: NonNegativeInt | None = Field(None, description="plan: leg-cycles whose IK tip missed "
                                                                         "its target by more than 5 mm.")
     ik_clamp_count: NonNegativeInt | None = Field(None, description="plan: leg-cycles with a joint clamped to its "

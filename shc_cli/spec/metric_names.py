@@ -11,7 +11,7 @@ ANALYZE_KEYS = ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps
                 "height_median_m", "height_iqr_m", "pitch_rate_median_rps", "pitch_rate_iqr_rps",
                 "roll_rate_median_rps", "roll_rate_iqr_rps", "stability_margin_median_m", "stability_margin_min_m",
                 "zmp_margin_median_m", "zmp_margin_iqr_m", "zmp_centre_distance_median_m", "zmp_centre_distance_iqr_m",
-                "gait_cycles", "joint_limit_fraction")
+                "gait_cycles", "joint_limit_fraction", "odometry_drift_percent", "odometry_heading_error_deg")
 """The numeric ``shc analyze`` keys, in its output's order."""
 OBJECTIVE_KEYS = tuple(key for key in ANALYZE_KEYS if key != "gait_cycles")
 """The analyze keys a study's objectives and constraints may name (a count of cycles is no quality)."""
