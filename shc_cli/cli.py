@@ -175,6 +175,12 @@ def simulate(
     live: LiveOption = False,
     live_port: LivePortOption = 8765,
     realtime: Annotated[bool, typer.Option(help="Pace the simulation to the wall clock.")] = False,
+    input_mode: Annotated[str, typer.Option("--input", help="timeline (--velocity/--commands), commands:FILE, or "
+                                                            "driven by hand in real time (implies --realtime): stdin "
+                                                            "(JSON lines), keyboard, gamepad[:DEVICE].")]
+    = "timeline",
+    watchdog: Annotated[float, typer.Option(help="stdin: seconds without a line before the velocity goes to 0.")]
+    = 0.5,
 ) -> None:
     """Run the controller on the robot in physics (MuJoCo; PyBullet with --engine): terrains, servos, power, CoT."""
     from shc_cli.commands.run_outputs import check_outputs, finish_outputs
@@ -188,7 +194,7 @@ def simulate(
                                start=start, gui=gui, stand=stand, posture=posture, imu_posing=imu_posing,
                                inclination=inclination, admittance=admittance, fail_on_fall=fail_on_fall,
                                overwrite=overwrite, engine=engine, live=live, live_port=live_port,
-                               realtime=realtime)
+                               realtime=realtime, input_mode=input_mode, watchdog=watchdog)
     run_simulate(options, after=lambda run: finish_outputs(run, bag, video))
 
 

@@ -110,17 +110,18 @@ def test_stdin_parse_validates_before_applying() -> None:
 
 
 def test_a_gait_for_other_legs_is_refused_on_stdin(monkeypatch: pytest.MonkeyPatch) -> None:
-    """run-hw's stdin gait loader refuses a gait for another leg set (the line is ignored with a warning)."""
+    """The stdin gait loader of run-hw and simulate refuses a gait for another leg set (the line is ignored with a
+    warning)."""
     import sys
 
-    from shc_cli.domain.hardware import _source
+    from shc_cli.loop.input_choice import open_input
 
     monkeypatch.setattr(sys, "stdin", io.StringIO(""))
     from shc_cli.errors import SpecError
     from shc_cli.spec.loading import load_robot
 
     robot, gait = load_robot("bullet").robot, load_gait("tripod").gait
-    source = _source("stdin", "", robot, gait, [], 0.5)
+    source = open_input("stdin", robot, gait, [], 0.5)
     assert isinstance(source, StdinInput) and source.load_gait is not None
     with pytest.raises(SpecError, match="gait 'quad_wave' is for legs"):
         source.load_gait("quad_wave")

@@ -68,6 +68,10 @@ class SimulationConfig(BaseModel):
         live: stream the run while it happens on a Foxglove WebSocket server on 127.0.0.1 (``shc_cli.live``).
         live_port: that server's port (0: any free port).
         realtime: pace the run to the wall clock (one control period of real time per cycle).
+        input_mode: what drives the run after start-up: ``timeline`` (``velocity``/``commands``),
+            ``commands:FILE``, or a person: ``stdin``, ``keyboard``, ``gamepad[:DEVICE]`` (these imply ``realtime``:
+            :attr:`paced`; :mod:`shc_cli.loop.input_choice`).
+        watchdog: stdin: seconds without a line before the velocities go to zero [s].
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -99,6 +103,8 @@ class SimulationConfig(BaseModel):
     live: bool = False
     live_port: int = 8765
     realtime: bool = False
+    input_mode: str = "timeline"
+    watchdog: float = 0.5
 
     def __init__(self, **options: Any) -> None:
         unknown = [key for key in options if key not in type(self).model_fields]
@@ -125,6 +131,21 @@ class SimulationConfig(BaseModel):
     def replace(self, **changes: Any) -> SimulationConfig:
         """This config with some options changed (validated again)."""
         return type(self)(**{**self.model_dump(exclude_unset=True), **changes})
+
+    @field_validator("input_mode")
+    @classmethod
+    def _input(cls, value: str) -> str:
+        from shc_cli.loop.input_choice import check_input
+
+        return check_input(value)
+
+    @property
+    def paced(self) -> bool:
+        """Paced to the wall clock: ``realtime``, or an input a person drives (a hand-driven simulation faster than
+        real time could not be steered)."""
+        from shc_cli.loop.input_choice import is_live
+
+        return self.realtime or is_live(self.input_mode)
 
     @field_validator("velocity", mode="before")
     @classmethod
@@ -279,4 +300,6 @@ class SimulationOptions(TypedDict, total=False):
     live: bool
     live_port: int
     realtime: bool
+    input_mode: str
+    watchdog: float
     engine: EngineName

@@ -30,30 +30,24 @@ from typing import TYPE_CHECKING, Literal
 from pydantic import BaseModel, ConfigDict, ValidationInfo, field_validator
 
 from shc_cli.domain.result import RunResult
-from shc_cli.errors import Issue, SpecError, check_choice
+from shc_cli.errors import check_choice
 from shc_cli.events import NOTICE, event
+from shc_cli.loop.input_choice import check_input
 from shc_cli.loop.input_sources import STATES
 
 if TYPE_CHECKING:
-    from collections.abc import Sequence
 
     from shc_cli.backends.base import InputSource
-    from shc_cli.control.controller import Command
     from shc_cli.hardware.bus import BusState
     from shc_cli.live.foxglove_server import FoxgloveTransport
     from shc_cli.loop.run_loop import LoopResult
     from shc_cli.loop.summary import RunSummary
-    from shc_cli.spec.gait import Gait
-    from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
 
 STOP_TIMEOUT_S = 10.0
 """Longest controlled stop and shut-down after Ctrl-C, beyond the sequences' own time, before the torque goes off
 anyway [s]."""
-INPUTS = "timeline, commands:FILE, stdin, keyboard, gamepad or gamepad:DEVICE"
-_TAKES_ARGUMENT = {"timeline": False, "commands": True, "stdin": False, "keyboard": False, "gamepad": None}
-"""Input kind → whether it takes ``:ARGUMENT`` (None: optional)."""
 OnFault = Literal["hold", "torque-off"]
 
 
@@ -119,10 +113,7 @@ class HardwareConfig(BaseModel):
     @field_validator("input_mode")
     @classmethod
     def _input(cls, value: str) -> str:
-        kind, _, argument = value.partition(":")
-        if kind not in _TAKES_ARGUMENT or _TAKES_ARGUMENT[kind] not in (None, bool(argument)):
-            raise SpecError([Issue(None, None, "--input", f"'{value}' is not an input", f"use {INPUTS}")])
-        return value
+        return check_input(value)
 
 
 def run_hardware(config: HardwareConfig) -> RunResult:
@@ -133,6 +124,7 @@ def run_hardware(config: HardwareConfig) -> RunResult:
     from shc_cli.domain.live import open_live
     from shc_cli.hardware.bus import HardwareError
     from shc_cli.hardware.buses import servo_bus
+    from shc_cli.loop.input_choice import commands_file, open_input
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import ControlledStop, Observer, RunLoop, StartUp
     from shc_cli.loop.runlog import LogRecorder, RunDirectory, default_run_directory
@@ -140,9 +132,8 @@ def run_hardware(config: HardwareConfig) -> RunResult:
     from shc_cli.loop.summary import RunSummary
 
     c = config
-    kind, _, argument = c.input_mode.partition(":")
-    commands = Path(argument) if kind == "commands" else c.commands
-    inputs = load_inputs(c.robot, c.gait, c.velocity, c.duration, commands, default_s=20.0)
+    inputs = load_inputs(c.robot, c.gait, c.velocity, c.duration, commands_file(c.input_mode, c.commands),
+                         default_s=20.0)
     robot, gait = inputs.robot, inputs.gait
     bus = servo_bus(robot, c.ports, c.baud, c.profile_velocity)  # the servo models' protocol
     source: InputSource | None = None
@@ -150,7 +141,7 @@ def run_hardware(config: HardwareConfig) -> RunResult:
     stream: FoxgloveTransport | None = None
     faulted = False
     try:
-        source = _source(kind, argument, robot, gait, inputs.commands(), c.watchdog)
+        source = open_input(c.input_mode, robot, gait, inputs.commands(), c.watchdog)
         bus.open()
         problems = bus.check()
         if problems:
@@ -222,30 +213,3 @@ def run_hardware(config: HardwareConfig) -> RunResult:
         if stream is not None:
             stream.close()
     return RunResult(path, summary)
-
-
-def _source(kind: str, argument: str, robot: Robot, gait: Gait, commands: Sequence[Command],
-            watchdog: float) -> InputSource:
-    """The input source (keyboard and gamepad cycle through the bundled gaits that fit the robot's legs)."""
-    from shc_cli.loop.input_sources import GamepadInput, KeyboardInput, StdinInput, TimelineInput
-    from shc_cli.spec.loading import bundled, load_gait
-
-    def gait_of(name: str) -> Gait:
-        found = load_gait(name).gait
-        if set(found.offset_multiplier) != set(robot.legs):
-            legs = ", ".join(found.offset_multiplier)
-            raise SpecError([Issue(None, None, "gait", f"gait '{name}' is for legs {legs}",
-                                   f"use a gait for {', '.join(robot.legs)}")])
-        return found
-
-    if kind == "stdin":
-        return StdinInput(watchdog_s=watchdog, load_gait=gait_of)
-    if kind in ("keyboard", "gamepad"):
-        gaits = [g for g in (load_gait(name).gait for name in bundled("gaits"))
-                 if set(g.offset_multiplier) == set(robot.legs)]
-        source: KeyboardInput | GamepadInput = KeyboardInput(gaits) if kind == "keyboard" else GamepadInput(
-            argument or None, gaits)
-        names = [g.name for g in gaits]
-        source.gait_index = names.index(gait.name) if gait.name in names else 0  # the next gait is the one after
-        return source
-    return TimelineInput(commands)

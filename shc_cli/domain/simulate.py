@@ -45,7 +45,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     from shc_cli import __version__
     from shc_cli.backends.simulated import SimulatedBackend, open_world
     from shc_cli.control.controller import Controller
-    from shc_cli.loop.input_sources import TimelineInput
+    from shc_cli.loop.input_choice import commands_file, is_live, open_input
     from shc_cli.loop.physics_summary import PhysicsRecord
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import Observer, RunLoop, StartUp
@@ -54,51 +54,56 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
 
     o = config or SimulationConfig()
     check_display(o.gui)
-    inputs = load_inputs(o.robot, o.gait, o.velocity, o.duration, o.commands, default_s=20.0, walking=o.walking,
-                         robot_change=o.apply_switches)
+    inputs = load_inputs(o.robot, o.gait, o.velocity, o.duration, commands_file(o.input_mode, o.commands),
+                         default_s=20.0, walking=o.walking, robot_change=o.apply_switches)
+    by_hand = is_live(o.input_mode)
     robot = inputs.robot
     options = o.engine_options(robot)
     directory = o.out or default_run_directory("simulate")
-    with RunDirectory(directory, o.overwrite) as run:  # refuses an existing --out before the physics opens
-        world = open_world(robot, options)
-        with SimulatedBackend(robot, world) as backend:
-            controller = Controller(robot, inputs.gait, joints=backend.start(), pose_sets=inputs.pose_sets)
-            run.write_robot(robot)
-            record = PhysicsRecord(robot, backend, o.airborne)
-            counter = None if progress is None else _Progress(progress, inputs.cycles)
-            observers: list[Observer[Reading]] = [record] if counter is None else [record, counter]
-            live = open_live(o.live_port, robot, controller, sensors=True) if o.live else None
-            if live is not None:
-                observers.append(live[1])
-            clock = wall_clock(robot) if o.realtime else None
-            if clock is not None:
-                observers.append(clock)
-            loop = RunLoop(controller, backend, TimelineInput(inputs.commands()),
-                           LogRecorder(run, robot, backend),
-                           StartUp.of(robot),
-                           observers=observers, flush_every=200)
-
-            def summarise(_: LoopResult) -> RunSummary:  # from the finished log (run.partial)
-                import numpy as np
-
-                if counter is not None:
-                    counter.stop()
-                return record.summary(run.partial, o.scenario, controller.gait.name, controller).updated(
-                    seed=o.seed, terrain=str(world.terrain.spec), engine=world.name, engine_version=world.version,
-                    engine_warnings=world.warnings,
-                    versions={"shc": __version__, world.name: world.version, "numpy": np.__version__},
-                    **(clock.statistics() if clock is not None else {}))
-
-            def plot(folder: Path) -> None:
-                from shc_cli.plots import plot_simulation
-
-                plot_simulation(robot, record.plot_series(folder), folder, gait=controller.gait.name)
-
-            try:
-                path, summary, _ = execute(loop, run, summarise, plot if o.plots else None)
-            finally:
+    source = open_input(o.input_mode, robot, inputs.gait, inputs.commands(), o.watchdog)  # before anything opens
+    try:
+        with RunDirectory(directory, o.overwrite) as run:  # refuses an existing --out before the physics opens
+            world = open_world(robot, options)
+            with SimulatedBackend(robot, world) as backend:
+                controller = Controller(robot, inputs.gait, joints=backend.start(), pose_sets=inputs.pose_sets)
+                run.write_robot(robot)
+                record = PhysicsRecord(robot, backend, o.airborne)
+                counter = None if progress is None or by_hand else _Progress(progress, inputs.cycles)
+                observers: list[Observer[Reading]] = [record] if counter is None else [record, counter]
+                live = open_live(o.live_port, robot, controller, sensors=True) if o.live else None
                 if live is not None:
-                    live[0].close()
+                    observers.append(live[1])
+                clock = wall_clock(robot) if o.paced else None
+                if clock is not None:
+                    observers.append(clock)
+                loop = RunLoop(controller, backend, source, LogRecorder(run, robot, backend),
+                               StartUp.of(robot),
+                               observers=observers, flush_every=200)
+
+                def summarise(_: LoopResult) -> RunSummary:  # from the finished log (run.partial)
+                    import numpy as np
+
+                    if counter is not None:
+                        counter.stop()
+                    return record.summary(run.partial, o.scenario, controller.gait.name, controller).updated(
+                        seed=o.seed, terrain=str(world.terrain.spec), engine=world.name, engine_version=world.version,
+                        engine_warnings=world.warnings,
+                        versions={"shc": __version__, world.name: world.version, "numpy": np.__version__},
+                        **(clock.statistics() if clock is not None else {}),
+                        **({"input": o.input_mode} if by_hand else {}))
+
+                def plot(folder: Path) -> None:
+                    from shc_cli.plots import plot_simulation
+
+                    plot_simulation(robot, record.plot_series(folder), folder, gait=controller.gait.name)
+
+                try:
+                    path, summary, _ = execute(loop, run, summarise, plot if o.plots else None)
+                finally:
+                    if live is not None:
+                        live[0].close()
+    finally:
+        source.close()  # a keyboard's terminal leaves cbreak mode
     return RunResult(path, summary)
 
 

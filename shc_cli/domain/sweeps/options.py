@@ -19,7 +19,8 @@ from shc_cli.spec.source import Document
 from shc_cli.spec.study import Study
 from shc_cli.spec.sweep import DEFAULT_DURATION, STRIDE, Point, Sweep, is_option
 
-PER_RUN = frozenset({"commands", "out", "plots", "gui", "overwrite", "fail_on_fall", "live", "live_port", "realtime"})
+PER_RUN = frozenset({"commands", "out", "plots", "gui", "overwrite", "fail_on_fall", "live", "live_port", "realtime",
+                     "input_mode", "watchdog"})
 """Options of ``shc simulate`` a sweep or study cannot set."""
 OPTIONS = (*(key for key in SimulationConfig.model_fields if key not in PER_RUN), STRIDE)
 """The simulation options a sweep or study can set, in ``shc simulate``'s order."""
