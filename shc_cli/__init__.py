@@ -17,7 +17,7 @@ __version__ = "0.1.0"
 _EXPORTS = {
     "Run": "shc_cli.api", "SweepResult": "shc_cli.api", "analyze": "shc_cli.api", "load_gait": "shc_cli.api",
     "load_robot": "shc_cli.api", "open_run": "shc_cli.api", "plan": "shc_cli.api", "simulate": "shc_cli.api",
-    "sweep": "shc_cli.api", "optimize": "shc_cli.api", "StudyResult": "shc_cli.api",
+    "sweep": "shc_cli.api", "optimize": "shc_cli.api", "fit": "shc_cli.api", "StudyResult": "shc_cli.api",
     "SimulationConfig": "shc_cli.domain.config",
     "RunLog": "shc_cli.loop.runread", "RunSummary": "shc_cli.loop.summary",
     "Controller": "shc_cli.control.controller", "Command": "shc_cli.control.controller",
@@ -27,8 +27,8 @@ _EXPORTS = {
 """Public name → the module that defines it."""
 
 __all__ = ["Command", "Controller", "RobotState", "Run", "RunLog", "RunSummary", "ShcError", "SimulationConfig",
-           "SpecError", "StudyResult", "SweepResult", "__version__", "analyze", "load_gait", "load_robot", "open_run",
-           "optimize", "plan", "simulate", "sweep"]
+           "SpecError", "StudyResult", "SweepResult", "__version__", "analyze", "fit", "load_gait", "load_robot",
+           "open_run", "optimize", "plan", "simulate", "sweep"]
 
 if TYPE_CHECKING:
     from shc_cli.api import (
@@ -36,6 +36,7 @@ if TYPE_CHECKING:
         StudyResult,
         SweepResult,
         analyze,
+        fit,
         load_gait,
         load_robot,
         open_run,

@@ -13,10 +13,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from collections.abc import Callable
+    from collections.abc import Callable, Sequence
     from typing import Unpack
 
     from shc_cli.domain.config import SimulationConfig, SimulationOptions
+    from shc_cli.domain.fit.run import FitResult
     from shc_cli.domain.hardware import HardwareConfig
     from shc_cli.domain.optimize.loop import StudyReport
     from shc_cli.domain.result import RunResult
@@ -198,6 +199,25 @@ def optimize(file: Path | str, *, trials: int | None = None, workers: int | None
 
     report = run_optimize(Path(file), trials, workers, executor, scheduler, _path(out), resume, overwrite)
     return StudyResult(report.path, _table(report.path / "trials.csv"), _table(report.path / "pareto.csv"), report)
+
+
+def fit(runs: Sequence[Path | str] | Path | str, *, robot: str | Path = "bullet", params: str | list[str] | None = None,
+        engine: str = "mujoco", out: Path | str | None = None, scenario: str = "WG", by: str = "model",
+        max_evaluations: int = 30, seconds: float | None = None, plots: bool = True,
+        overwrite: bool = False) -> FitResult:
+    """``shc fit``: the robot's ``[servo]`` parameters fitted to run logs (``run-hw`` or ``simulate``) by replaying
+    their joint commands in the engine (:func:`shc_cli.domain.fit.run.fit`); returns the output directory and each
+    fit (:class:`~shc_cli.domain.fit.run.FitResult`: ``fits[0].values``, ``.solution.uncertainty``,
+    ``.solution.identifiable``). ``params``: ``[servo]`` names or short names (``"gain,coulomb"`` or a list);
+    ``scenario``: where a real robot's runs were recorded (SA, WA, SG, WG); ``by``: ``"model"`` or ``"joint"``."""
+    from shc_cli.domain.fit.run import FitConfig
+    from shc_cli.domain.fit.run import fit as run
+
+    paths = [Path(runs)] if isinstance(runs, (str, Path)) else [Path(r) for r in runs]
+    names = ",".join(params) if isinstance(params, list) else params
+    config = FitConfig(paths, str(robot), names, engine, _path(out), scenario.upper(), by,  # type: ignore[arg-type]
+                       max_evaluations, seconds, plots, overwrite)
+    return run(config)
 
 
 def _table(path: Path) -> list[dict[str, str]]:

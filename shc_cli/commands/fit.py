@@ -1,0 +1,33 @@
+"""``shc fit``: the robot's servo model fitted to run logs (:func:`shc_cli.api.fit`); prints each parameter and
+where the files went."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import typer
+
+
+def run_fit(runs: list[Path], robot: str, params: str | None, engine: str, out: Path | None, scenario: str, by: str,
+            max_evaluations: int, seconds: float | None, plots: bool, overwrite: bool) -> None:
+    """Fit and print: per group, one line per parameter (initial → fitted ± uncertainty, identifiable or not) and
+    the channels' RMS before → after."""
+    from shc_cli.api import fit
+
+    result = fit(runs, robot=robot, params=params, engine=engine, out=out, scenario=scenario, by=by,
+                 max_evaluations=max_evaluations, seconds=seconds, plots=plots, overwrite=overwrite)
+    for group in result.fits:
+        solution = group.solution
+        if group.group != "all":
+            typer.echo(f"[{group.group}]")
+        for index, parameter in enumerate(group.parameters):
+            sigma = float(solution.uncertainty[index])
+            spread = f"± {sigma:.3g}" if math.isfinite(sigma) else "± inf"
+            flag = "" if solution.identifiable[index] else "  (not identifiable from these runs)"
+            typer.echo(f"  {parameter.name:24s} {parameter.initial:9.4g} → {solution.x[index]:9.4g} {spread}{flag}")
+        errors = ", ".join(f"{name} {group.before[name]:.3g} → {group.after[name]:.3g}" for name in group.after)
+        typer.echo(f"  RMS error: {errors}")
+    first = result.fits[0]
+    typer.echo(f"{len(runs)} run{'s' if len(runs) != 1 else ''}, {first.solution.replays} replays, "
+               f"{result.elapsed_s:.1f} s → {result.path / 'robot.toml' if by == 'model' else result.path}")

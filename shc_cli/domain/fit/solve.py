@@ -1,0 +1,242 @@
+"""The fit proper: weighted residuals of every recording, a bounded least squares over the parameters and the
+uncertainty of each from the Jacobian at the solution.
+
+**Residuals.** Per recording and channel — joint positions [rad], joint speeds [rad/s], motor currents [A] (a bus)
+or output torques [N·m] (a simulated run), and total supply power [W] where it was measured — the simulated minus
+the measured values, divided by the channel's RMS over the measured data and by √(its sample count), so each channel
+weighs the same whatever its unit and length.
+
+**Solver.** :func:`scipy.optimize.least_squares` (trust-region reflective, bounds) from the robot's values, with
+this module's forward-difference Jacobian: a step of :data:`STEP` × the parameter's typical size; a parameter
+that changes the motion needs one replay per step, the others (:data:`~shc_cli.domain.fit.params.ELECTRICAL_ONLY`)
+only the electrical model on the cached replay.
+
+**Uncertainty.** ``cov = s²·(JᵀJ)⁻¹`` with ``s² = Σr²/(m − n)`` (m residuals, n parameters), through the SVD of
+the Jacobian in units of each parameter's typical size; a singular value below :data:`SINGULAR` × the largest is a
+direction the data do not see, and every parameter with a share in it gets an infinite uncertainty. The residuals of
+successive cycles are correlated (model error, not white noise), so ``s²/m`` underestimates the variance: the
+uncertainty is multiplied by √(:data:`CORRELATION_CYCLES`), the number of control cycles over which a residual stays
+correlated. A parameter is **identifiable** when its uncertainty is below :data:`IDENTIFIABLE` of its value (of its
+typical size when the value is smaller).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from shc_cli.domain.fit.params import Parameter
+from shc_cli.domain.fit.recording import Recording
+from shc_cli.domain.fit.rollout import Trace, replay
+
+if TYPE_CHECKING:
+    from shc_cli.backends.engine_registry import EngineName
+    from shc_cli.spec.robot import Servo
+
+log = logging.getLogger(__name__)
+
+STEP = 0.01
+"""Forward-difference step [share of the parameter's typical size]."""
+SINGULAR = 1e-6
+"""Relative singular value below which a direction counts as unseen."""
+CORRELATION_CYCLES = 25.0
+"""Control cycles over which model error stays correlated (the uncertainty's inflation is its square root)."""
+IDENTIFIABLE = 0.05
+"""Relative uncertainty below which a parameter counts as identifiable."""
+CHANNELS = ("position", "velocity", "current", "torque", "power")
+
+
+@dataclass
+class Simulated:
+    """One recording's replay with one parameter set, its electrical model applied.
+
+    Attributes:
+        position, velocity: ``(N, J)`` [rad, rad/s].
+        current: motor current ``(N, J)`` [A].
+        torque: output torque ``(N, J)`` [N·m].
+        power: total supply power ``(N,)`` [W].
+    """
+
+    position: np.ndarray
+    velocity: np.ndarray
+    current: np.ndarray
+    torque: np.ndarray
+    power: np.ndarray
+
+    def channel(self, name: str) -> np.ndarray:
+        return np.asarray(getattr(self, name))
+
+
+def electrical(trace: Trace, servo: Servo, dt: float) -> Simulated:
+    """``trace`` through ``servo``'s electrical model."""
+    from shc_cli.backends.servo import ServoModel
+
+    speed = trace.speed(dt)
+    state = ServoModel(servo).electrical(trace.torque, speed)
+    return Simulated(trace.position, speed, state.current, trace.torque, state.power.sum(axis=1))
+
+
+def measured_channels(recording: Recording) -> dict[str, np.ndarray]:
+    """The recording's measured channels by name (those it has)."""
+    out = {"position": recording.position, "velocity": recording.velocity}
+    for name in ("current", "torque", "power"):
+        value = getattr(recording, name)
+        if value is not None:
+            out[name] = value
+    return out
+
+
+@dataclass
+class Problem:
+    """The least-squares problem of a fit.
+
+    Args:
+        recordings: the runs.
+        base: the robot's servo (the fields not fitted keep its values).
+        parameters: the fitted parameters.
+        engine: the physics engine of the replays.
+        joints: the servo indices whose residuals count (``None``: every joint).
+    """
+
+    recordings: list[Recording]
+    base: Servo
+    parameters: list[Parameter]
+    engine: EngineName = "mujoco"
+    joints: np.ndarray | None = None
+    replays: int = 0
+    _cache: dict[tuple[float, ...], list[Trace]] = field(default_factory=dict)
+    _scales: dict[tuple[int, str], float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        for index, recording in enumerate(self.recordings):
+            for name, values in measured_channels(recording).items():
+                chosen = values if values.ndim == 1 or self.joints is None else values[:, self.joints]
+                rms = float(np.sqrt(np.mean(np.square(chosen))))
+                self._scales[(index, name)] = max(rms, 1e-9) * np.sqrt(chosen.size)
+
+    def servo(self, x: np.ndarray) -> Servo:
+        """The servo with the parameters set to ``x``."""
+        return self.base.model_copy(update={p.name: float(v) for p, v in zip(self.parameters, x, strict=True)})
+
+    def traces(self, x: np.ndarray) -> list[Trace]:
+        """The replays of every recording at ``x`` (cached by the values that change the motion)."""
+        key = tuple(float(v) for p, v in zip(self.parameters, x, strict=True) if p.moves)
+        cached = self._cache.get(key)
+        if cached is None:
+            servo = self.servo(x)
+            cached = [replay(recording, servo, self.engine) for recording in self.recordings]
+            self.replays += 1
+            if len(self._cache) > 8:
+                self._cache.pop(next(iter(self._cache)))
+            self._cache[key] = cached
+        return cached
+
+    def simulated(self, x: np.ndarray) -> list[Simulated]:
+        servo = self.servo(x)
+        return [electrical(trace, servo, recording.dt)
+                for trace, recording in zip(self.traces(x), self.recordings, strict=True)]
+
+    def residuals(self, x: np.ndarray) -> np.ndarray:
+        """Every weighted residual at ``x`` (module docstring)."""
+        parts = []
+        for index, (recording, sim) in enumerate(zip(self.recordings, self.simulated(x), strict=True)):
+            for name, values in measured_channels(recording).items():
+                difference = sim.channel(name) - values
+                if difference.ndim == 2 and self.joints is not None:
+                    difference = difference[:, self.joints]
+                parts.append(difference.ravel() / self._scales[(index, name)])
+        return np.concatenate(parts)
+
+    def channel_errors(self, x: np.ndarray) -> dict[str, float]:
+        """RMS of each channel's residual over every recording, in the channel's unit (``fit.json``)."""
+        sums: dict[str, list[float]] = {}
+        for recording, sim in zip(self.recordings, self.simulated(x), strict=True):
+            for name, values in measured_channels(recording).items():
+                difference = sim.channel(name) - values
+                if difference.ndim == 2 and self.joints is not None:
+                    difference = difference[:, self.joints]
+                sums.setdefault(name, []).extend(np.square(difference).ravel().tolist())
+        return {name: float(np.sqrt(np.mean(values))) for name, values in sums.items()}
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        """Forward differences of :meth:`residuals` (steps of :data:`STEP` × typical size, turned back at an upper
+        bound)."""
+        base = self.residuals(x)
+        columns = []
+        for j, p in enumerate(self.parameters):
+            step = STEP * p.scale
+            if x[j] + step > p.upper:
+                step = -step
+            moved = x.copy()
+            moved[j] += step
+            columns.append((self.residuals(moved) - base) / step)
+        return np.column_stack(columns)
+
+
+@dataclass(frozen=True)
+class Solution:
+    """What the solver found.
+
+    Attributes:
+        x: the fitted values.
+        uncertainty: one standard deviation of each (``inf``: not seen by the data).
+        identifiable: each parameter's flag (module docstring).
+        cost_before, cost_after: half the sum of squared weighted residuals at the start and the end.
+        iterations: solver evaluations of the residuals.
+        replays: engine replays of every recording.
+        singular_values: of the Jacobian in typical-size units, largest first.
+    """
+
+    x: np.ndarray
+    uncertainty: np.ndarray
+    identifiable: np.ndarray
+    cost_before: float
+    cost_after: float
+    iterations: int
+    replays: int
+    singular_values: np.ndarray
+
+
+def solve(problem: Problem, max_evaluations: int = 30) -> Solution:
+    """Bounded least squares from the parameters' initial values; uncertainties at the solution."""
+    from scipy.optimize import least_squares
+
+    parameters = problem.parameters
+    x0 = np.array([p.initial for p in parameters])
+    lower = np.array([p.lower for p in parameters])
+    upper = np.array([p.upper for p in parameters])
+    x0 = np.clip(x0, lower, upper)
+    scale = np.array([p.scale for p in parameters])
+    start = problem.residuals(x0)
+    result = least_squares(problem.residuals, x0, jac=lambda x: problem.jacobian(x), bounds=(lower, upper),
+                           x_scale=scale, method="trf", max_nfev=max_evaluations, xtol=1e-4, ftol=1e-6)
+    x = np.asarray(result.x, dtype=float)
+    residual = problem.residuals(x)
+    jacobian = problem.jacobian(x)
+    sigma, singular = uncertainty(residual, jacobian, scale)
+    reference = np.maximum(np.abs(x), scale * IDENTIFIABLE)
+    identifiable = np.isfinite(sigma) & (sigma <= IDENTIFIABLE * reference)
+    log.info("fit: %d evaluations, %d replays, cost %.4g → %.4g", result.nfev, problem.replays,
+             0.5 * float(start @ start), 0.5 * float(residual @ residual))
+    return Solution(x, sigma, identifiable, 0.5 * float(start @ start), 0.5 * float(residual @ residual),
+                    int(result.nfev), problem.replays, singular)
+
+
+def uncertainty(residual: np.ndarray, jacobian: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One standard deviation of each parameter and the singular values (module docstring)."""
+    m, n = jacobian.shape
+    s2 = float(residual @ residual) / max(m - n, 1) * CORRELATION_CYCLES
+    scaled = jacobian * scale  # columns per typical size
+    _, singular, vt = np.linalg.svd(scaled, full_matrices=False)
+    seen = singular > SINGULAR * (singular[0] if len(singular) else 1.0)
+    sigma = np.zeros(n)
+    for k in range(n):
+        share = vt[:, k]
+        if np.any(~seen & (np.abs(share) > 1e-6)):
+            sigma[k] = np.inf
+        else:
+            sigma[k] = np.sqrt(s2 * np.sum((share[seen] / singular[seen]) ** 2)) * scale[k]
+    return sigma, singular
