@@ -99,7 +99,7 @@ def plot_fit(recording: Recording, before: Simulated, after: Simulated, names: l
             axes[j // columns][j % columns].axis("off")
         axes[0][0].legend(fontsize=6)
         figure.suptitle(f"{recording.path.name}: {channel} [{UNITS[channel]}], measured and simulated", fontsize=9)
-        figure.tight_layout()
+        figure.subplots_adjust(left=0.05, right=0.99, bottom=0.04, top=0.92, wspace=0.25, hspace=0.45)
         path = folder / f"{stem}_{channel}.png"
         figure.savefig(path)
         plt.close(figure)

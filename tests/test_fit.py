@@ -1,0 +1,141 @@
+"""``shc fit``: servo parameters recovered from bus-like logs of a simulated robot with known (perturbed) servo
+values, non-identifiable parameters reported, a held-out run's power predicted, and bad input refused.
+
+The logs: ``shc simulate`` of Bullet whose ``[servo]`` values are the nominal ones changed by 30–40 %, rewritten as
+a servo bus logs them (:func:`shc_cli.domain.fit.synthetic.bus_log`: positions in whole ticks, currents in 2.69 mA
+steps, both with noise). Short runs and few parameters keep it fast; benchmarks/fit_servo.py is the full case.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from .test_cli import run
+
+NOMINAL = """extends = "bullet"
+[start_up]
+time_to_start = 1.0   # a short start-up keeps the runs short
+"""
+TRUTH = {"position_p_gain": 850.0 * 1.4, "coulomb_friction": 0.73 * 0.6, "holding_ratio": 0.55 * 1.4,
+         "idle_power": 0.96 * 0.65}
+"""The simulated robot's servo: Bullet's nominal values changed by 30–40 %."""
+
+
+@pytest.fixture(scope="module")
+def logs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """Bus logs of the perturbed robot: a walk in the air (fitted) and a stance on the ground (held out), each with
+    and without a supply power meter; the nominal robot file."""
+    from shc_cli.api import simulate
+    from shc_cli.domain.fit.synthetic import bus_log
+
+    root = tmp_path_factory.mktemp("fit")
+    (root / "nominal.toml").write_text(NOMINAL, encoding="utf-8")
+    servo = "\n".join(f"{k} = {v!r}" for k, v in TRUTH.items())
+    (root / "truth.toml").write_text(f'extends = "nominal.toml"\n[servo]\n{servo}\n', encoding="utf-8")
+    out = {"robot": root / "nominal.toml"}
+    for scenario, seconds in (("WA", 1.5), ("SG", 1.0)):
+        simulated = simulate(root / "truth.toml", scenario=scenario, duration=seconds, plots=False,
+                             out=root / f"sim_{scenario}").path
+        out[scenario] = bus_log(simulated, root / f"bus_{scenario}", seed=1)
+        out[f"{scenario}_no_power"] = bus_log(simulated, root / f"bus_{scenario}_no_power", seed=2, power=False)
+    return out
+
+
+def test_fit_recovers_the_perturbed_servo_and_predicts_held_out_power(logs: dict[str, Path], tmp_path: Path,
+                                                                       cli: Cli) -> None:
+    from shc_cli.api import fit, load_robot
+    from shc_cli.domain.fit.recording import load_recording
+    from shc_cli.domain.fit.rollout import replay
+    from shc_cli.domain.fit.solve import electrical
+
+    result = fit([logs["WA"]], robot=logs["robot"], params="gain,coulomb,holding,idle", out=tmp_path / "fit",
+                 plots=False)
+    data = json.loads((tmp_path / "fit" / "fit.json").read_text(encoding="utf-8"))
+    assert set(data) == {"params", "residuals"}
+    assert set(data["params"]) == set(TRUTH)
+    for name, entry in data["params"].items():
+        assert set(entry) == {"value", "initial", "lower", "upper", "uncertainty", "identifiable"}
+        assert entry["lower"] <= entry["value"] <= entry["upper"]
+        if entry["identifiable"]:
+            assert entry["value"] == pytest.approx(TRUTH[name], rel=0.10), name
+    assert data["params"]["position_p_gain"]["identifiable"] and data["params"]["coulomb_friction"]["identifiable"]
+    assert data["residuals"]["after"]["current"] < 0.5 * data["residuals"]["before"]["current"]
+    # the override extends the robot and validates; it holds the fitted values
+    code, _, err = run(["validate", str(tmp_path / "fit" / "robot.toml")], *cli)
+    assert code == 0, err
+    fitted = load_robot(tmp_path / "fit" / "robot.toml").servo
+    assert fitted.position_p_gain == pytest.approx(result.fits[0].values["position_p_gain"], rel=1e-4)
+    # a held-out run (standing on the ground): its mean power, replayed with the fitted servo
+    held = load_recording(logs["SG"], load_robot(logs["robot"]))
+    assert held.power is not None
+    predicted = electrical(replay(held, fitted), fitted, held.dt).power.mean()
+    nominal = load_robot(logs["robot"]).servo
+    before = electrical(replay(held, nominal), nominal, held.dt).power.mean()
+    assert predicted == pytest.approx(held.power.mean(), rel=0.05)
+    assert abs(before / held.power.mean() - 1.0) > 0.05  # the nominal servo did not already predict it
+
+
+def test_a_parameter_the_logs_do_not_see_is_reported_as_such(logs: dict[str, Path], tmp_path: Path) -> None:
+    """Without a supply meter nothing in a bus log depends on the idle power: infinite uncertainty, not
+    identifiable; the Coulomb friction (currents) still is."""
+    from shc_cli.api import fit
+
+    fit([logs["WA_no_power"]], robot=logs["robot"], params="coulomb,idle", out=tmp_path / "fit", plots=True)
+    data = json.loads((tmp_path / "fit" / "fit.json").read_text(encoding="utf-8"))
+    idle, coulomb = data["params"]["idle_power"], data["params"]["coulomb_friction"]
+    assert idle["identifiable"] is False and idle["uncertainty"] is None and idle["value"] == idle["initial"]
+    assert coulomb["identifiable"] and coulomb["value"] == pytest.approx(TRUTH["coulomb_friction"], rel=0.10)
+    assert "power" not in data["residuals"]["after"]
+    names = sorted(p.name for p in (tmp_path / "fit").glob("*.png"))
+    assert names == ["01_bus_WA_no_power_current.png", "01_bus_WA_no_power_position.png",
+                     "01_bus_WA_no_power_power.png"]
+
+
+Cli = tuple[pytest.CaptureFixture[str], pytest.MonkeyPatch]
+
+
+@pytest.fixture
+def cli(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Cli:
+    """What :func:`tests.test_cli.run` needs."""
+    return capsys, monkeypatch
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--params", "gain,colomb"], "'colomb' is not a fittable [servo] parameter"),
+    (["--robot", "quadruped"], "differs from 'quadruped'"),
+    (["--engine", "bullet3"], "bullet3"),
+])
+def test_bad_input_is_one_line_and_exit_2(logs: dict[str, Path], tmp_path: Path, argv: list[str], message: str,
+                                          cli: Cli) -> None:
+    argv = ["fit", str(logs["WA"]), "--robot", str(logs["robot"]), "--out", str(tmp_path / "fit"), *argv]
+    code, out, err = run(argv, *cli)
+    assert code == 2, (out, err)
+    assert message in err and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "fit").exists()  # nothing half-written
+
+
+def test_a_run_without_measured_joints_is_refused(tmp_path: Path, cli: Cli) -> None:
+    (tmp_path / "plan").mkdir()
+    plan = ["plan", "bullet", "--duration", "0.2", "--no-plots", "--out", str(tmp_path / "plan" / "p")]
+    code, _, err = run(plan, *cli)
+    assert code == 0, err
+    code, _, err = run(["fit", str(tmp_path / "plan" / "p"), "--out", str(tmp_path / "fit")], *cli)
+    assert code == 2 and "has no measured joints" in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_a_bus_log_is_what_a_bus_reads(logs: dict[str, Path]) -> None:
+    """Positions in whole ticks, currents in whole 2.69 mA steps, the unmeasured columns listed."""
+    from shc_cli.api import load_robot
+    from shc_cli.domain.fit.recording import load_recording
+
+    recording = load_recording(logs["WA"], load_robot(logs["robot"]))
+    assert recording.current is not None and recording.torque is None and recording.power is not None
+    ticks = recording.position / (2 * np.pi / 4096)
+    assert np.allclose(ticks, np.round(ticks), atol=2e-3)
+    steps = recording.current / 0.00269
+    assert np.allclose(steps, np.round(steps), atol=2e-3)
+    assert load_recording(logs["WA_no_power"], load_robot(logs["robot"])).power is None
