@@ -5,6 +5,7 @@ reference), validates and plans."""
 from __future__ import annotations
 
 import math
+import re
 import tomllib
 from pathlib import Path
 
@@ -25,6 +26,8 @@ DESCRIPTIONS = {
     "pxmark4": (DATA / "pxmark4_interbotix.urdf", 6),
     "hexapod_olli_io": (DATA / "hexapod_olli_io.urdf", 6),
     "anymal_b": (DATA / "anymal_b_anybotics.urdf", 4),
+    "octapod": (DATA / "octapod_spider_sai_raghava.urdf", 8),
+    "solo12": (DATA / "solo12_odri.urdf", 4),
 }
 
 
@@ -83,7 +86,9 @@ def test_third_party_descriptions_import_without_options_with_their_kinematics(
     assert len(servos) == sum(len(data["templates"][leg.get("template", "leg")]["joints"]) for leg in
                               data["legs"].values())
     snapped = read_source(path, {}, 0.001 if "snapped" in out else 0.0).snapped_text
-    assert _fk_worst(snapped, path, robot_file) < 1e-6
+    turned = re.search(r"turned (\S+) deg about z", robot_file.read_text())  # the header: the octapod's 22.5
+    yaw = math.radians(float(turned.group(1))) if turned else 0.0
+    assert _fk_worst(snapped, path, robot_file, yaw=yaw) < 1e-6
     if "snapped" in out:  # PhantomX: base z and coxa axes 8.9e-5 rad apart; the snap moves tips < 0.4 mrad × 0.3 m
         assert _fk_worst(path.read_text(), path, robot_file, legs_text=snapped) < 1.2e-4
 
@@ -100,6 +105,66 @@ def test_third_party_descriptions_validate_and_plan(name: str, tmp_path: Path, c
     assert code == 0, err
     speed = float(out.split("displacement speed ")[1].split()[0])
     assert speed > 0.01, out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(DESCRIPTIONS))
+def test_third_party_descriptions_walk_10_s_in_simulation(name: str, tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                          monkeypatch) -> None:
+    """Each imported robot walks 10 s in MuJoCo at full throttle without falling, at least half as far as asked
+    (tests/data/robots/README.md: what each walks with its stated efforts)."""
+    import json
+
+    code, _, err, robot_file = _import(DESCRIPTIONS[name][0], tmp_path, capsys, monkeypatch)
+    assert code == 0, err
+    code, _, err = run(["simulate", str(robot_file), "--duration", "10", "--no-plots", "--out",
+                        str(tmp_path / "sim")], capsys, monkeypatch)
+    assert code == 0, err
+    summary = json.loads((tmp_path / "sim" / "summary.json").read_text())
+    assert not summary["fell"] and summary["complete"], summary
+    assert summary["forward_distance_m"] > 0.5 * summary["commanded_distance_m"] > 0.0, summary
+
+
+def test_an_octopod_with_legs_all_round_pointing_up_stands_and_pairs_its_legs(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                              monkeypatch) -> None:
+    """The octapod's legs are every 45° (one straight ahead, one behind, one each side: no quarter turn pairs them)
+    and point straight up at the zero pose (the hip yaw axis through the tip, the femur and tibia axes all along
+    the URDF's y): forward turns 22.5°, the legs are AR…DR, DL…AL, and the stance is found from the seeds."""
+    path = DESCRIPTIONS["octapod"][0]
+    code, out, err, robot_file = _import(path, tmp_path, capsys, monkeypatch)
+    assert code == 0, err
+    assert robot_file is not None
+    assert "shc's forward is 22.5 deg from base_link's +x towards +y, halfway between two legs" in out
+    data = tomllib.loads(robot_file.read_text())
+    assert list(data["legs"]) == ["AR", "BR", "CR", "DR", "DL", "CL", "BL", "AL"]
+    assert data["walker"]["gait"] == "octo_alternating"
+    servos = data["hardware"]["servos"]
+    assert servos["AR_joint1"]["joint"] == "joint_7_1" and servos["AL_joint1"]["joint"] == "joint_8_1"
+    # every stance foot is outside its hip (the legs spread), below the body
+    for leg in data["legs"].values():
+        assert math.hypot(leg["stance"]["x"], leg["stance"]["y"]) > 0.5
+    assert data["walker"]["body_clearance"] > 0.0
+    assert _fk_worst(path.read_text(), path, robot_file, yaw=math.radians(22.5)) < 1e-6
+
+
+def test_placeholder_efforts_and_unlimited_speeds_are_named_and_replaced(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                         monkeypatch) -> None:
+    """Solo-12 gives every joint 1000 N·m and 1000 rad/s (its real actuators: ≈2.7 N·m): named, with the weight
+    of its 2.5 kg on a third of its legs half a 0.35 m leg out (3.21 N·m) and 5 rad/s used instead."""
+    code, out, err, robot_file = _import(DESCRIPTIONS["solo12"][0], tmp_path, capsys, monkeypatch)
+    assert code == 0, err
+    assert robot_file is not None
+    assert "every joint's effort limit is 1000 N·m, which looks like a placeholder" in out
+    assert "every joint's velocity limit is 1000 rad/s, which looks like a placeholder" in out
+    data = tomllib.loads(robot_file.read_text())
+    mass = data["body"]["mass"] + sum(j["mass"] for leg in data["legs"].values() for j in
+                                      data["templates"][leg.get("template", "leg")]["joints"].values())
+    assert mass == pytest.approx(2.505, abs=0.01)
+    # the leg through its joint origins to the foot (leg.xacro): HAA→HFE (19.5, 14) mm, HFE→KFE (37.45, 160) mm,
+    # KFE→FOOT (9, 160) mm
+    leg = math.hypot(0.0195, 0.014) + math.hypot(0.03745, 0.16) + math.hypot(0.009, 0.16)
+    assert data["servo"]["stall_torque"] == pytest.approx(1.5 * mass * 9.81 * leg / 4, abs=0.01)
+    assert data["servo"]["no_load_speed"] == 5.0
 
 
 # -- the classes of description, made up -------------------------------------------------------------------------

@@ -86,6 +86,8 @@ FAR = [0.75, 0.8, 0.85, 0.9]
 """Reaches tried when none of :data:`FRACTIONS` stands (a knee limit that keeps the leg nearly straight)."""
 HEIGHTS = [round(0.05 * k, 2) for k in range(1, 15)]
 """Body heights tried with the reaches of :data:`FAR`, as shares of the leg's length (a narrow band may fit)."""
+SEED_POSES = 729
+"""Joint vectors per leg the stance search may start its IK from when OpenSHC's initial pose does not reach."""
 GAITS = {4: "quad_wave", 6: "tripod", 8: "octo_alternating"}
 """Gait written for a robot with this many legs (others get ``wave``, which fits none but six legs)."""
 AUTO_SNAP = 0.001
@@ -501,18 +503,32 @@ def choose_stance(robot_tree: dict[str, Any], legs: list[LegChain], clearance: f
         if reach is None and reaches is FRACTIONS:
             candidates = []
             groups.append(candidates)
+    seeds = _seeds(chains)
     for group in groups:
-        scored = [stance for stance in (_try(chains, xy, height, what, time_delta) for xy, height, what in group)
-                  if stance is not None]
+        scored = [stance for stance in (_try(chains, xy, height, what, time_delta, seeds)
+                                        for xy, height, what in group) if stance is not None]
         if scored:
             best = max(stance.walkspace for stance in scored)
             return next(stance for stance in scored if stance.walkspace >= TIE * best)
     return None
 
 
-def _try(chains: Any, xy: FloatArray, height: float, what: str, time_delta: float) -> Stance | None:
+def _seeds(chains: Any) -> tuple[FloatArray, FloatArray]:
+    """Joint vectors spread over every leg's limits (about :data:`SEED_POSES` of them, the same share of each
+    joint's range for every leg) and their tips: ``(q (G, B, n) [rad], tips (G, B, 3) [m])``."""
+    steps = max(2, round(SEED_POSES ** (1.0 / chains.joints)))
+    shares = np.linspace(0.0, 1.0, steps + 2)[1:-1]  # inside the limits, not on them
+    grid = np.array(list(itertools.product(shares, repeat=chains.joints)))
+    q = chains.lower[None] + grid[:, None, :] * (chains.upper - chains.lower)[None]
+    return q, np.array([chains.tips(pose) for pose in q])
+
+
+def _try(chains: Any, xy: FloatArray, height: float, what: str, time_delta: float,
+         seeds: tuple[FloatArray, FloatArray] | None = None) -> Stance | None:
     """The stance if every leg reaches it and its swing apex (:data:`SWING_SHARE` of the clearance higher) within
-    its limits, with its walkspace; None otherwise."""
+    its limits, with its walkspace; None otherwise. The IK starts from OpenSHC's initial pose (every joint at 0
+    within its limits), else (a zero pose far from any standing pose: legs straight up) from each leg's pose of
+    ``seeds`` whose tip is nearest its foot."""
     from shc_cli.model.ik import solve
     from shc_cli.model.workspace import search_workspaces, walkspace
 
@@ -524,6 +540,10 @@ def _try(chains: Any, xy: FloatArray, height: float, what: str, time_delta: floa
         return None
     targets = np.column_stack([xy, np.full(len(xy), -height)])
     q, error = solve(chains, chains.default_joints(), targets, tolerance=1e-5, max_steps=600, dt=time_delta)
+    if not (error < 1e-4).all() and seeds is not None:
+        nearest = np.linalg.norm(seeds[1] - targets[None], axis=2).argmin(axis=0)
+        start = seeds[0][nearest, np.arange(len(targets))]
+        q, error = solve(chains, start, targets, tolerance=1e-5, max_steps=600, dt=time_delta)
     if not (error < 1e-4).all():
         return None
     apex = targets + np.array([0.0, 0.0, SWING_SHARE * height])
@@ -578,8 +598,12 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
         yaw = forward_turn([np.mean([c.hip, *c.points, c.tip], axis=0) for c in chains])
         if yaw:
             again = import_tree(model, file, name, legs, tips, clearance, reach, yaw, stubs)
+            quarter = abs(abs(yaw) - math.pi / 2) < 1e-9
+            way = (f"base_link's {'+y' if yaw > 0 else '-y'}" if quarter else
+                   f"{math.degrees(yaw):g} deg from base_link's +x towards {'+y' if yaw > 0 else '-y'}, halfway "
+                   "between two legs")
             again.notes.append(f"the URDF's +x points at a leg (legs straight ahead and behind): shc's forward is "
-                               f"base_link's {'+y' if yaw > 0 else '-y'} (--forward +x keeps the URDF's)")
+                               f"{way} (--forward +x keeps the URDF's)")
             return again
     ids, order = leg_ids([np.mean([chain.hip, *chain.points, chain.tip], axis=0) for chain in chains])
     for (given, chain), leg_id in zip(found, ids, strict=True):
@@ -614,7 +638,8 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
     parts = [p for p in (_inertial(tree, link) for link in tree.links) if p is not None]
     found_placeholders = placeholders(
         [p[0] for p in parts], [float(np.linalg.eigvalsh(p[2]).max()) for p in parts], [_length(c) for c in chains],
-        [float(j.limit.velocity) for c in chains for j in c.joints if j.limit.velocity])
+        [float(j.limit.velocity) for c in chains for j in c.joints if j.limit.velocity],
+        [float(j.limit.effort) for c in chains for j in c.joints if j.limit.effort])
     notes += found_placeholders.notes
     if found_placeholders.masses:
         for chain in chains:
@@ -636,6 +661,8 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
         servo["no_load_speed"] = float(speeds.most_common(1)[0][0])
     if found_placeholders.speed is not None:
         servo["no_load_speed"] = found_placeholders.speed
+    if found_placeholders.torque is not None:
+        servo["stall_torque"] = found_placeholders.torque
     legs_out: dict[str, Any] = {}
     for chain in chains:
         joints = {}

@@ -10,11 +10,13 @@ Each rule is a class of description seen in the wild, not one robot:
 * **Non-leg chains**: a head, camera pan/tilt or tail chain is not a leg: when at least :data:`MIN_LEGS` chains
   have the same number of joints, the legs are those with the most common number (ties: the larger number), and
   of those the ones at least :data:`SHORT` of the median length.
-* **Forward**: a body frame whose +x points at a leg (legs straight ahead and behind, none beside it in pairs)
-  is turned a quarter turn so that the legs pair up left and right.
+* **Forward**: a body frame whose +x points at a leg (legs straight ahead and behind) is turned so that the legs
+  pair up left and right: a quarter turn, or (legs all round, as an octopod's every 45°) halfway between two
+  neighbouring legs.
 * **Placeholders**: inertial data no real robot has (a total mass below :data:`TINY_MASS`; most links with a
   radius of gyration beyond twice the leg's length; every link the same mass) and one joint speed limit below
-  :data:`SLOW` rad/s everywhere are named, and a plausible value from the legs' size is used instead.
+  :data:`SLOW` (or at least :data:`FAST`) rad/s everywhere, and one effort limit far beyond what the robot's weight
+  needs (:data:`STRONG`), are named, and a plausible value from the legs' size is used instead.
 """
 
 from __future__ import annotations
@@ -45,6 +47,11 @@ SLOW = 1.0
 """A joint speed limit below this on every joint is a placeholder [rad/s]: hobby servos turn ≥ 5 rad/s unloaded."""
 DEFAULT_SPEED = 5.0
 """Joint speed limit used instead of a placeholder [rad/s] (shc's default ``max_vel``)."""
+FAST = 100.0
+"""A joint speed limit at or above this on every joint is a placeholder too [rad/s] (1000: "unlimited")."""
+STRONG = 20.0
+"""A joint effort limit above this many times the torque of the robot's weight at a leg's length, the same on
+every joint, is a placeholder (1000 N·m on a 2.5 kg robot)."""
 SERVO_MASS = 0.07
 """Mass of one hobby servo with its bracket, used for placeholder masses [kg] (AX-12A 54.6 g + bracket)."""
 
@@ -86,14 +93,30 @@ def leg_chains(counts: list[int], lengths: list[float]) -> list[int]:
 
 
 def forward_turn(hips: list[FloatArray]) -> float:
-    """Yaw [rad] to turn the body frame by so that no leg is straight ahead or behind: π/2 when a leg's hip is
-    on the x axis (within a twentieth of the farthest hip's distance) and none is on the y axis, else 0."""
+    """Yaw [rad] to turn the body frame by so that no leg is straight ahead or behind and the legs split evenly
+    left and right: 0 if that holds already; else π/2 (legs ahead and behind, none beside the body); else (legs
+    all round, as an octopod's every 45°) the smallest turn halfway between two neighbouring hips that makes it
+    hold. A hip is on an axis within a twentieth of the farthest hip's distance."""
     if len(hips) < 4 or len(hips) % 2:
         return 0.0
     reach = max(float(np.hypot(h[0], h[1])) for h in hips)
-    on_x = [abs(float(h[1])) < 0.05 * reach and abs(float(h[0])) > 0.05 * reach for h in hips]
-    on_y = [abs(float(h[0])) < 0.05 * reach and abs(float(h[1])) > 0.05 * reach for h in hips]
-    return math.pi / 2 if any(on_x) and not any(on_y) else 0.0
+    spread = [(float(np.hypot(h[0], h[1])), math.atan2(float(h[1]), float(h[0]))) for h in hips]
+
+    def even(yaw: float) -> bool:
+        sides = [r * math.sin(a - yaw) for r, a in spread]
+        ahead = [abs(r * math.cos(a - yaw)) for r, a in spread]
+        on_x = any(abs(s) < 0.05 * reach and x > 0.05 * reach for s, x in zip(sides, ahead, strict=True))
+        return not on_x and sum(s > 0.0 for s in sides) == sum(s < 0.0 for s in sides)
+
+    if not any(abs(float(h[1])) < 0.05 * reach and abs(float(h[0])) > 0.05 * reach for h in hips):
+        return 0.0  # no leg straight ahead or behind: the URDF's +x (whatever the split)
+    angles = sorted(a for r, a in spread if r > 0.05 * reach)
+    halfway = [0.5 * (a + b) for a, b in zip(angles, [*angles[1:], angles[0] + 2.0 * math.pi], strict=True)]
+    turns = [math.remainder(a, math.pi) for a in halfway]  # forward or backward along the same line
+    for yaw in [math.pi / 2, *sorted(turns, key=lambda t: (round(abs(t), 9), -t))]:
+        if even(yaw):
+            return yaw
+    return 0.0
 
 
 @dataclass(frozen=True)
@@ -103,11 +126,13 @@ class Placeholders:
     notes: list[str]
     masses: bool
     speed: float | None
+    torque: float | None = None
 
 
-def placeholders(masses: list[float], inertias: list[float], sizes: list[float], speeds: list[float]) -> Placeholders:
-    """Check the URDF's link masses [kg], their largest principal inertias [kg·m²], the leg's length [m] and the
-    leg joints' speed limits [rad/s] (module docstring)."""
+def placeholders(masses: list[float], inertias: list[float], sizes: list[float], speeds: list[float],
+                 efforts: list[float] | None = None) -> Placeholders:
+    """Check the URDF's link masses [kg], their largest principal inertias [kg·m²], the legs' lengths [m] (one per
+    leg) and the leg joints' speed [rad/s] and effort [N·m] limits (module docstring)."""
     notes = []
     total = sum(masses)
     size = max(sizes) if sizes else 0.1
@@ -123,9 +148,18 @@ def placeholders(masses: list[float], inertias: list[float], sizes: list[float],
                      f"{SERVO_MASS:g} kg per joint (a servo and its bracket) and the body as many servos' worth as "
                      "the legs have joints; measure and write body.mass and each joint's mass")
     speed = None
-    if speeds and len(set(speeds)) == 1 and speeds[0] < SLOW:
+    if speeds and len(set(speeds)) == 1 and (speeds[0] < SLOW or speeds[0] >= FAST):
         speed = DEFAULT_SPEED
         notes.append(f"every joint's velocity limit is {speeds[0]:g} rad/s, which looks like a placeholder (a servo "
-                     f"turns ≥ 5 rad/s): max_vel and servo.no_load_speed are {DEFAULT_SPEED:g} rad/s instead; "
+                     f"turns 5–50 rad/s): max_vel and servo.no_load_speed are {DEFAULT_SPEED:g} rad/s instead; "
                      "write your servo's")
-    return Placeholders(notes, placeholder_mass, speed)
+    torque = None
+    weight = total * 9.81 * size
+    if efforts and len(set(efforts)) == 1 and not placeholder_mass and efforts[0] > STRONG * weight > 0.0:
+        # The weight on a third of the legs, half a leg's length out from each.
+        torque = round(1.5 * weight / max(len(sizes), 1), 2)
+        notes.append(f"every joint's effort limit is {efforts[0]:g} N·m, which looks like a placeholder (the "
+                     f"robot's {total:.3g} kg at a leg's {size:.2g} m is {weight:.2g} N·m): servo.stall_torque is "
+                     f"{torque:g} N·m instead (its weight on a third of the legs, half a leg out); write your "
+                     "servo's")
+    return Placeholders(notes, placeholder_mass, speed, torque)
