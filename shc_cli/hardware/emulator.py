@@ -2,8 +2,12 @@
 
 ``BusEmulator(servos).start()`` opens a pty pair; open ``emulator.port`` with dynamixel-sdk (or anything that
 speaks the protocol) as if it were a USB2Dynamixel. Each servo has a control table (the addresses of
-:mod:`shc_cli.hardware.models`) and first-order position dynamics while its torque is enabled
-(``present += (goal − present)·(1 − e^(−Δt/τ))``, evaluated at every read). Faults can be injected per servo at
+:mod:`shc_cli.hardware.models`) and, by default, first-order position dynamics while its torque is enabled
+(``present += (goal − present)·(1 − e^(−Δt/τ))``, evaluated at every read). With ``dynamics`` (a robot file's
+``[servo]`` table) the shaft is instead a load-free servo joint of that model (:mod:`shc_cli.backends.servo_joint`:
+the firmware's P/I/D law, the motor's torque–speed line, armature, viscous and Coulomb gearbox friction), and
+Present Current, Present Velocity and Present Position report its motor current, speed and angle in the model's
+units (e.g. 2.69 mA, 0.229 rpm, ticks), optionally with Gaussian current noise. Faults can be injected per servo at
 any time: no reply, a corrupted CRC, Hardware Error Status bits (the status error byte then carries the alert
 bit), overload (also turns its torque off, as real servos do), vanishing after a given number of packets, and a
 present position whose bytes contain ``FF FF FD`` (so status packets need byte stuffing).
@@ -24,9 +28,14 @@ import time
 import tty
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from shc_cli.hardware import protocol2 as p2
 from shc_cli.hardware.models import MODELS, OVERLOAD_ERROR, ServoModel
+
+if TYPE_CHECKING:
+    from shc_cli.backends.servo_joint import FreeJoints
+    from shc_cli.spec.robot import Servo
 
 TABLE_SIZE = 256
 STUFFING_POSITION = 0x00FDFFFF
@@ -58,11 +67,25 @@ class EmulatedServo:
     packets_seen: int = 0
     clock: Callable[[], float] = time.monotonic
     """The clock the motion model reads [s] (a test gives its own to move the servos without waiting)."""
+    dynamics: Servo | None = None
+    """The servo model moving the shaft (a ``[servo]`` table: a load-free joint of
+    :mod:`shc_cli.backends.servo_joint`); None: the first-order lag of ``time_constant``."""
+    current_noise_ma: float = 0.0
+    """Standard deviation of Gaussian noise on Present Current [mA] (with ``dynamics``)."""
     _updated: float = math.nan
     _position: float = 2048.0
+    _joint: FreeJoints | None = None
+    _noise: Callable[[], float] | None = None
 
     def __post_init__(self) -> None:
         self._updated = self.clock()
+        if self.dynamics is not None:
+            import random
+
+            from shc_cli.backends.servo_joint import FreeJoints
+
+            self._joint = FreeJoints(self.dynamics, 1)
+            self._noise = random.Random(self.servo_id).gauss
         self.write(self.model.model_number_address, self.model.model_number.to_bytes(2, "little"))
         self.write(self.model.firmware_address, bytes([self.firmware]))
         self.write(7, bytes([self.servo_id]))
@@ -89,6 +112,9 @@ class EmulatedServo:
 
     def set_position(self, ticks: int) -> None:
         self._position = float(ticks)
+        if self._joint is not None:
+            self._joint.position[:] = ticks / self.model.ticks_per_radian
+            self._joint.speed[:] = 0.0
         self._store_position(ticks)
 
     def _store_position(self, ticks: int) -> None:
@@ -100,9 +126,14 @@ class EmulatedServo:
         return int.from_bytes(self.table[address:address + length], "little", signed=True)
 
     def _advance(self) -> None:
-        """First-order motion towards the goal since the last access (torque on only)."""
+        """Motion since the last access: the servo model's (``dynamics``), else first-order towards the goal
+        (torque on only)."""
         now = self.clock()
         elapsed, self._updated = now - self._updated, now
+        if self._joint is not None:
+            if elapsed > 0.0:
+                self._move(elapsed)
+            return
         if self.table[self.model.torque_enable] != 1 or elapsed <= 0.0:
             self.table[self.model.present_velocity:self.model.present_velocity + 4] = bytes(4)
             return
@@ -117,6 +148,23 @@ class EmulatedServo:
         current = max(-32768, min(32767, round((goal - self._position) * 2.0)))
         self.table[self.model.present_current:self.model.present_current + 2] = current.to_bytes(
             2, "little", signed=True)
+
+    def _move(self, elapsed: float) -> None:
+        """The load-free joint over ``elapsed`` [s] towards Goal Position, its state into the control table."""
+        joint, model = self._joint, self.model
+        assert joint is not None and self._noise is not None
+        per_radian = model.ticks_per_radian
+        joint.advance(self._int(model.goal_position, 4) / per_radian, elapsed, self.table[model.torque_enable] == 1)
+        self._position = float(joint.position[0]) * per_radian
+        self._store_position(round(self._position))
+        rpm = float(joint.speed[0]) * 60.0 / (2.0 * math.pi)
+        velocity = round(rpm / model.velocity_unit_rpm)
+        self.table[model.present_velocity:model.present_velocity + 4] = velocity.to_bytes(4, "little", signed=True)
+        milliamps = float(joint.current[0]) * 1000.0
+        if self.current_noise_ma:
+            milliamps += self.current_noise_ma * self._noise()
+        current = max(-32768, min(32767, round(milliamps / model.current_unit_ma)))
+        self.table[model.present_current:model.present_current + 2] = current.to_bytes(2, "little", signed=True)
 
     def _overload(self) -> None:
         self.table[self.model.hardware_error_status] |= OVERLOAD_ERROR
@@ -142,11 +190,16 @@ class BusEmulator:
         servos: servo id → model name (see :data:`shc_cli.hardware.models.MODELS`).
         return_delay: seconds each reply waits (a real servo's return delay time).
         clock: the servos' clock [s] (default the monotonic clock).
+        dynamics: the servo model of every servo (a robot file's ``[servo]`` table, its parameters the truth a
+            fit should find), or None for the first-order lag.
+        current_noise_ma: Gaussian noise on Present Current [mA] (with ``dynamics``; seeded by servo id).
     """
 
     def __init__(self, servos: dict[int, str], return_delay: float = 0.0,
-                 clock: Callable[[], float] = time.monotonic) -> None:
-        self.servos = {servo_id: EmulatedServo(servo_id, MODELS[model], clock=clock)
+                 clock: Callable[[], float] = time.monotonic, dynamics: Servo | None = None,
+                 current_noise_ma: float = 0.0) -> None:
+        self.servos = {servo_id: EmulatedServo(servo_id, MODELS[model], clock=clock, dynamics=dynamics,
+                                               current_noise_ma=current_noise_ma)
                        for servo_id, model in sorted(servos.items())}
         self.return_delay = return_delay
         self.packets: list[p2.Packet] = []

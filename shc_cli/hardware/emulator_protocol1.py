@@ -9,9 +9,13 @@ manual (same framing and checksum as Protocol 1.0; SYNC READ 0x82; Response Stat
 ``Protocol1Emulator(servos).start()`` opens a pty pair; open ``emulator.port`` with dynamixel-sdk's Protocol 1.0
 handler or feetech-servo-sdk as if it were the USB adapter. Each servo has its control table and a first-order
 position response while its torque is on (``present += (goal − present)·(1 − e^(−Δt/τ))``, capped at the model's
-no-load speed). With ``wire_time`` the bus keeps the baud rate's time line: an instruction ends its bytes' time
-after it arrives, each status packet goes out the servo's Return Delay Time after the bus fell silent plus its own
-bytes' time; ``latency_s`` adds a USB adapter's turnaround to each answered instruction.
+no-load speed); with ``dynamics`` (a robot file's ``[servo]`` table) a load-free servo joint of that model instead
+(:mod:`shc_cli.backends.servo_joint`, as the Protocol 2.0 emulator's), whose motor current is reported as Present
+Load (0.1 % steps of the datasheet's stall current, what the host's bus reads back as current), MX(1.0) Current
+(4.5 mA steps about 2048) and Feetech Present Current (6.5 mA steps, its magnitude). With ``wire_time`` the
+bus keeps the baud rate's time line: an instruction ends its bytes' time after it arrives, each status packet
+goes out the servo's Return Delay Time after the bus fell silent plus its own bytes' time; ``latency_s`` adds a
+USB adapter's turnaround to each answered instruction.
 
 Faults per servo (:class:`Faults`, changed at any time): no reply, a corrupt checksum, error bits (voltage,
 overheating, overload: in every status packet while set; a bit in Shutdown also turns the torque off), overload at
@@ -36,10 +40,14 @@ import time
 import tty
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 from shc_cli.hardware import protocol1 as p1
 from shc_cli.hardware.emulator import serve_promptly
+
+if TYPE_CHECKING:
+    from shc_cli.backends.servo_joint import FreeJoints
+    from shc_cli.spec.robot import Servo
 
 Vendor = Literal["dynamixel", "feetech"]
 
@@ -171,7 +179,7 @@ class EmulatedServo:
     """One servo: its control table, motion and faults."""
 
     def __init__(self, servo_id: int, model: EmulatedModel, clock: Callable[[], float], time_constant: float,
-                 position: int | None = None) -> None:
+                 position: int | None = None, dynamics: Servo | None = None) -> None:
         self.model = model
         self.addr = _ADDR[model.vendor]
         self.items = {item.address: item for item in model.items}
@@ -184,6 +192,17 @@ class EmulatedServo:
         self.clock = clock
         self.time_constant = time_constant
         self.position = float(model.resolution // 2 if position is None else position)
+        self.joint: FreeJoints | None = None
+        """The load-free joint of ``dynamics`` (None: the first-order lag)."""
+        self.stall_current = 1.0
+        """The datasheet's stall current [A]: Present Load's full scale with ``dynamics``."""
+        if dynamics is not None:
+            from shc_cli.backends.servo_joint import FreeJoints
+            from shc_cli.spec.servo_models import DATASHEETS
+
+            self.joint = FreeJoints(dynamics, 1, self.position / self.ticks_per_radian)
+            sheet = DATASHEETS.get(model.name)
+            self.stall_current = sheet.stall_current if sheet is not None else float(dynamics.current_limit)
         self.set(self.addr["goal"], round(self.position))
         self.faults = Faults()
         self.conditions = 0
@@ -192,6 +211,10 @@ class EmulatedServo:
         """(address, data, error bits) of every refused write."""
         self._updated = clock()
         self.advance()
+
+    @property
+    def ticks_per_radian(self) -> float:
+        return self.model.resolution * 360.0 / self.model.range_degrees / (2.0 * math.pi)
 
     def get(self, address: int) -> int:
         item = self.items[address]
@@ -274,6 +297,9 @@ class EmulatedServo:
         goal_raw = self.get(self.addr["goal"])
         goal = float(-(goal_raw & 0x7FFF) if self.model.vendor == "feetech" and goal_raw & 0x8000 else goal_raw)
         before = self.position
+        if self.joint is not None:
+            self._move(goal, elapsed)
+            return
         if self.torque_on and elapsed > 0:
             ticks_per_turn = self.model.resolution * 360.0 / self.model.range_degrees
             cap = self.model.no_load_rpm / 60.0 * ticks_per_turn * elapsed
@@ -295,6 +321,36 @@ class EmulatedServo:
             self.set(self.addr["load"], _magnitude(round(load), 10))
             if 68 in self.items:
                 self.set(68, 2048 + round(load))
+        self.table[self.addr["moving"]] = int(abs(goal - self.position) > 1.0 and self.torque_on)
+
+    def _move(self, goal: float, elapsed: float) -> None:
+        """The load-free joint over ``elapsed`` [s] towards ``goal`` [ticks], its state into the table (a joint
+        driven past the ends of the range stops there)."""
+        joint, per_radian = self.joint, self.ticks_per_radian
+        assert joint is not None
+        if elapsed > 0:
+            joint.advance(goal / per_radian, elapsed, self.torque_on)
+        ticks = float(joint.position[0]) * per_radian
+        if not 0.0 <= ticks <= self.model.resolution - 1.0:
+            ticks = max(0.0, min(self.model.resolution - 1.0, ticks))
+            joint.position[:], joint.speed[:] = ticks / per_radian, 0.0
+        self.position = ticks
+        speed = float(joint.speed[0]) * per_radian  # [ticks/s]
+        amps = float(joint.current[0])
+        load = max(-1000.0, min(1000.0, amps / self.stall_current * 1000.0))  # [0.1 %]
+        self.set(self.addr["position"], round(self.position))
+        if self.model.vendor == "feetech":
+            self.set(self.addr["speed"], _magnitude(round(speed), 15))
+            self.set(self.addr["load"], _magnitude(round(load), 10))
+            self.table[65] = self.error_byte
+            self.set(69, min(65535, round(abs(amps) / 0.0065)))
+        else:
+            unit = 0.111 if self.model.resolution == 1024 else 0.114  # [rpm]
+            rpm = speed / (per_radian * 2.0 * math.pi) * 60.0
+            self.set(self.addr["speed"], _magnitude(round(rpm / unit), 10))
+            self.set(self.addr["load"], _magnitude(round(load), 10))
+            if 68 in self.items:
+                self.set(68, max(0, min(4095, 2048 + round(amps / 0.0045))))
         self.table[self.addr["moving"]] = int(abs(goal - self.position) > 1.0 and self.torque_on)
 
     def answers(self, instruction: int) -> bool:
@@ -323,13 +379,15 @@ class Protocol1Emulator:
         time_constant: the position response's time constant [s].
         clock: the servos' clock [s].
         positions: power-up present positions [ticks] by id (default the middle of the range).
+        dynamics: the servo model of every servo (a robot file's ``[servo]`` table: load-free servo joints), or
+            None for the first-order lag.
     """
 
     def __init__(self, servos: dict[int, str], baud: int = 1_000_000, wire_time: bool = False,
                  latency_s: float = 0.0, time_constant: float = 0.03, clock: Callable[[], float] = time.monotonic,
-                 positions: dict[int, int] | None = None) -> None:
-        self.servos = {i: EmulatedServo(i, EMULATED_MODELS[name], clock, time_constant, (positions or {}).get(i))
-                       for i, name in sorted(servos.items())}
+                 positions: dict[int, int] | None = None, dynamics: Servo | None = None) -> None:
+        self.servos = {i: EmulatedServo(i, EMULATED_MODELS[name], clock, time_constant, (positions or {}).get(i),
+                                        dynamics) for i, name in sorted(servos.items())}
         vendors = {servo.model.vendor for servo in self.servos.values()}
         if len(vendors) > 1:
             raise ValueError("one vendor per bus")
