@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -106,6 +107,20 @@ class ServoModel:
         self.torque_limit = min(s.stall_torque, s.torque_constant * self.max_voltage / s.winding_resistance,
                                 s.torque_constant * s.current_limit)
         """Largest output torque [N·m]: stall torque, PWM limit and current limit."""
+        # the kernels' scalar arguments, converted once (the same values every call)
+        self._pd = ((float(s.stiffness), float(s.damping), float(s.stall_torque)) if s.control == "pd" else None)
+        self._firmware = (self.volts_per_rad, self.volts_per_rad_s, self.volts_per_rad_per_s, self.max_voltage,
+                          self.back_emf, float(s.winding_resistance), float(s.current_limit),
+                          float(s.torque_constant), float(s.viscous_friction))
+        self._friction = float(s.coulomb_friction)
+        self._supply = (float(s.viscous_friction), float(s.holding_ratio), float(s.static_speed),
+                        float(s.torque_constant), float(s.current_limit), float(s.idle_power),
+                        float(s.winding_resistance), float(s.regenerative_efficiency))
+
+    @cached_property
+    def _kernels(self) -> Any:
+        """The compiled laws, imported on first use (a model built for its :meth:`gains` loads no numba)."""
+        return _kernels()
 
     def gains(self) -> Gains:
         """Stiffness, damping and limits for an engine's implicit PD motor (``control`` 'dynamixel' or 'pd')."""
@@ -129,22 +144,24 @@ class ServoModel:
             step: the physics step this torque holds for [s]: the I term integrates the error over it (0: no
                 integration, e.g. for a one-off evaluation).
         """
-        s = self.servo
-        kernels = _kernels()
         goal, position, speed = (np.asarray(a, dtype=float) for a in (goal, position, speed))
         out = np.empty(goal.shape)
-        if s.control == "pd":
-            kernels.pd_torque(goal.ravel(), position.ravel(), speed.ravel(), float(s.stiffness), float(s.damping),
-                              float(s.stall_torque), out.ravel())
-            return out
+        self.torque_into(goal.ravel(), position.ravel(), speed.ravel(), float(step), out.ravel())
+        return out
+
+    def torque_into(self, goal: np.ndarray, position: np.ndarray, speed: np.ndarray, step: float,
+                    out: np.ndarray) -> None:
+        """:meth:`torque` written into ``out`` [N·m], without conversions: every argument a contiguous 1-D float64
+        array of one length (e.g. views into an engine's state), ``step`` a float — an engine's per-physics-step
+        path, where :meth:`torque`'s checks and copies cost more than the law."""
+        kernels = self._kernels
+        if self._pd is not None:
+            kernels.pd_torque(goal, position, speed, *self._pd, out)
+            return
         if self.volts_per_rad_s > 0.0 and self._integral is None:
             self._integral = np.zeros(goal.shape, dtype=float)
         integral = self._integral if self._integral is not None else out  # (unused without an I term)
-        kernels.firmware_torque(goal.ravel(), position.ravel(), speed.ravel(), float(step), integral.ravel(),
-                                self.volts_per_rad, self.volts_per_rad_s, self.volts_per_rad_per_s, self.max_voltage,
-                                self.back_emf, float(s.winding_resistance), float(s.current_limit),
-                                float(s.torque_constant), float(s.viscous_friction), out.ravel())
-        return out
+        kernels.firmware_torque(goal, position, speed, step, integral, *self._firmware, out)
 
     def electrical(self, torque: np.ndarray, speed: np.ndarray, friction_in_engine: bool = False) -> Electrical:
         """Motor torque, current and supply power from the output torque and joint speed the engine reports.
@@ -155,18 +172,13 @@ class ServoModel:
             friction_in_engine: the engine applied the gearbox's Coulomb friction itself (then ``torque`` is
                 already the motor's torque while moving); otherwise it is added here.
         """
-        s = self.servo
         torque = np.asarray(torque, float)
         speed = np.asarray(speed, float)
-        friction = 0.0 if friction_in_engine else s.coulomb_friction
         if torque.shape != speed.shape:
             torque, speed = (np.ascontiguousarray(a) for a in np.broadcast_arrays(torque, speed))
         motor, current, power = np.empty(torque.shape), np.empty(torque.shape), np.empty(torque.shape)
-        _kernels().supply_power(torque.ravel(), speed.ravel(),
-                                float(friction), float(s.viscous_friction), float(s.holding_ratio),
-                                float(s.static_speed), float(s.torque_constant), float(s.current_limit),
-                                float(s.idle_power), float(s.winding_resistance), float(s.regenerative_efficiency),
-                                motor.ravel(), current.ravel(), power.ravel())
+        self._kernels.supply_power(torque.ravel(), speed.ravel(), 0.0 if friction_in_engine else self._friction,
+                                   *self._supply, motor.ravel(), current.ravel(), power.ravel())
         return Electrical(motor_torque=motor, current=current, power=power)
 
     def power(self, torque: np.ndarray, speed: np.ndarray, friction_in_engine: bool = False) -> np.ndarray:

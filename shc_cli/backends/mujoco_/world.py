@@ -115,6 +115,10 @@ class MujocoWorld:
         self._q = _view(data.qpos, self.qpos_index)
         """The servos' joint positions: a view into ``qpos`` (the hinges follow the free joint, legs in order)."""
         self._v = _view(data.qvel, self.qvel_index)
+        self._ctrl = data.ctrl
+        """The actuators' controls, one per servo in servo order (a view into ``data``, fetched once)."""
+        self._force = data.actuator_force
+        """The actuators' forces after a step (a view into ``data``)."""
         self._work = np.zeros(len(joints))
         self._ray_hit = np.zeros(1, dtype=np.int32)
         self.command(initial_joints)
@@ -138,26 +142,35 @@ class MujocoWorld:
 
     def step(self) -> None:
         """Advance one control period; torque and speed averaged over its physics steps give the power."""
-        mujoco, model, data = self.mujoco, self.model, self.data
-        q, v, ctrl, goals = self._q, self._v, data.ctrl, self._goals
-        gain, keep, speed, kv, stall = self._gain, self._keep, self._speed, self._kv, self._stall
+        mj_step, model, data = self.mujoco.mj_step, self.model, self.data
+        q, v, ctrl, goals, force = self._q, self._v, self._ctrl, self._goals, self._force
         clock = time.perf_counter
         total = np.zeros(len(goals))
         physics = 0.0
         explicit, step = self.explicit, self.timestep
-        motor, motor_force = servo_kernels.velocity_motor, servo_kernels.velocity_motor_force
-        velocity_motor = not self.compliant and explicit is None
-        for _ in range(self.substeps):
-            if explicit is not None:  # the servo model's torque from the state before the step, as in PyBullet
-                ctrl[:] = explicit.torque(goals, q, v, step)
-            elif velocity_motor:  # PyBullet's velocity motor: the speed that closes position_gain of the error
+        if explicit is not None:  # the servo model's torque from the state before the step, as in PyBullet
+            torque_into = explicit.torque_into
+            for _ in range(self.substeps):
+                torque_into(goals, q, v, step, ctrl)
+                started = clock()
+                mj_step(model, data)
+                physics += clock() - started
+                total += force
+        elif self.compliant:
+            for _ in range(self.substeps):
+                started = clock()
+                mj_step(model, data)
+                physics += clock() - started
+                total += force
+        else:  # PyBullet's velocity motor: the speed that closes position_gain of the error
+            gain, keep, speed, kv, stall = self._gain, self._keep, self._speed, self._kv, self._stall
+            motor, motor_force = servo_kernels.velocity_motor, servo_kernels.velocity_motor_force
+            for _ in range(self.substeps):
                 motor(goals, q, v, gain, keep, speed, ctrl)
-            started = clock()
-            mujoco.mj_step(model, data)
-            physics += clock() - started
-            if not velocity_motor:
-                total += data.actuator_force
-            else:  # the implicit step applied kv·(ctrl − v_new); a clamped one (explicit) the stall torque
+                started = clock()
+                mj_step(model, data)
+                physics += clock() - started
+                # the implicit step applied kv·(ctrl − v_new); a clamped one (explicit) the stall torque
                 motor_force(ctrl, v, kv, stall, total)
         self.physics_time += physics
         positions = np.array(q)
