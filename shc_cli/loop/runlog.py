@@ -31,6 +31,7 @@ marked only by ``"complete": false``.
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Generic, TypeVar
 
@@ -68,8 +69,9 @@ def default_run_directory(kind: str) -> Path:
 class RunDirectory:
     """A run directory written while the run goes on: ``<name>.partial`` until :meth:`finish` renames it.
 
-    Tables are CSV files whose rows are formatted with one ``%`` operation each (fast) and flushed by
-    :meth:`flush`, so an interrupted run keeps every flushed row.
+    Tables are CSV files whose rows are formatted with one ``%`` operation each (``log.csv``: a block at a time by
+    the compiled formatter, :mod:`shc_cli.loop.csv_rows`, the same bytes) and flushed by :meth:`flush`, so an
+    interrupted run keeps every flushed row; :meth:`close` writes and flushes every recorded row.
 
     Args:
         directory: final run directory (must not exist yet, unless ``overwrite``).
@@ -92,6 +94,7 @@ class RunDirectory:
             raise OutputError(f"{self.partial}: cannot create run directory: {error.strerror} "
                               "(choose another --out)") from None
         self._handles: list[IO[str]] = []
+        self._before_close: list[Callable[[], None]] = []
         self.signals = StopSignals()
         """SIGINT/SIGTERM become this run's stop request from now on (:mod:`shc_cli.loop.stop_signals`)."""
         self.signals.install()
@@ -124,14 +127,23 @@ class RunDirectory:
         text = f"# the robot of this run, expanded\n{dump_toml(robot.model_dump(mode='json'))}"
         (self.partial / ROBOT_FILE).write_text(text, encoding="utf-8")
 
+    def before_close(self, write: Callable[[], None]) -> None:
+        """Call ``write`` before the tables close (a recorder that keeps rows writes them)."""
+        self._before_close.append(write)
+
     def flush(self) -> None:
         for handle in self._handles:
             handle.flush()
 
     def close(self) -> None:
-        """Flush and close every table: every written row is on disk."""
-        for handle in self._handles:
-            handle.close()
+        """Write what recorders keep, flush and close every table: every recorded row is on disk."""
+        try:
+            for write in self._before_close:
+                write()
+        finally:
+            self._before_close.clear()
+            for handle in self._handles:
+                handle.close()
 
     @property
     def finished(self) -> bool:
@@ -212,9 +224,15 @@ class LogRecorder(Generic[ReadingT]):
     """
 
     def __init__(self, run: RunDirectory, robot: Robot, backend: MeasuringBackend[ReadingT]) -> None:
+        from shc_cli.loop.csv_rows import RowBlock
+
         self.run = run
         columns = log_columns(robot)
         self.handle, self.row = run.table("log.csv", columns, ["%.6g"] * (len(columns) - 2) + ["%s", "%s"])
+        self.block = RowBlock(len(columns) - 2, 2, self.row)
+        """Rows not yet written: formatted a block at a time by the compiled formatter (the same bytes as
+        ``self.row % …``), at every :meth:`flush` and when the run directory closes."""
+        run.before_close(self.write_rows)
         self.rows, self.cols = joint_slots(robot)
         self.dt = robot.time_delta
         self.measured = backend.measured
@@ -235,12 +253,19 @@ class LogRecorder(Generic[ReadingT]):
 
     def record(self, cycle: int, command: Command, out: CycleOutput, applied: np.ndarray,
                reading: ReadingT) -> None:
-        values = np.concatenate((applied[self.rows, self.cols], *self.measured_values(self.measured(reading)),
-                                 command.velocity, out.velocity, out.odometry))
-        self.handle.write(self.row % (cycle, cycle * self.dt, *values.tolist(), out.robot_state.name,
-                                      out.walk_state.name))
+        block = self.block
+        row = block.add(self.handle, cycle, cycle * self.dt,
+                        (block.code(0, out.robot_state), block.code(1, out.walk_state)))
+        np.concatenate((applied[self.rows, self.cols], *self.measured_values(self.measured(reading)),
+                        command.velocity, out.velocity, out.odometry), out=row)
+
+    def write_rows(self) -> None:
+        """Write the rows recorded so far into the table (not flushed)."""
+        self.block.drain(self.handle)
 
     def flush(self) -> None:
+        """Every recorded row on disk."""
+        self.write_rows()
         self.run.flush()
 
 
