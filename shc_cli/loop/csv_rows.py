@@ -43,6 +43,9 @@ class RowBlock:
         self._hard = np.zeros(capacity, dtype=np.uint8)
         self._out = np.zeros(1, dtype=np.uint8)
         self._per_row = csv_kernels.VALUE_WIDTH * columns + csv_kernels.ROW_EXTRA
+        # numba loads (or compiles) the kernel at its first call: here, not in the middle of a (real-time) run
+        csv_kernels.format_rows(self.cycles, self.times, self.values, self.states, self._names, self._starts, 0,
+                                self._out, self._ends, self._hard)
 
     def code(self, column: int, value: Enum) -> int:
         """The index of name column ``column``'s ``value``, written as its name (members of different enums may
