@@ -148,14 +148,17 @@ def placeholders(masses: list[float], inertias: list[float], sizes: list[float],
                      f"{SERVO_MASS:g} kg per joint (a servo and its bracket) and the body as many servos' worth as "
                      "the legs have joints; measure and write body.mass and each joint's mass")
     speed = None
-    if speeds and len(set(speeds)) == 1 and (speeds[0] < SLOW or speeds[0] >= FAST):
+    if speeds and (max(speeds) < SLOW or min(speeds) >= FAST):
         speed = DEFAULT_SPEED
-        notes.append(f"every joint's velocity limit is {speeds[0]:g} rad/s, which looks like a placeholder (a servo "
+        given = f"{speeds[0]:g}" if len(set(speeds)) == 1 else f"{min(speeds):g}–{max(speeds):g}"
+        notes.append(f"every joint's velocity limit is {given} rad/s, which looks like a placeholder (a servo "
                      f"turns 5–50 rad/s): max_vel and servo.no_load_speed are {DEFAULT_SPEED:g} rad/s instead; "
                      "write your servo's")
     torque = None
+    if placeholder_mass:  # the masses used instead: a servo's per joint and as much again for the body
+        total = 2.0 * SERVO_MASS * len(efforts or [])
     weight = total * 9.81 * size
-    if efforts and len(set(efforts)) == 1 and not placeholder_mass and efforts[0] > STRONG * weight > 0.0:
+    if efforts and len(set(efforts)) == 1 and efforts[0] > STRONG * weight > 0.0:
         # The weight on a third of the legs, half a leg's length out from each.
         torque = round(1.5 * weight / max(len(sizes), 1), 2)
         notes.append(f"every joint's effort limit is {efforts[0]:g} N·m, which looks like a placeholder (the "
