@@ -31,6 +31,9 @@ RobotArgument = Annotated[str, typer.Argument(help="Robot file or bundled robot 
 GaitOption = Annotated[str | None, typer.Option(help="Gait name or file (default: the robot's gait).")]
 CommandsOption = Annotated[Path | None, typer.Option(help="Command timeline: CSV 'cycle,vx,vy,wz' or a TOML plan "
                                                           "script.")]
+PathOption = Annotated[Path | None, typer.Option("--path", help="Walk the waypoints of a path file (CSV 'x,y[,yaw]' "
+                                                               "or TOML [[waypoint]]; metres, radians, from the "
+                                                               "robot's start pose) by the odometry, then stop.")]
 BagOption = Annotated[str | None, typer.Option(help="Also write the run as a bag in it: mcap, sqlite3 or ros1.")]
 OVERWRITE_HELP = "Replace an existing run directory at --out (when the new run finishes; only shc's own outputs)."
 LiveOption = Annotated[bool, typer.Option(help="Stream the run while it happens to a Foxglove WebSocket server on "
@@ -107,6 +110,7 @@ def plan(
     ] = "1,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 10).")] = None,
     commands: CommandsOption = None,
+    path: PathOption = None,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-plan).")] = None,
     plots: Annotated[bool, typer.Option(help="Write gait.png, tips.png and joints.png.")] = True,
     bag: BagOption = None,
@@ -123,7 +127,7 @@ def plan(
 
     check_outputs(bag, video, overwrite)
     run_plan(robot, gait, velocity, duration, commands, out, plots, after=lambda run: finish_outputs(run, bag, video),
-             overwrite=overwrite, live=live, live_port=live_port, realtime=realtime)
+             overwrite=overwrite, live=live, live_port=live_port, realtime=realtime, path=path)
 
 
 @app.command()
@@ -133,6 +137,7 @@ def simulate(
     velocity: Annotated[str, typer.Option(help=VELOCITY_HELP)] = "1,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
     commands: CommandsOption = None,
+    path: PathOption = None,
     terrain: Annotated[
         str, typer.Option(help="flat, ramp:DEG, blocks[:LOW,HIGH[,SIZE]], stairs:RISE,RUN or heightfield:FILE[,SCALE]")
     ] = "flat",
@@ -189,7 +194,7 @@ def simulate(
 
     check_outputs(bag, video, overwrite)
     options = SimulationConfig(robot=robot, gait=gait, velocity=velocity, duration=duration, commands=commands,
-                               out=out, plots=plots, terrain=terrain, scenario=scenario, physics_rate=physics_rate,
+                               path=path, out=out, plots=plots, terrain=terrain, scenario=scenario, physics_rate=physics_rate,
                                friction=friction, restitution=restitution, seed=seed, imu_noise=imu_noise,
                                start=start, gui=gui, stand=stand, posture=posture, imu_posing=imu_posing,
                                inclination=inclination, admittance=admittance, fail_on_fall=fail_on_fall,
@@ -211,6 +216,7 @@ def run_hw(
     velocity: Annotated[str, typer.Option(help=VELOCITY_HELP)] = "0,0,0",
     duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
     commands: CommandsOption = None,
+    path: PathOption = None,
     out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-run-hw).")] = None,
     dry_run: Annotated[bool, typer.Option(help="Everything except current-limit, torque-enable and goal writes.")]
     = False,
@@ -233,7 +239,7 @@ def run_hw(
 
     run(HardwareConfig(robot=robot, ports=port, baud=baud, gait=gait, on_fault=on_fault, on_stop=on_stop,
                        stop_state=stop_state, input_mode=input_mode, velocity=velocity, duration=duration,
-                       commands=commands, out=out, dry_run=dry_run, profile_velocity=profile_velocity,
+                       commands=commands, path=path, out=out, dry_run=dry_run, profile_velocity=profile_velocity,
                        watchdog=watchdog, overwrite=overwrite, live=live, live_port=live_port))
 
 

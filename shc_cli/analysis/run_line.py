@@ -58,7 +58,7 @@ def simulation_line(summary: RunSummary, terrain: str, path: Path, note: str = "
         line += ", FELL"
     elif walking:
         line += progress_note(summary)
-    line += note
+    line += path_note(summary) + note
     if generic_servos(summary.servo_model):
         line += f" ({GENERIC_SERVOS})"
     return f"{line} → {path}"
@@ -75,4 +75,16 @@ def plan_line(summary: RunSummary, path: Path, note: str = "") -> str:
     return (f"{summary.robot} / {gaits}: {summary.cycles} cycles "
             f"({summary.duration_s or 0.0:.2f} s), path speed {summary.path_speed_mps or 0.0:.4f} m/s, displacement "
             f"speed {summary.displacement_speed_mps or 0.0:.4f} m/s, {feet}, IK deviations "
-            f"{summary.ik_deviation_count}, clamped {summary.ik_clamp_count}{progress_note(summary)}{note} → {path}")
+            f"{summary.ik_deviation_count}, clamped {summary.ik_clamp_count}{progress_note(summary)}{path_note(summary)}"
+            f"{note} → {path}")
+
+
+def path_note(summary: RunSummary) -> str:
+    """``", path: 4/4 waypoints reached (odometry) in 84.9 s"`` for a ``--path`` run (the follower's own view;
+    ``shc analyze`` measures against the ground truth), else empty."""
+    if not summary.waypoints:
+        return ""
+    reached = sum(w.reached for w in summary.waypoints)
+    last = summary.waypoints[-1]
+    when = f" in {last.left_s:.1f} s" if last.reached and last.left_s is not None else ""
+    return f", path: {reached}/{len(summary.waypoints)} waypoints reached (odometry){when}"

@@ -131,3 +131,12 @@ class InputSource(Protocol):
 
     def close(self) -> None:
         ...
+
+
+@runtime_checkable
+class FeedbackSource(Protocol):
+    """An input source that steers by the controller's output (a path follower): the loop calls :meth:`observe`
+    with every cycle's output, right after the controller's step, so the next :meth:`InputSource.next` sees it."""
+
+    def observe(self, out: CycleOutput) -> None:
+        ...

@@ -45,6 +45,7 @@ class SimulationConfig(BaseModel):
         velocity: constant velocity input ``"VX,VY,WZ"`` in the robot's input mode (a 3-tuple is accepted).
         duration: seconds to run after start-up (None: a timeline's length + 1 s, or 20 s) [s].
         commands: command timeline (CSV or TOML plan script).
+        path: a path file the follower walks by the odometry (instead of ``velocity`` or ``commands``).
         out: run directory (None: ``runs/<timestamp>-simulate``).
         plots: write trajectory.png, power.png and contacts.png.
         terrain: ``flat``, ``ramp:DEG``, ``blocks[...]``, ``stairs:RISE,RUN`` or ``heightfield:FILE[,SCALE]``
@@ -81,6 +82,7 @@ class SimulationConfig(BaseModel):
     velocity: str = "1,0,0"
     duration: float | None = None
     commands: Path | None = None
+    path: Path | None = None
     out: Path | None = None
     plots: bool = True
     terrain: str = "flat"
@@ -279,6 +281,7 @@ class SimulationOptions(TypedDict, total=False):
     velocity: Velocity
     duration: float | None
     commands: Path | str | None
+    path: Path | str | None
     out: Path | str | None
     plots: bool
     terrain: str

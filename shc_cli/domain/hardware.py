@@ -63,6 +63,7 @@ class HardwareConfig(BaseModel):
         velocity: constant velocity input ``"VX,VY,WZ"`` of the timeline.
         duration: seconds to run after start-up (None: a timeline's length + 1 s, or 20 s) [s].
         commands: command timeline (CSV or TOML plan script).
+        path: a path file the follower walks by the odometry (``--input timeline`` only).
         out: run directory (None: ``runs/<timestamp>-run-hw``).
         dry_run: everything except current-limit, torque-enable and goal writes.
         stop_state: the state to shut down to: ``packed``, ``ready`` or ``running``.
@@ -89,6 +90,7 @@ class HardwareConfig(BaseModel):
     velocity: str = "0,0,0"
     duration: float | None = None
     commands: Path | None = None
+    path: Path | None = None
     out: Path | None = None
     dry_run: bool = False
     profile_velocity: bool = False
@@ -125,6 +127,7 @@ def run_hardware(config: HardwareConfig) -> RunResult:
     from shc_cli.hardware.bus import HardwareError
     from shc_cli.hardware.buses import servo_bus
     from shc_cli.loop.input_choice import commands_file, open_input
+    from shc_cli.loop.path_input import keep_path
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import ControlledStop, Observer, RunLoop, StartUp
     from shc_cli.loop.runlog import LogRecorder, RunDirectory, default_run_directory
@@ -132,8 +135,11 @@ def run_hardware(config: HardwareConfig) -> RunResult:
     from shc_cli.loop.summary import RunSummary
 
     c = config
+    if c.path is not None and c.input_mode != "timeline":
+        raise SpecError([Issue(None, None, "--path", f"--path and --input {c.input_mode} both give the run's input",
+                               "drop --input (a path is followed by itself)")])
     inputs = load_inputs(c.robot, c.gait, c.velocity, c.duration, commands_file(c.input_mode, c.commands),
-                         default_s=20.0)
+                         default_s=20.0, path=c.path)
     robot, gait = inputs.robot, inputs.gait
     bus = servo_bus(robot, c.ports, c.baud, c.profile_velocity)  # the servo models' protocol
     source: InputSource | None = None
@@ -166,6 +172,10 @@ def run_hardware(config: HardwareConfig) -> RunResult:
         controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
                                 direct_shutdown=True)
         run.write_robot(robot)
+        if inputs.path is not None:
+            source.close()
+            source = inputs.source(controller)
+        path_fields = keep_path(source, run.partial)
         dt = robot.time_delta
         stop = STATES[c.stop_state]
         action = "holding" if c.on_fault == "hold" else "torque off"
@@ -199,8 +209,9 @@ def run_hardware(config: HardwareConfig) -> RunResult:
                 "final_state": controller.state.name, "stop_state": stop.name,
                 "step_frequency_hz": controller.parameters["step_frequency"],
                 "step_period_cycles": controller.cycle.period, "duty_factor": controller.cycle.duty_factor,
-                "input": c.input_mode, "watchdog_trips": getattr(source, "watchdog_trips", 0),
-                "unmeasured": UNMEASURED, "odometry_pose": list(controller.odometry.pose),
+                "input": "path" if c.path is not None else c.input_mode,
+                "watchdog_trips": getattr(source, "watchdog_trips", 0),
+                "unmeasured": UNMEASURED, "odometry_pose": list(controller.odometry.pose), **path_fields(),
             })
 
         path, summary, _ = execute(loop, run, summarise, after_loop=release)

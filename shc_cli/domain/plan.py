@@ -16,7 +16,8 @@ if TYPE_CHECKING:
 
 def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0", duration: float | None = None,
          commands: Path | None = None, out: Path | None = None, plots: bool = True,
-         overwrite: bool = False, live: bool = False, live_port: int = 8765, realtime: bool = False) -> RunResult:
+         overwrite: bool = False, live: bool = False, live_port: int = 8765, realtime: bool = False,
+         path: Path | None = None) -> RunResult:
     """Load, run through the one loop on the kinematic backend, log; returns the run directory and its summary
     (``complete`` false when a signal stopped it).
 
@@ -31,22 +32,25 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
         overwrite: replace an existing run directory at ``out`` when the run finishes.
         live: stream the run while it happens on a Foxglove server on 127.0.0.1:``live_port`` (0: any free port).
         realtime: pace the run to the wall clock.
+        path: a path file the follower walks (instead of ``velocity`` or ``commands``), steering by the odometry.
     """
     from shc_cli.backends.kinematic import KinematicBackend
     from shc_cli.control.controller import Controller
-    from shc_cli.loop.input_sources import TimelineInput
+    from shc_cli.loop.path_input import keep_path
     from shc_cli.loop.plan_summary import PlanRecord, plan_summary
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import Observer, RunLoop, StartUp
     from shc_cli.loop.runlog import RunWriter, default_run_directory
     from shc_cli.loop.session import execute
 
-    inputs = load_inputs(robot, gait, velocity, duration, commands, default_s=10.0, check_fit=True)
+    inputs = load_inputs(robot, gait, velocity, duration, commands, default_s=10.0, check_fit=True, path=path)
     model = inputs.robot
     directory = out or default_run_directory("plan")
     controller = Controller(model, inputs.gait, pose_sets=inputs.pose_sets)
     writer = RunWriter(directory, model, overwrite)
     writer.write_robot(model)
+    source = inputs.source(controller)
+    path_fields = keep_path(source, writer.partial)
     record = PlanRecord(controller)
     start_up = StartUp.of(model)
     observers: list[Observer[None]] = [record]
@@ -56,7 +60,7 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
     clock = wall_clock(model) if realtime else None
     if clock is not None:
         observers.append(clock)
-    loop = RunLoop(controller, KinematicBackend(), TimelineInput(inputs.commands()), writer,
+    loop = RunLoop(controller, KinematicBackend(), source, writer,
                    start_up, observers=observers, flush_every=500)
     started = time.perf_counter()
 
@@ -67,7 +71,8 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
 
     def summarise(_: object) -> RunSummary:
         summary = plan_summary(model, controller, record, time.perf_counter() - started, writer.partial)
-        return summary.updated(**clock.statistics()) if clock is not None else summary
+        summary = summary.updated(**path_fields(), **(clock.statistics() if clock is not None else {}))
+        return summary
 
     try:
         path, summary, _ = execute(loop, writer, summarise, plot if plots else None)

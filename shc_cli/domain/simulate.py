@@ -46,6 +46,8 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     from shc_cli.backends.simulated import SimulatedBackend, open_world
     from shc_cli.control.controller import Controller
     from shc_cli.loop.input_choice import commands_file, is_live, open_input
+    from shc_cli.errors import Issue, SpecError
+    from shc_cli.loop.path_input import keep_path
     from shc_cli.loop.physics_summary import PhysicsRecord
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import Observer, RunLoop, StartUp
@@ -54,8 +56,11 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
 
     o = config or SimulationConfig()
     check_display(o.gui)
+    if o.path is not None and o.input_mode != "timeline":
+        raise SpecError([Issue(None, None, "--path", f"--path and --input {o.input_mode} both give the run's input",
+                               "drop --input (a path is followed by itself)")])
     inputs = load_inputs(o.robot, o.gait, o.velocity, o.duration, commands_file(o.input_mode, o.commands),
-                         default_s=20.0, walking=o.walking, robot_change=o.apply_switches)
+                         default_s=20.0, walking=o.walking, robot_change=o.apply_switches, path=o.path)
     by_hand = is_live(o.input_mode)
     robot = inputs.robot
     options = o.engine_options(robot)
@@ -67,6 +72,10 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
             with SimulatedBackend(robot, world) as backend:
                 controller = Controller(robot, inputs.gait, joints=backend.start(), pose_sets=inputs.pose_sets)
                 run.write_robot(robot)
+                if inputs.path is not None:
+                    source.close()
+                    source = inputs.source(controller)
+                path_fields = keep_path(source, run.partial)
                 record = PhysicsRecord(robot, backend, o.airborne)
                 counter = None if progress is None or by_hand else _Progress(progress, inputs.cycles)
                 observers: list[Observer[Reading]] = [record] if counter is None else [record, counter]
@@ -89,7 +98,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
                         seed=o.seed, terrain=str(world.terrain.spec), engine=world.name, engine_version=world.version,
                         engine_warnings=world.warnings,
                         versions={"shc": __version__, world.name: world.version, "numpy": np.__version__},
-                        **(clock.statistics() if clock is not None else {}),
+                        **(clock.statistics() if clock is not None else {}), **path_fields(),
                         **({"input": o.input_mode} if by_hand else {}))
 
                 def plot(folder: Path) -> None:

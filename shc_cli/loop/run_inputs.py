@@ -1,4 +1,4 @@
-"""What every run command reads before it runs: the robot and gait, the command timeline, the auto-pose sets.
+"""What every run command reads before it runs: the robot and gait, the command timeline or path, the auto-pose sets.
 
 Shared by ``plan``, ``simulate`` and ``run-hw`` (and the Python API), so they accept the same options the same way.
 """
@@ -10,15 +10,25 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from shc_cli.errors import Issue, SpecError
-from shc_cli.loop.input_sources import TimelineCommands, timeline_commands
+from shc_cli.loop.input_sources import TimelineCommands, TimelineInput, timeline_commands
 from shc_cli.spec.autopose import AutoPoseSet, compatibility_issues, load_auto_pose_set
 from shc_cli.spec.gait import Gait
+from shc_cli.spec.path import Path2D, load_path
 from shc_cli.spec.robot import Robot
 from shc_cli.spec.timeline import Timeline, constant, load_timeline
 
+if TYPE_CHECKING:
+    from shc_cli.backends.base import InputSource
+    from shc_cli.control.controller import Controller
+
 logger = logging.getLogger(__name__)
+
+PATH_TIME_PER_WAYPOINT_S = 60.0
+"""Without ``--duration``, a path run lasts at most this long per waypoint [s] (the follower's per-waypoint timeout,
+:class:`~shc_cli.control.path_follower.FollowerOptions`); it ends when the robot has stopped at the last."""
 
 MAX_DURATION_ENV = "SHC_MAX_DURATION"
 """Environment variable (a test aid): when set to seconds, every run's time after start-up is cut to at most that,
@@ -127,22 +137,32 @@ def _mapping(value: object) -> dict[str, object]:
 
 @dataclass(frozen=True)
 class RunInputs:
-    """A run's robot, gait, timeline (and how many cycles of it to play) and auto-pose sets."""
+    """A run's robot, gait, timeline or path (and how many cycles of it to play) and auto-pose sets."""
 
     robot: Robot
     gait: Gait
     timeline: Timeline
     cycles: int
     pose_sets: dict[str, AutoPoseSet]
+    path: Path2D | None = None
 
     def commands(self) -> TimelineCommands:
         """The command of every cycle of the run, made when asked for."""
         return timeline_commands(self.timeline, self.cycles)
 
+    def source(self, controller: Controller) -> InputSource:
+        """The run's input: the path follower steering ``controller`` (:class:`~shc_cli.loop.path_input.PathInput`)
+        when there is a path, else the timeline."""
+        if self.path is not None:
+            from shc_cli.loop.path_input import PathInput
+
+            return PathInput(self.path, controller, self.cycles)
+        return TimelineInput(self.commands())
+
 
 def load_inputs(robot_name: str, gait_name: str | None, velocity: str | tuple[float, float, float],
                 duration: float | None, commands: Path | None, default_s: float, walking: bool = True,
-                robot_change: object = None, check_fit: bool = False) -> RunInputs:
+                robot_change: object = None, check_fit: bool = False, path: Path | None = None) -> RunInputs:
     """Load and check a run's inputs.
 
     Args:
@@ -155,6 +175,9 @@ def load_inputs(robot_name: str, gait_name: str | None, velocity: str | tuple[fl
         walking: False: a constant zero velocity (the stance scenarios).
         robot_change: a callable ``Robot → Robot`` applied after loading (``simulate``'s feedback switches).
         check_fit: check the legs and gaits the timeline names against the robot.
+        path: a path file (``--path``): the follower walks it (instead of ``velocity`` or ``commands``); the run
+            lasts ``duration``, else until the robot stopped at the last waypoint (at most
+            :data:`PATH_TIME_PER_WAYPOINT_S` per waypoint).
     """
     from shc_cli.validation import load_checked
 
@@ -162,10 +185,17 @@ def load_inputs(robot_name: str, gait_name: str | None, velocity: str | tuple[fl
     if callable(robot_change):
         robot = robot_change(robot)
     check_duration(duration)
+    waypoints = None
+    if path is not None:
+        if commands:
+            raise SpecError([Issue(None, None, "--path", "--path and --commands both give the run's input",
+                                   "give one of them")])
+        waypoints = load_path(path)
+        default_s = PATH_TIME_PER_WAYPOINT_S * len(waypoints.waypoints)
     if commands:
         timeline = load_timeline(commands, robot.time_delta)
     else:
-        if not walking:
+        if not walking or waypoints is not None:
             timeline = constant((0.0, 0.0, 0.0))
         else:
             values = parse_velocity(velocity) if isinstance(velocity, str) else velocity
@@ -175,4 +205,4 @@ def load_inputs(robot_name: str, gait_name: str | None, velocity: str | tuple[fl
         check_timeline(robot, timeline, commands)
     cycles = walk_cycles(timeline, duration, robot.time_delta, commands is not None, default_s=default_s)
     gait_file, _ = loaded.where(("walker", "gait"))
-    return RunInputs(robot, gait, timeline, cycles, pose_sets_for(robot, gait, timeline, gait_file.parent))
+    return RunInputs(robot, gait, timeline, cycles, pose_sets_for(robot, gait, timeline, gait_file.parent), waypoints)

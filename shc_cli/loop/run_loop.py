@@ -3,7 +3,8 @@
 :class:`RunLoop` drives any :class:`~shc_cli.backends.base.Backend` (kinematic for ``plan``, physics for
 ``simulate``, Dynamixel for ``run-hw``) with any input source. Each cycle: the command (a RUNNING request
 until the start-up is done, then the input's next command, then — after a stop request on a backend with a
-controlled stop — requests towards the stop state), the controller step with the backend's sensors, the
+controlled stop — requests towards the stop state), the controller step with the backend's sensors, the output
+shown to a source that steers by it (:class:`~shc_cli.backends.base.FeedbackSource`: a path follower), the
 targets applied, one control period, the reading, the fault check, the recorder's row, the observers (who may
 stop the run: a fall). It stops when the input is over, on a fault, on an observer's reason or on a stop request
 (SIGINT/SIGTERM via :func:`shc_cli.loop.session.interrupts`, or :meth:`RunLoop.request_stop`). Robot and walk state
@@ -19,7 +20,7 @@ from typing import Generic, Protocol, TypeVar
 
 import numpy as np
 
-from shc_cli.backends.base import Backend, InputSource
+from shc_cli.backends.base import Backend, FeedbackSource, InputSource
 from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
 from shc_cli.control.walk import WalkState
 from shc_cli.errors import ShcError
@@ -174,6 +175,8 @@ class RunLoop(Generic[ReadingT]):
         self._stopping_since: int | None = None
         self._stop_announced = False
         self._stop_limit_s = 0.0
+        self._observe = source.observe if isinstance(source, FeedbackSource) else None
+        """The source's feedback hook (:class:`~shc_cli.backends.base.FeedbackSource`), told every cycle's output."""
 
     def request_stop(self, reason: str) -> None:
         """Stop (or begin the controlled stop) at the next cycle; the first reason is kept."""
@@ -250,6 +253,8 @@ class RunLoop(Generic[ReadingT]):
             if command is None:
                 break
             out = controller.step(command, sensors)
+            if self._observe is not None:
+                self._observe(out)
             if out.robot_state is not robot_state or out.walk_state is not walk_state:
                 robot_state, walk_state = self._state_events(cycle, out, robot_state, walk_state)
             applied = backend.apply(out)

@@ -14,6 +14,8 @@ What each kind writes:
   RUNNING window, fall detection, terrain, seed, engine and versions.
 * ``run-hw`` (``scenario = "hardware"``): bus, cycle-time statistics, overruns, the fault, the final state, the
   input, what a real robot does not measure.
+* ``plan``, ``simulate``, ``run-hw`` with ``--path``: the path file's copy, the follower's tolerance and each
+  waypoint's result (:class:`WaypointSummary`).
 * every run: ``complete`` and ``stop_reason`` (an interrupted run is marked only by them).
 """
 
@@ -26,6 +28,26 @@ from pydantic import BaseModel, ConfigDict, Field, NonNegativeFloat, NonNegative
 
 SUMMARY_FILE = "summary.json"
 """The summary's file name in a run directory."""
+
+
+class WaypointSummary(BaseModel):
+    """One waypoint of a path run as the follower saw it (its odometry; ``shc analyze`` adds the ground truth)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    x: float = Field(description="Waypoint x in the odometry frame [m].")
+    y: float = Field(description="Waypoint y in the odometry frame [m].")
+    yaw: float | None = Field(None, description="Heading asked for there [rad]; null: any.")
+    reached: bool = Field(description="The odometry came within the tolerances before the follower moved on.")
+    closest_m: NonNegativeFloat | None = Field(None, description="Closest odometry distance to it [m]; null: never "
+                                                                 "the target.")
+    reached_s: NonNegativeFloat | None = Field(None, description="Time it was reached, from the path's start [s].")
+    left_s: NonNegativeFloat | None = Field(None, description="Time the follower moved on from it (or stopped at "
+                                                              "it), from the path's start [s].")
+    position_error_m: NonNegativeFloat | None = Field(None, description="Odometry distance from it when the "
+                                                                        "follower moved on [m].")
+    heading_error_rad: float | None = Field(None, description="Odometry heading error when the follower moved on "
+                                                              "[rad]; null: no heading asked.")
 
 
 class RunSummary(BaseModel):
@@ -173,6 +195,19 @@ class RunSummary(BaseModel):
                                                                     "robot.")
     unmeasured: list[str] | None = Field(None, description="run-hw: log.csv columns a real robot does not measure "
                                                            "(written as 0).")
+
+    # a path run (--path)
+    path_file: str | None = Field(None, description="plan, simulate, run-hw with --path: the path file's copy in "
+                                                    "the run directory (its name).")
+    path_tolerance_m: NonNegativeFloat | None = Field(None, description="--path: distance within which a waypoint "
+                                                                        "counts as reached [m].")
+    path_heading_tolerance_rad: NonNegativeFloat | None = Field(None, description="--path: heading error within "
+                                                                                  "which a waypoint's heading "
+                                                                                  "counts as reached [rad].")
+    path_start_cycle: NonNegativeInt | None = Field(None, description="--path: the logged cycle the follower "
+                                                                      "started at (the path's times count from "
+                                                                      "it).")
+    waypoints: list[WaypointSummary] | None = Field(None, description="--path: each waypoint's result, in order.")
 
     # how it ended (every run)
     complete: bool = Field(True, description="The run played its input to its end (every run; runs written "
