@@ -356,7 +356,10 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
 def analyze_log(run: RunLog, window: Window = Window()) -> dict[str, Any]:
     """:func:`analyze_run` plus whether the run played to its end (``complete``) and why it stopped
     (``stop_reason``: ``end``, ``SIGINT``, ``fell``, ``fault``, …)."""
+    from shc_cli.analysis.path_measures import path_measures
+
     result = analyze_run(run, window)
+    result.update(path_measures(run))
     result["complete"] = run.complete
     result["stop_reason"] = run.summary.stop_reason
     return result

@@ -1,4 +1,4 @@
-"""Checking a sweep, a study, a plan script, a timeline or an auto-pose set as what it is (``shc validate``).
+"""Checking a sweep, a study, a plan script, a timeline, a path or an auto-pose set as what it is (``shc validate``).
 
 A sweep point or a study trial that sets robot-file values (``"walker.body_clearance" = [0.2, 0.3]``) runs a robot
 *variant* — a file that ``extends`` the robot with those values. :func:`check_variants` writes each distinct variant
@@ -126,6 +126,13 @@ def validate_file(name: str, kind: Kind) -> tuple[str, list[Issue]]:
         issues = _gaits_fit(path, points, study.lines) + found.issues
         return (f"{path}: study '{study.name}' ok ({len(study.space)} parameters, {found.variants} robot variants "
                 "checked at the bounds and choices)", issues)
+    if kind == "path":
+        from shc_cli.spec.path import load_path
+
+        loaded = load_path(path)
+        headings = sum(w.yaw is not None for w in loaded.waypoints)
+        return (f"{path}: path ok ({len(loaded.waypoints)} waypoints, {headings} with a heading, "
+                f"{loaded.length_m:.2f} m from the start)", [])
     if kind in ("plan script", "timeline"):
         from shc_cli.spec.timeline import load_timeline
 

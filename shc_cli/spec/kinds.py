@@ -1,7 +1,7 @@
 """Which kind of shc file a file is (the checks of each kind: :mod:`shc_cli.domain.file_checks`).
 
-``shc validate`` takes any shc file: a robot, a gait, an auto-pose set, a sweep, a study or a plan script (TOML), or
-a command timeline (CSV). The kind follows from the top-level keys only each kind has (:func:`file_kind`), so that a
+``shc validate`` takes any shc file: a robot, a gait, an auto-pose set, a sweep, a study, a plan script or a path
+(TOML), or a command timeline or a path (CSV, told apart by the header). The kind follows from the top-level keys only each kind has (:func:`file_kind`), so that a
 sweep is checked as a sweep instead of as a robot file with an unknown key ``grid``.
 """
 
@@ -17,13 +17,14 @@ from shc_cli.spec.robot import Robot
 DEFAULT_ROBOT = "bullet"
 """The robot of a point whose file names none (``shc simulate``'s default)."""
 
-Kind = Literal["robot", "gait", "pose set", "sweep", "study", "plan script", "timeline"]
+Kind = Literal["robot", "gait", "pose set", "sweep", "study", "plan script", "timeline", "path"]
 
 MARKERS: tuple[tuple[Kind, tuple[str, ...]], ...] = (
     ("gait", ("stance_phase", "swing_phase", "offset_multiplier")),
     ("sweep", ("grid",)),
     ("study", ("space", "objectives")),
     ("plan script", ("step",)),
+    ("path", ("waypoint",)),
     ("pose set", ("poser", "pose_phase_length", "negation")),
 )
 """Top-level keys only one kind of file has, in the order they are tried."""
@@ -35,7 +36,9 @@ def file_kind(name: str) -> Kind:
     path = Path(name)
     if path.is_file():
         if path.suffix.lower() == ".csv":
-            return "timeline"
+            from shc_cli.spec.path import is_path_csv
+
+            return "path" if is_path_csv(path) else "timeline"
         try:
             data = tomllib.loads(path.read_text(encoding="utf-8"))
         except (tomllib.TOMLDecodeError, UnicodeDecodeError, OSError):
