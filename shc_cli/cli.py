@@ -194,7 +194,8 @@ def simulate(
 
     check_outputs(bag, video, overwrite)
     options = SimulationConfig(robot=robot, gait=gait, velocity=velocity, duration=duration, commands=commands,
-                               path=path, out=out, plots=plots, terrain=terrain, scenario=scenario, physics_rate=physics_rate,
+                               path=path, out=out, plots=plots, terrain=terrain, scenario=scenario,
+                               physics_rate=physics_rate,
                                friction=friction, restitution=restitution, seed=seed, imu_noise=imu_noise,
                                start=start, gui=gui, stand=stand, posture=posture, imu_posing=imu_posing,
                                inclination=inclination, admittance=admittance, fail_on_fall=fail_on_fall,

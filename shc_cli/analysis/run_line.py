@@ -75,8 +75,8 @@ def plan_line(summary: RunSummary, path: Path, note: str = "") -> str:
     return (f"{summary.robot} / {gaits}: {summary.cycles} cycles "
             f"({summary.duration_s or 0.0:.2f} s), path speed {summary.path_speed_mps or 0.0:.4f} m/s, displacement "
             f"speed {summary.displacement_speed_mps or 0.0:.4f} m/s, {feet}, IK deviations "
-            f"{summary.ik_deviation_count}, clamped {summary.ik_clamp_count}{progress_note(summary)}{path_note(summary)}"
-            f"{note} → {path}")
+            f"{summary.ik_deviation_count}, clamped {summary.ik_clamp_count}{progress_note(summary)}"
+            f"{path_note(summary)}{note} → {path}")
 
 
 def path_note(summary: RunSummary) -> str:

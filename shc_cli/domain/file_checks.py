@@ -129,10 +129,10 @@ def validate_file(name: str, kind: Kind) -> tuple[str, list[Issue]]:
     if kind == "path":
         from shc_cli.spec.path import load_path
 
-        loaded = load_path(path)
-        headings = sum(w.yaw is not None for w in loaded.waypoints)
-        return (f"{path}: path ok ({len(loaded.waypoints)} waypoints, {headings} with a heading, "
-                f"{loaded.length_m:.2f} m from the start)", [])
+        walk = load_path(path)
+        headings = sum(w.yaw is not None for w in walk.waypoints)
+        return (f"{path}: path ok ({len(walk.waypoints)} waypoints, {headings} with a heading, "
+                f"{walk.length_m:.2f} m from the start)", [])
     if kind in ("plan script", "timeline"):
         from shc_cli.spec.timeline import load_timeline
 

@@ -1,8 +1,9 @@
 """Which kind of shc file a file is (the checks of each kind: :mod:`shc_cli.domain.file_checks`).
 
 ``shc validate`` takes any shc file: a robot, a gait, an auto-pose set, a sweep, a study, a plan script or a path
-(TOML), or a command timeline or a path (CSV, told apart by the header). The kind follows from the top-level keys only each kind has (:func:`file_kind`), so that a
-sweep is checked as a sweep instead of as a robot file with an unknown key ``grid``.
+(TOML), or a command timeline or a path (CSV, told apart by the header). The kind follows from the top-level keys
+only each kind has (:func:`file_kind`), so that a sweep is checked as a sweep instead of as a robot file with an
+unknown key ``grid``.
 """
 
 from __future__ import annotations

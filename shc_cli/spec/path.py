@@ -25,6 +25,7 @@ follower's default)::
 from __future__ import annotations
 
 import csv
+import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -73,7 +74,7 @@ class Path2D:
     def length_m(self) -> float:
         """Length of the polyline from the start (0, 0) through every waypoint [m]."""
         points = [(0.0, 0.0), *((w.x, w.y) for w in self.waypoints)]
-        return sum(math.dist(a, b) for a, b in zip(points, points[1:], strict=False))
+        return sum(math.dist(a, b) for a, b in itertools.pairwise(points))
 
 
 class _TomlWaypoint(Strict):
@@ -159,7 +160,7 @@ def _load_csv(path: Path) -> Path2D:
                 value = float(cell)
             except ValueError:
                 raise SpecError([Issue(path, number, name, f"'{cell}' is not a number",
-                                       "write metres for x and y, radians for yaw (e.g. 1.5708)")]) from None
+                                       "write metres for x and y, radians for yaw, e.g. 1.5708")]) from None
             _check(path, number, name, value, name)
             values.append(value)
         x, y = values[0], values[1]
