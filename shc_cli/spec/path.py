@@ -92,13 +92,14 @@ class PathFile(Strict):
 
 
 def is_path_csv(path: Path) -> bool:
-    """Whether a CSV file's header is a path's (``x,y`` or ``x,y,yaw``) rather than a command timeline's."""
+    """Whether a CSV file is a path rather than a command timeline: its header's first column is ``x`` (a path's
+    header is ``x,y`` or ``x,y,yaw``; a timeline's starts with ``cycle``)."""
     try:
         with path.open(encoding="utf-8") as handle:
             for line in handle:
                 text = line.strip()
                 if text and not text.startswith("#"):
-                    return [c.strip() for c in text.split(",")] in PATH_HEADERS
+                    return text.split(",")[0].strip() == "x"
     except (OSError, UnicodeDecodeError):
         return False
     return False
@@ -129,10 +130,12 @@ def _text(path: Path) -> str:
 def _check(path: Path, line: int | None, field: str, value: float, name: str) -> None:
     if not math.isfinite(value):
         raise SpecError([Issue(path, line, field, f"{name} is {value}", "use a finite number")])
-    if abs(value) > (math.tau * 100 if name == "yaw" else MAX_DISTANCE_M):
-        unit = "radians" if name == "yaw" else "metres"
-        raise SpecError([Issue(path, line, field, f"{name} {value:g} is implausibly large",
-                               f"write {unit} (not degrees or millimetres)")])
+    if name == "yaw" and abs(value) > math.tau:
+        raise SpecError([Issue(path, line, field, f"yaw {value:g} is outside −2π…2π",
+                               f"write radians, not degrees: {value:g}° is {math.radians(value):.4f}")])
+    if name != "yaw" and abs(value) > MAX_DISTANCE_M:
+        raise SpecError([Issue(path, line, field, f"{name} {value:g} is beyond {MAX_DISTANCE_M:g} m",
+                               "write metres, not millimetres")])
 
 
 def _load_csv(path: Path) -> Path2D:
