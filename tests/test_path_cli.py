@@ -81,7 +81,7 @@ def test_a_bad_path_file_is_one_line_and_exit_2(text: str, where: str, what: str
     out = tmp_path / "run"
     for command in (["plan", "--path", str(file), "--out", str(out)],
                     ["simulate", "--path", str(file), "--out", str(out)], ["validate", str(file)]):
-        code, stdout, err = run(command, capsys, monkeypatch)
+        code, _, err = run(command, capsys, monkeypatch)
         assert code == 2, (command, err)
         lines = err.strip().splitlines()
         assert len(lines) == 1 and "Traceback" not in err, err

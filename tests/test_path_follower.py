@@ -4,6 +4,7 @@ cannot reach as missed."""
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -90,7 +91,7 @@ def test_walks_the_square_reaches_every_waypoint_and_stops_at_the_last() -> None
     assert abs(wrap(walker.pose[2])) <= options.heading_tolerance_rad
     assert asked[-1] == (0.0, 0.0, 0.0)
     times = [r.left_s for r in follower.results]
-    assert all(a is not None and b is not None and a < b for a, b in zip(times, times[1:], strict=False))
+    assert all(a is not None and b is not None and a < b for a, b in itertools.pairwise(times))
 
 
 @settings(max_examples=25, deadline=None)

@@ -10,8 +10,8 @@ where the follower started (``summary.path_start_cycle``), which is the odometry
 * ``waypoints_reached`` / ``waypoints_total`` — waypoints where, when the follower moved on from them, the truth
   was within the run's tolerance (``path_tolerance_m``) and, when a heading was asked, its heading within
   ``path_heading_tolerance_rad``.
-* ``time_to_goal_s`` — from the follower's start to its leaving the last waypoint, when that one was reached
-  (``None`` otherwise).
+* ``time_to_goal_s`` — from the follower's start to its leaving the last waypoint, when the follower reached it
+  (by its odometry; ``None`` otherwise): how long the walk took, whatever its accuracy.
 * ``waypoint_errors_m`` / ``waypoint_heading_errors_deg`` — per waypoint, the truth's distance and heading error
   when the follower moved on (``None``: it never did).
 
@@ -99,8 +99,7 @@ def path_measures(run: RunLog) -> dict[str, Any]:
     out["cross_track_rms_m"] = float(np.sqrt(walked.mean())) if len(walked) else None
     out["waypoints_reached"] = reached
     last = waypoints[-1]
-    out["time_to_goal_s"] = last.left_s if last.reached and errors[-1] is not None and errors[-1] <= tolerance \
-        else None
+    out["time_to_goal_s"] = last.left_s if last.reached else None
     out["waypoint_errors_m"] = errors
     out["waypoint_heading_errors_deg"] = heading_errors
     out["measured_by"] = "ground truth"
