@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Literal
 from pydantic import BaseModel, ConfigDict, ValidationInfo, field_validator
 
 from shc_cli.domain.result import RunResult
-from shc_cli.errors import check_choice
+from shc_cli.errors import Issue, SpecError, check_choice
 from shc_cli.events import NOTICE, event
 from shc_cli.loop.input_choice import check_input
 from shc_cli.loop.input_sources import STATES

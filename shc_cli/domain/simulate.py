@@ -45,8 +45,8 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     from shc_cli import __version__
     from shc_cli.backends.simulated import SimulatedBackend, open_world
     from shc_cli.control.controller import Controller
-    from shc_cli.loop.input_choice import commands_file, is_live, open_input
     from shc_cli.errors import Issue, SpecError
+    from shc_cli.loop.input_choice import commands_file, is_live, open_input
     from shc_cli.loop.path_input import keep_path
     from shc_cli.loop.physics_summary import PhysicsRecord
     from shc_cli.loop.run_inputs import load_inputs
