@@ -16,6 +16,8 @@ if TYPE_CHECKING:
     from collections.abc import Callable, Sequence
     from typing import Unpack
 
+    from shc_cli.domain.bringup.check import CheckReport
+    from shc_cli.domain.bringup.jog import JogReport, Question
     from shc_cli.domain.config import SimulationConfig, SimulationOptions
     from shc_cli.domain.fit.run import FitResult
     from shc_cli.domain.hardware import HardwareConfig
@@ -24,6 +26,7 @@ if TYPE_CHECKING:
     from shc_cli.domain.ros_node import NodeConfig
     from shc_cli.domain.simulate import OnProgress
     from shc_cli.domain.sweeps.run import OnRow, SweepReport
+    from shc_cli.hardware.scan import Found, Protocol
     from shc_cli.loop.runread import RunLog
     from shc_cli.loop.summary import RunSummary
     from shc_cli.spec.gait import Gait
@@ -230,6 +233,50 @@ def _table(path: Path) -> list[dict[str, str]]:
 
 def _path(value: Path | str | None) -> Path | None:
     return None if value is None else Path(value)
+
+
+def hw_scan(ports: list[str] | None = None, *, bauds: list[int] | None = None,
+            protocols: list[Protocol] | None = None, ids: range = range(253), timeout_s: float | None = None,
+            on_step: Callable[[str], None] | None = None) -> list[Found]:
+    """``shc hw scan``: the servos answering on ``ports`` (default every USB serial adapter) at ``bauds``
+    [bit/s] in ``protocols`` (``2.0``, ``1.0``, ``feetech``) with ids in ``ids``."""
+    from shc_cli.hardware.scan import DEFAULT_BAUDS, PROTOCOLS, check_ports, scan
+
+    return scan(check_ports(list(ports or [])), bauds or DEFAULT_BAUDS, protocols or PROTOCOLS, ids, timeout_s,
+                on_step)
+
+
+def hw_check(robot: str | Path, ports: list[str], baud: int | None = None) -> CheckReport:
+    """``shc hw check``: every joint's present position against its limits and the standing pose (no motion, no
+    torque)."""
+    from shc_cli.domain.bringup.check import check
+
+    return check(load_robot(robot), ports, baud)
+
+
+def hw_jog(robot: str | Path, ports: list[str], ask: Callable[[Question], str], *, joints: list[str] | None = None,
+           angle: float = 0.1, torque: float = 0.3, baud: int | None = None) -> JogReport:
+    """``shc hw jog``: each joint moved by ``angle`` [rad] and back, torque limited to ``torque`` of the maximum;
+    ``ask`` answers the direction and zero questions; the answers are written to the robot file."""
+    from shc_cli.domain.bringup.jog import check_jog_options, jog
+    from shc_cli.errors import Issue, SpecError
+
+    path = Path(robot)
+    if not path.is_file():
+        raise SpecError([Issue(None, None, "ROBOT", f"{robot}: not a robot file (jog writes the servo map back)",
+                               "give the robot file's path; copy a bundled robot first")])
+    loaded = load_robot(path)
+    check_jog_options(loaded, joints, angle, torque)
+    return jog(loaded, path, ports, ask, joints, angle, torque, baud)
+
+
+def hw_emulate(robot: str | Path, on_ready: Callable[[list[str]], None], *, links: list[Path] | None = None,
+               baud: int | None = None, duration: float | None = None) -> None:
+    """``shc hw emulate``: the robot's servo buses emulated on pseudo-terminals until a signal (or ``duration``
+    [s]); ``on_ready`` gets their ports."""
+    from shc_cli.domain.bringup.emulate import emulate
+
+    emulate(load_robot(robot), on_ready, links, baud, duration)
 
 
 def warm_up() -> float:

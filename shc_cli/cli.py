@@ -484,6 +484,77 @@ def import_urdf(
     run(file, out, name, legs, tip, clearance, reach, snap, arg, forward)
 
 
+hw_app = typer.Typer(help="Bring a robot's servos up: find them, check where they stand, jog each joint to confirm "
+                     "its direction and zero, emulate a robot's buses.", no_args_is_help=True)
+app.add_typer(hw_app, name="hw")
+PortsOption = Annotated[list[str], typer.Option("--port", metavar="DEV", help="Serial device of a servo bus, e.g. "
+                                                "/dev/ttyUSB0; once per bus, bus 0 first.")]
+HwBaudOption = Annotated[int | None, typer.Option(help="Baud rate [default: hardware.baud].")]
+
+
+@hw_app.command("scan")
+def hw_scan(
+    port: Annotated[list[str] | None, typer.Option(metavar="DEV", help="Serial device to scan; repeatable "
+                                                   "[default: every /dev/ttyUSB* and /dev/ttyACM*].")] = None,
+    baud: Annotated[list[int] | None, typer.Option(help="Baud rate to try; repeatable [default: 1000000 and "
+                                                   "57600, the servos' factory rates].")] = None,
+    protocol: Annotated[list[str] | None, typer.Option(help="2.0, 1.0 (Dynamixel) or feetech; repeatable "
+                                                       "[default: all].")] = None,
+    ids: Annotated[str, typer.Option(help="Ids to look for, FIRST-LAST.")] = "0-252",
+    timeout_ms: Annotated[float | None, typer.Option(help="Reply timeout of a Protocol 1.0/Feetech ping [ms] "
+                                                     "[default: 2 x the adapter's latency timer + 6].")] = None,
+) -> None:
+    """Find the servos: for each port, baud rate and protocol, the ids that answer, their model and firmware."""
+    from shc_cli.commands.hw import run_scan
+
+    run_scan(port or [], baud or [], protocol or [], ids, timeout_ms)
+
+
+@hw_app.command("check")
+def hw_check(robot: RobotArgument, port: PortsOption, baud: HwBaudOption = None) -> None:
+    """Read every joint's position (no motion, no torque) against its limits and the standing pose; exit 1 when a
+    joint is outside its limits."""
+    from shc_cli.commands.hw import run_check
+
+    run_check(robot, port, baud)
+
+
+@hw_app.command("jog")
+def hw_jog(
+    robot: Annotated[str, typer.Argument(help="Robot file (its [hardware.servos] is written back).")],
+    port: PortsOption,
+    joint: Annotated[list[str] | None, typer.Option(help="Joint to jog, e.g. AR_coxa; repeatable [default: "
+                                                    "every joint, in order].")] = None,
+    angle: Annotated[float, typer.Option(help="Jog size [rad].")] = 0.1,
+    torque: Annotated[float, typer.Option(help="Torque limit while jogging, a share of the maximum (0-1].")] = 0.3,
+    answers: Annotated[str | None, typer.Option(help="Answers in order instead of asking, e.g. y,k,n,h: "
+                                                "direction y(es)/n(o, reversed)/s(kip), then zero h(ere)/k(eep).")]
+    = None,
+    baud: HwBaudOption = None,
+) -> None:
+    """Move one joint at a time by a small angle, torque limited, and back; confirm its direction and zero, which
+    are written to the robot file's [hardware.servos]."""
+    from shc_cli.commands.hw_jog import run_jog
+
+    run_jog(robot, port, joint or [], angle, torque, answers, baud)
+
+
+@hw_app.command("emulate")
+def hw_emulate(
+    robot: RobotArgument,
+    link: Annotated[list[Path] | None, typer.Option(help="Make a symbolic link to each bus's port here (bus 0 "
+                                                    "first); repeatable.")] = None,
+    baud: HwBaudOption = None,
+    duration: Annotated[float | None, typer.Option(help="Stop after this many seconds [default: at Ctrl-C].")]
+    = None,
+) -> None:
+    """Emulate the robot's servo buses on pseudo-terminals (their ports are printed), to try the hw commands and
+    run-hw without hardware."""
+    from shc_cli.commands.hw import run_emulate
+
+    run_emulate(robot, link or [], baud, duration)
+
+
 @app.command()
 def schema(
     kind: Annotated[str, typer.Argument(help="'robot', 'gait' or 'summary'.")],

@@ -81,6 +81,8 @@ class Protocol1Bus(ServoBus):
                                    for s in self.slots])
         self._speed_unit = np.array([s.model.velocity_unit_rpm for s in self.slots])
         self._load_unit = np.array([s.model.load_unit for s in self.slots])
+        self._last_tick = np.array([s.model.resolution - 1 for s in self.slots])
+        """Each servo's last position tick (1023 for the AX series, 4095 for MX and STS)."""
         self._sdk: Any = None
         self.errors: dict[int, int] = {}
         """The last status error byte of each servo (slot) that had one set."""
@@ -220,7 +222,8 @@ class Protocol1Bus(ServoBus):
                                 f"angle limits (addresses {table.min_position_limit}, {table.max_position_limit})")
                 continue
             ends = sorted(self._to_ticks(index, np.array(slot.limits)))
-            if ends[0] < low or ends[1] > high:
+            # one tick of rounding: a limit at the end of an AX's 300° (±150°: tick 1024) is its last tick, 1023
+            if ends[0] < low - 1 or ends[1] > high + 1:
                 problems.append(f"{slot.key}: the joint limits {slot.limits[0]:.3f}..{slot.limits[1]:.3f} rad are "
                                 f"ticks {ends[0]}..{ends[1]}, outside servo {slot.servo_id}'s angle limits "
                                 f"{low}..{high}; widen the servo's angle limits or fix zero_ticks, direction or the "
@@ -363,6 +366,7 @@ class Protocol1Bus(ServoBus):
         """One SYNC WRITE per bus of every goal position ``(L, n)`` [rad]; with ``profile_velocity`` also the speed
         that reaches it in ``period`` [s] (at least one unit: 0 means the servo's maximum)."""
         ticks = self._to_ticks(slice(None), joints[self.layout.rows, self.layout.cols])
+        ticks = np.clip(ticks, 0, self._last_tick)  # a joint limit at the range's end rounds one tick past it
         if self.profile_velocity:
             previous = ticks if self._last_ticks is None else self._last_ticks
             rpm = np.abs(ticks - previous) / (self._ticks_per_rad * 2.0 * math.pi) / period * 60.0

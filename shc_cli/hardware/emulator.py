@@ -193,15 +193,18 @@ class BusEmulator:
         dynamics: the servo model of every servo (a robot file's ``[servo]`` table, its parameters the truth a
             fit should find), or None for the first-order lag.
         current_noise_ma: Gaussian noise on Present Current [mA] (with ``dynamics``; seeded by servo id).
+        baud: the servos' baud rate [bit/s]: when given, packets sent at another line speed go unheard (as on a
+            real bus; ``shc hw scan`` tries several).
     """
 
     def __init__(self, servos: dict[int, str], return_delay: float = 0.0,
                  clock: Callable[[], float] = time.monotonic, dynamics: Servo | None = None,
-                 current_noise_ma: float = 0.0) -> None:
+                 current_noise_ma: float = 0.0, baud: int | None = None) -> None:
         self.servos = {servo_id: EmulatedServo(servo_id, MODELS[model], clock=clock, dynamics=dynamics,
                                                current_noise_ma=current_noise_ma)
                        for servo_id, model in sorted(servos.items())}
         self.return_delay = return_delay
+        self.baud = baud
         self.packets: list[p2.Packet] = []
         """Every instruction packet received, in order (for tests)."""
         self.crc_errors = 0
@@ -255,6 +258,8 @@ class BusEmulator:
                 chunk = os.read(self._master, 4096)
             except OSError:
                 return
+            if not line_speed_matches(self._slave, self.baud):
+                continue
             buffer += chunk
             while True:
                 try:
@@ -320,6 +325,22 @@ class BusEmulator:
             target.write(int.from_bytes(params[0:2], "little"), params[2:])
             return self._reply(target)
         return self._reply(target, error=p2.ERROR_INSTRUCTION)
+
+
+def line_speed_matches(fd: int, baud: int | None) -> bool:
+    """Whether the pty's line speed (set by the host's serial library on its end) is ``baud`` [bit/s]: a real servo
+    hears only its own baud rate. True when ``baud`` is None or the speed is not a standard one termios names
+    (pyserial sets those through BOTHER, which a pty does not report)."""
+    import termios
+
+    if baud is None:
+        return True
+    constant = getattr(termios, f"B{baud}", None)
+    try:
+        speed = termios.tcgetattr(fd)[4]
+    except termios.error:
+        return True
+    return constant is None or speed in (constant, getattr(termios, "BOTHER", -1))
 
 
 def serve_promptly() -> None:

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal
 
 from shc_cli.hardware import protocol1 as p1
-from shc_cli.hardware.emulator import serve_promptly
+from shc_cli.hardware.emulator import line_speed_matches, serve_promptly
 
 if TYPE_CHECKING:
     from shc_cli.backends.servo_joint import FreeJoints
@@ -381,11 +381,13 @@ class Protocol1Emulator:
         positions: power-up present positions [ticks] by id (default the middle of the range).
         dynamics: the servo model of every servo (a robot file's ``[servo]`` table: load-free servo joints), or
             None for the first-order lag.
+        check_baud: packets sent at a line speed other than ``baud`` go unheard (as on a real bus).
     """
 
     def __init__(self, servos: dict[int, str], baud: int = 1_000_000, wire_time: bool = False,
                  latency_s: float = 0.0, time_constant: float = 0.03, clock: Callable[[], float] = time.monotonic,
-                 positions: dict[int, int] | None = None, dynamics: Servo | None = None) -> None:
+                 positions: dict[int, int] | None = None, dynamics: Servo | None = None,
+                 check_baud: bool = False) -> None:
         self.servos = {i: EmulatedServo(i, EMULATED_MODELS[name], clock, time_constant, (positions or {}).get(i),
                                         dynamics) for i, name in sorted(servos.items())}
         vendors = {servo.model.vendor for servo in self.servos.values()}
@@ -393,6 +395,7 @@ class Protocol1Emulator:
             raise ValueError("one vendor per bus")
         self.vendor: Vendor = vendors.pop() if vendors else "dynamixel"
         self.baud, self.wire_time, self.latency_s = baud, wire_time, latency_s
+        self.check_baud = check_baud
         self.packets: list[p1.Packet] = []
         """Every instruction packet received with a good checksum, in order."""
         self.checksum_errors = 0
@@ -463,6 +466,8 @@ class Protocol1Emulator:
             except OSError:
                 return
             arrived = time.monotonic()
+            if self.check_baud and not line_speed_matches(self._slave, self.baud):
+                continue
             buffer += chunk
             while True:
                 try:
