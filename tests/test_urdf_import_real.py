@@ -363,3 +363,62 @@ def test_odd_mounts_flipped_rear_frames_tight_coxas_and_an_endcap_tip(tmp_path: 
     code, _, err = run(["plan", str(robot_file), "--duration", "2", "--no-plots", "--out", str(tmp_path / "run")],
                          capsys, monkeypatch)
     assert code == 0, err
+
+
+def test_legs_straight_up_at_the_zero_pose_stand_from_the_seeds(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """Every leg points straight up at the zero pose, its femur joint 0.08 m above the hip yaw on the yaw axis and
+    every pitch axis along base_link's y (the octapod's build, on a hexapod): from all joints at 0 the IK cannot
+    reach any stance (the yaw does not move a tip on its axis); from the seeds it stands, and plans."""
+    legs = [LegSpec(f"leg{i}", [Element("revolute", (x, y, 0.0), lower=-3.1, upper=3.1),
+                                Element("revolute", (0.0, 0.0, 0.08), axis=(0.0, 1.0, 0.0), lower=-3.1, upper=3.1),
+                                Element("revolute", (0.0, 0.0, 0.08), axis=(0.0, 1.0, 0.0), lower=-3.1, upper=3.1),
+                                Element("fixed", (0.0, 0.0, 0.08))], sphere=(0.0, 0.0, 0.0))
+            for i, (x, y) in enumerate([(0.12, -0.08), (0.0, -0.1), (-0.12, -0.08),
+                                        (-0.12, 0.08), (0.0, 0.1), (0.12, 0.08)])]
+    path = tmp_path / "up.urdf"
+    path.write_text(robot_urdf(legs, name="up"))
+    code, _, err, robot_file = _import(path, tmp_path / "out", capsys, monkeypatch)
+    assert code == 0, err
+    assert robot_file is not None
+    data = tomllib.loads(robot_file.read_text())
+    for leg in data["legs"].values():  # the feet stand out from the hips, below them
+        assert leg["stance"]["x"] ** 2 + leg["stance"]["y"] ** 2 > 0.1 ** 2
+    assert _fk_worst(path.read_text(), path, robot_file) < 1e-6
+    code, _, err = run(["plan", str(robot_file), "--duration", "2", "--no-plots", "--out", str(tmp_path / "run")],
+                       capsys, monkeypatch)
+    assert code == 0, err
+    import shc_cli.interop.urdf_import as urdf_import
+
+    monkeypatch.setattr(urdf_import, "_seeds", lambda chains: None)  # OpenSHC's initial pose alone: no stance
+    code, _, err, _ = _import(path, tmp_path / "unseeded", capsys, monkeypatch)
+    assert code == 2 and "no standing pose found" in err
+
+
+@pytest.mark.parametrize(("angles", "expected"), [
+    ([0, 60, 120, 180, 240, 300], 90.0),  # legs ahead and behind, none beside: a quarter turn
+    ([30, 90, 150, 210, 270, 330], 0.0),  # none ahead or behind: as it is
+    ([0, 90, 180, 270], 45.0),  # a "+" quadruped: halfway between two legs
+    ([0, 45, 90, 135, 180, 225, 270, 315], 22.5),  # the octapod
+    ([10, 55, 100, 145, 190, 235, 280, 325], 0.0),  # none within a twentieth of the x axis
+])
+def test_forward_turns_the_least_that_pairs_the_legs_left_and_right(angles: list[float], expected: float) -> None:
+    from shc_cli.interop.urdf_import_clean import forward_turn
+
+    hips = [np.array([0.2 * math.cos(math.radians(a)), 0.2 * math.sin(math.radians(a)), 0.0]) for a in angles]
+    assert math.degrees(forward_turn(hips)) == pytest.approx(expected)
+
+
+@pytest.mark.slow
+def test_the_octapod_walks_with_the_eight_legged_wave_gait_too(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """gaits/octo_wave.toml (one leg at a time, duty 0.875) on the imported octapod: 10 s in MuJoCo, upright, as far
+    as asked within a fifth."""
+    import json
+
+    code, _, err, robot_file = _import(DESCRIPTIONS["octapod"][0], tmp_path, capsys, monkeypatch)
+    assert code == 0, err
+    code, _, err = run(["simulate", str(robot_file), "--gait", "octo_wave", "--duration", "10", "--no-plots", "--out",
+                        str(tmp_path / "sim")], capsys, monkeypatch)
+    assert code == 0, err
+    summary = json.loads((tmp_path / "sim" / "summary.json").read_text())
+    assert not summary["fell"] and summary["gait"] == "octo_wave", summary
+    assert summary["forward_distance_m"] == pytest.approx(summary["commanded_distance_m"], rel=0.2), summary
