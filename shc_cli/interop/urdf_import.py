@@ -37,7 +37,8 @@
   limit that keeps the leg nearly straight) 0.75 … 0.9 out with the body 0.05 … 0.7 of it above the
   hips. ``--clearance`` and ``--reach`` fix either (a stance they ask for that a leg cannot take is refused
   naming the leg, the joint limit and the range that stands). ``unpacked`` is the pose the IK finds there
-  from every joint at 0.
+  from every joint at 0, else (a zero pose far from any stance: legs straight up) from each leg's pose nearest
+  its foot among :data:`SEED_POSES` spread over its joint ranges.
 """
 
 from __future__ import annotations
