@@ -132,3 +132,18 @@ def test_touchdown_and_liftoff_have_hysteresis() -> None:
     detector = ContactDetector(1, touchdown=0.9, liftoff=0.1)
     states = [bool(detector.update(np.array([force]))[0]) for force in (0.0, 0.5, 0.95, 0.5, 0.1, 0.05, 0.5, 1.0)]
     assert states == [False, False, True, True, True, False, False, True]
+
+
+def test_quaternion_roll_pitch_is_euler_of_the_matrix_to_the_bit() -> None:
+    """The odometry's shortcut gives exactly the roll and pitch of the full matrix (random, near-vertical and
+    unnormalised quaternions)."""
+    from shc_cli.control.pose import euler_from_matrix
+    from shc_cli.control.sensing import quaternion_matrix, quaternion_roll_pitch
+
+    rng = np.random.default_rng(7)
+    quaternions = list(rng.normal(size=(5000, 4)))
+    quaternions += [q / np.linalg.norm(q) for q in rng.normal(size=(5000, 4))]
+    quaternions += [np.array([0.0, np.sin(a / 2), 0.0, np.cos(a / 2)]) for a in np.linspace(-np.pi, np.pi, 101)]
+    for q in quaternions:
+        roll, pitch, _ = euler_from_matrix(quaternion_matrix(q))
+        assert quaternion_roll_pitch(q) == (roll, pitch) or (np.isnan(roll) and np.isnan(pitch))

@@ -23,14 +23,14 @@ from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.manipulation import MAX_MANUAL_LEGS as MAX_MANUAL_LEGS
 from shc_cli.control.manipulation import LegManipulation
 from shc_cli.control.odometry import LegOdometry, euler_yaw_rate, level
-from shc_cli.control.pose import Pose, PoseController, PoseReset, euler_from_matrix
+from shc_cli.control.pose import Pose, PoseController, PoseReset
 from shc_cli.control.sensing import (
     ContactDetector,
     ImuPoser,
     PostureController,
     Sensors,
     inclination_pose,
-    quaternion_matrix,
+    quaternion_roll_pitch,
     support_centroid_pose,
 )
 from shc_cli.control.startup import iterations, plan_direct_startup
@@ -375,7 +375,7 @@ class Controller(LegManipulation):
             self._contact_before = contact
         yaw_rate = None
         if sensors is not None and sensors.orientation is not None:
-            roll, pitch, _ = euler_from_matrix(quaternion_matrix(sensors.orientation))
+            roll, pitch = quaternion_roll_pitch(sensors.orientation)
             if sensors.angular_rate is not None:
                 yaw_rate = euler_yaw_rate(roll, pitch, np.asarray(sensors.angular_rate, dtype=float))
         else:
