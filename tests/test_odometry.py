@@ -171,3 +171,43 @@ def test_a_plan_run_has_odometry_columns_and_its_drift_is_small(tmp_path, capsys
     code, stdout, err = run(["analyze", str(out), "--json"], capsys, monkeypatch)
     result = json.loads(stdout)
     assert result["odometry_drift_percent"] < 0.5 and result["odometry_heading_error_deg"] < 0.2
+
+
+def _numpy_increment(before: np.ndarray, after: np.ndarray) -> tuple[float, float, float]:
+    """The NumPy form of the rigid fit (means, centred sums, atan2): what the list form must equal to the bit."""
+    p_mean, q_mean = before.mean(axis=0), after.mean(axis=0)
+    turn = 0.0
+    if len(before) > 1:
+        p, q = before - p_mean, after - q_mean
+        turn = math.atan2(float(np.sum(q[:, 0] * p[:, 1] - q[:, 1] * p[:, 0])),
+                          float(np.sum(q[:, 0] * p[:, 0] + q[:, 1] * p[:, 1])))
+    c, s = math.cos(turn), math.sin(turn)
+    return (float(p_mean[0] - (c * q_mean[0] - s * q_mean[1])), float(p_mean[1] - (s * q_mean[0] + c * q_mean[1])),
+            turn)
+
+
+def test_rigid_increment_equals_the_numpy_form_to_the_bit() -> None:
+    """1 … 10 feet (the list form below 8, NumPy's pairwise sums from 8), random motions and magnitudes; and the
+    odometry's per-cycle path (indices of the stance feet) gives the same pose as the NumPy form."""
+    rng = np.random.default_rng(11)
+    for count in range(1, 11):
+        for _ in range(2000):
+            before = rng.normal(size=(count, 2)) * 10.0 ** rng.integers(-3, 1)
+            after = before + rng.normal(size=(count, 2)) * 10.0 ** rng.integers(-6, -1)
+            assert rigid_increment(before, after) == _numpy_increment(before, after)
+    odometry = LegOdometry(0.01)
+    feet = rng.normal(size=(6, 3))
+    pose = np.zeros(3)
+    odometry.update(feet, np.ones(6, dtype=bool))
+    for _ in range(500):
+        moved = feet + rng.normal(size=(6, 3)) * 1e-3
+        stance = rng.random(6) < 0.6
+        if stance.any():
+            dx, dy, turn = _numpy_increment(feet[stance, :2], moved[stance, :2])
+        else:
+            dx = dy = turn = 0.0
+        heading = pose[2]
+        pose = np.array([pose[0] + (math.cos(heading) * dx - math.sin(heading) * dy),
+                         pose[1] + (math.sin(heading) * dx + math.cos(heading) * dy), heading + turn])
+        assert odometry.update(moved, stance) == tuple(pose.tolist())
+        feet = moved

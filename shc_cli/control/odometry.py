@@ -63,6 +63,8 @@ def level(feet: np.ndarray, roll: float, pitch: float) -> np.ndarray:
 def rigid_increment(before: np.ndarray, after: np.ndarray) -> tuple[float, float, float]:
     """Body motion ``(dx, dy, dψ)`` [m, m, rad] over one cycle, in the body's earlier level frame, from the
     planar positions ``(K, 2)`` of the same K ≥ 1 world-fixed feet before and after (least squares, 2-D Kabsch)."""
+    if len(before) < PAIRWISE_FROM:
+        return _increment_of_lists(np.asarray(before, dtype=float).tolist(), np.asarray(after, dtype=float).tolist())
     p_mean, q_mean = before.mean(axis=0), after.mean(axis=0)
     if len(before) > 1:
         p, q = before - p_mean, after - q_mean
@@ -74,6 +76,41 @@ def rigid_increment(before: np.ndarray, after: np.ndarray) -> tuple[float, float
     dx = float(p_mean[0] - (c * q_mean[0] - s * q_mean[1]))
     dy = float(p_mean[1] - (s * q_mean[0] + c * q_mean[1]))
     return dx, dy, turn
+
+
+PAIRWISE_FROM = 8
+"""From this many elements NumPy sums a 1-D array pairwise; below it, element by element from the first (as a mean
+over the first axis always does) — the order :func:`_increment_of_lists` repeats."""
+
+
+def _increment_of_lists(before: list[list[float]], after: list[list[float]]) -> tuple[float, float, float]:
+    """:func:`rigid_increment` of fewer than :data:`PAIRWISE_FROM` feet given as lists of (x, y[, …]): NumPy's
+    operations in NumPy's order on Python floats (the same bits, tested), without NumPy's per-call cost — the
+    odometry runs every control cycle."""
+    k = len(before)
+    px, py = before[0][0], before[0][1]
+    qx, qy = after[0][0], after[0][1]
+    for i in range(1, k):
+        px += before[i][0]
+        py += before[i][1]
+        qx += after[i][0]
+        qy += after[i][1]
+    px, py, qx, qy = px / k, py / k, qx / k, qy / k
+    if k > 1:
+        cross = dot = 0.0
+        for i in range(k):
+            bx, by = before[i][0] - px, before[i][1] - py
+            ax, ay = after[i][0] - qx, after[i][1] - qy
+            if i == 0:
+                cross, dot = ax * by - ay * bx, ax * bx + ay * by
+            else:
+                cross += ax * by - ay * bx
+                dot += ax * bx + ay * by
+        turn = math.atan2(cross, dot)
+    else:
+        turn = 0.0
+    c, s = math.cos(turn), math.sin(turn)
+    return px - (c * qx - s * qy), py - (s * qx + c * qy), turn
 
 
 class LegOdometry:
@@ -115,8 +152,12 @@ class LegOdometry:
         dx = dy = legs_turn = 0.0
         used = 0
         if self._feet is not None:
-            used = int(stance.sum())
-            if used:
+            chosen = [i for i, standing in enumerate(stance.tolist()) if standing]
+            used = len(chosen)
+            if 0 < used < PAIRWISE_FROM:
+                before, after = self._feet.tolist(), feet.tolist()
+                dx, dy, legs_turn = _increment_of_lists([before[i] for i in chosen], [after[i] for i in chosen])
+            elif used:
                 dx, dy, legs_turn = rigid_increment(self._feet[stance, :2], feet[stance, :2])
         self._feet, self.feet_used = feet, used
         self.leg_yaw += legs_turn
