@@ -89,7 +89,7 @@ def quaternion_roll_pitch(q: np.ndarray) -> tuple[float, float]:
     """Roll and pitch [rad] of a unit quaternion (x, y, z, w): ``euler_from_matrix(quaternion_matrix(q))[:2]`` from
     the three matrix entries they need, with the same operations in the same order (the same bits; the leg odometry
     calls it every cycle, where building the whole matrix cost ≈ 20 µs)."""
-    x, y, z, w = (float(v) for v in q)
+    x, y, z, w = np.asarray(q, dtype=float).tolist()
     r20 = 2 * (x * z - y * w)
     r21 = 2 * (y * z + x * w)
     r22 = 1 - 2 * (x * x + y * y)

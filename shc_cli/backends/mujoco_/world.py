@@ -43,6 +43,9 @@ from shc_cli.spec.robot import Robot
 
 RAY_GROUPS = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)
 """Geom groups the height ray sees: the terrain's (0), not the robot's."""
+DOWN = np.array([0.0, 0.0, -1.0])
+DOWN.flags.writeable = False
+"""The height ray's direction."""
 
 
 class MujocoWorld:
@@ -116,6 +119,10 @@ class MujocoWorld:
         """The servos' joint positions: a view into ``qpos`` (the hinges follow the free joint, legs in order)."""
         self._v = _view(data.qvel, self.qvel_index)
         self._ctrl = data.ctrl
+        self._xmat, self._xquat, self._xpos = data.xmat, data.xquat, data.xpos
+        self._qvel, self._sensordata = data.qvel, data.sensordata
+        """Views into ``data`` the sensor read uses, fetched once (each attribute access builds a new view)."""
+        self._mj_ray = mujoco.mj_ray
         """The actuators' controls, one per servo in servo order (a view into ``data``, fetched once)."""
         self._force = data.actuator_force
         """The actuators' forces after a step (a view into ``data``)."""
@@ -182,21 +189,22 @@ class MujocoWorld:
 
     def read(self) -> Reading:
         """Sensor readings now."""
-        data, padded = self.data, self.layout.padded
-        rotation = data.xmat[self.base].reshape(3, 3).copy()
-        quat = data.xquat[self.base]
-        position = data.xpos[self.base].copy()
+        padded, base = self.layout.padded, self.base
+        rotation = self._xmat[base].reshape(3, 3).copy()
+        quat = self._xquat[base]
+        position = self._xpos[base].copy()
         if self.fixed_base:
             linear_origin, angular = np.zeros(3), np.zeros(3)
         else:
-            linear_origin = data.qvel[0:3].copy()
-            angular = rotation @ data.qvel[3:6]  # a free joint's angular velocity is in the body frame
+            qvel = self._qvel
+            linear_origin = qvel[0:3].copy()
+            angular = rotation @ qvel[3:6]  # a free joint's angular velocity is in the body frame
         r = rotation @ self.com_offset
         w = angular
         velocity = linear_origin + np.array([w[1] * r[2] - w[2] * r[1], w[2] * r[0] - w[0] * r[2],
                                              w[0] * r[1] - w[1] * r[0]])  # of the centre of mass, as PyBullet
         specific_force, rate = self.imu.sense(rotation, velocity, angular)
-        forces = data.sensordata[self.touch_index].copy()
+        forces = self._sensordata[self.touch_index]  # (a copy: fancy indexing)
         return Reading(
             joints=padded(self._positions), joint_velocities=padded(np.array(self._v)),
             joint_efforts=padded(self._mean_torque), servo_power=padded(self._mean_power),
@@ -208,8 +216,7 @@ class MujocoWorld:
 
     def _ray_height(self, position: np.ndarray) -> float:
         """Body-origin height above the terrain, from a ray cast down that sees only terrain geoms."""
-        distance = self.mujoco.mj_ray(self.model, self.data, position, np.array([0.0, 0.0, -1.0]), RAY_GROUPS, 1, -1,
-                                      self._ray_hit)
+        distance = self._mj_ray(self.model, self.data, position, DOWN, RAY_GROUPS, 1, -1, self._ray_hit)
         if distance < 0.0:
             return self.terrain.height_above(position)
         return float(distance)
