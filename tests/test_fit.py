@@ -139,3 +139,23 @@ def test_a_bus_log_is_what_a_bus_reads(logs: dict[str, Path]) -> None:
     steps = recording.current / 0.00269
     assert np.allclose(steps, np.round(steps), atol=2e-3)
     assert load_recording(logs["WA_no_power"], load_robot(logs["robot"])).power is None
+
+
+def test_by_joint_fits_each_joint_name_in_its_own_folder(logs: dict[str, Path], tmp_path: Path, cli: Cli) -> None:
+    """Every servo has the same (perturbed) Coulomb friction, so each joint group's fit finds it (from a robot that
+    has the other values right)."""
+    known = {k: v for k, v in TRUTH.items() if k != "coulomb_friction"}
+    start = tmp_path / "start.toml"
+    start.write_text(f'extends = "{logs["robot"].as_posix()}"\n[servo]\n'
+                     + "".join(f"{k} = {v!r}\n" for k, v in known.items()), encoding="utf-8")
+    argv = ["fit", str(logs["WA"]), "--robot", str(start), "--params", "coulomb", "--by", "joint",
+            "--no-plots", "--out", str(tmp_path / "fit")]
+    code, out, err = run(argv, *cli)
+    assert code == 0, err
+    groups = sorted(p.name for p in (tmp_path / "fit").iterdir())
+    assert groups == ["coxa", "coxat", "femur", "tarsus", "tibia"], groups
+    for group in groups:
+        data = json.loads((tmp_path / "fit" / group / "fit.json").read_text(encoding="utf-8"))
+        assert data["params"]["coulomb_friction"]["value"] == pytest.approx(TRUTH["coulomb_friction"], rel=0.10)
+        assert (tmp_path / "fit" / group / "robot.toml").is_file()
+    assert "[femur]" in out
