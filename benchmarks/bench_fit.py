@@ -1,10 +1,12 @@
 """``shc fit`` on logs with known truth, the full case: every default parameter perturbed, 60 s of bus logs.
 
-Run:  .venv/bin/python benchmarks/bench_fit.py [--robot bullet] [--repeats 3] [--no-power] [--out DIR]
+Run:  .venv/bin/python benchmarks/bench_fit.py [--robot bullet] [--runs WA:25,SG:25] [--repeats 3] [--no-power]
+      [--out DIR]
 
 Simulates the robot (default Bullet, 30 servos; ``athena_paper`` has 18) with its ``[servo]`` values changed by
-30–50 % (:data:`FACTORS`; a value of 0 becomes half the parameter's typical size) in three runs — walking in the air,
-standing on the ground and walking on the ground, 60 s of logs with their start-ups — turns them into what a servo
+30–50 % (:data:`FACTORS`; a value of 0 becomes half the parameter's typical size) in the ``--runs`` (scenario:seconds
+after the start-up; default walking in the air 25 s and standing on the ground 25 s: 60 s of logs with the 5 s
+start-ups), turns them into what a servo
 bus logs (positions in ticks, currents in 2.69 mA steps, noise; the supply power kept unless ``--no-power``) and
 fits the robot's nominal servo to them with ``shc fit``'s default parameters. Prints each parameter (truth, fitted,
 error, uncertainty, identifiable), the mean power of a held-out run (walking on the ground at another velocity)
@@ -24,8 +26,6 @@ from pathlib import Path
 FACTORS = {"position_p_gain": 1.4, "coulomb_friction": 0.6, "viscous_friction": 1.5, "holding_ratio": 1.4,
            "armature": 1.45, "idle_power": 0.65, "torque_constant": 0.7}
 """Truth ÷ nominal of each fitted parameter."""
-RUNS = {"WA": ("WA", 15.0, "1,0,0"), "SG": ("SG", 10.0, "1,0,0"), "WG": ("WG", 20.0, "1,0,0")}
-"""Fitted runs: scenario, seconds after the start-up, velocity."""
 HELD_OUT = ("WG", 10.0, "0.5,0,0.3")
 
 
@@ -39,6 +39,7 @@ def main() -> None:
 
     parser = argparse.ArgumentParser()
     parser.add_argument("--robot", default="bullet")
+    parser.add_argument("--runs", default="WA:25,SG:25", help="fitted runs, SCENARIO:SECONDS,...")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--no-power", action="store_true")
     parser.add_argument("--out", type=Path, default=None)
@@ -51,7 +52,9 @@ def main() -> None:
     body = "\n".join(f"{k} = {v!r}" for k, v in truth.items())
     (root / "truth.toml").write_text(f'extends = "{args.robot}"\n[servo]\n{body}\n', encoding="utf-8")
     logs = []
-    for name, (scenario, seconds, velocity) in {**RUNS, "held_out": HELD_OUT}.items():
+    runs = {f"{scenario}{seconds}": (scenario, float(seconds), "1,0,0")
+            for scenario, seconds in (part.split(":") for part in args.runs.split(","))}
+    for name, (scenario, seconds, velocity) in {**runs, "held_out": HELD_OUT}.items():
         sim = root / f"sim_{name}"
         if not sim.exists():
             simulate(root / "truth.toml", scenario=scenario, duration=seconds, velocity=velocity, plots=False,
