@@ -66,9 +66,13 @@ def _check_fields(log: RunLog, topics: dict[str, list[tuple[int, object]]]) -> N
     positions = np.array([m.position for _, m in joint_states])  # type: ignore[attr-defined]
     np.testing.assert_array_equal(positions, log.joints.reshape(n, -1))
     assert joint_states[0][1].name[:2] == ["AR_coxa_joint", "AR_coxat_joint"]  # type: ignore[attr-defined]
+    truth = np.array([[m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z]  # type: ignore[attr-defined]
+                      for _, m in topics["/ground_truth/odom"]])
+    np.testing.assert_array_equal(truth, log.position)
     odom = np.array([[m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z]  # type: ignore[attr-defined]
-                     for _, m in topics["/odom"]])
-    np.testing.assert_array_equal(odom, log.position)
+                     for _, m in topics["/odom"]])  # the leg odometry, at the body's height
+    assert log.odometry is not None
+    np.testing.assert_array_equal(odom, np.column_stack([log.odometry[:, :2], log.position[:, 2]]))
     assert topics["/robot_description"][0][1].data == robot_urdf(log.robot)  # type: ignore[attr-defined]
     tf = topics["/tf"][n // 2][1]
     assert len(tf.transforms) == 1 + 6 * (5 + 1)  # type: ignore[attr-defined]

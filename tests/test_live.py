@@ -77,11 +77,16 @@ def _check_joints(joints: list[dict[str, object]], table: Path, suffix: str) -> 
 def test_a_live_plan_reaches_the_client_cycle_for_cycle(tmp_path: Path) -> None:
     run = tmp_path / "plan"
     messages = _live_run(["plan", "--duration", "3", "--realtime", "--out", str(run), "--no-plots"],
-                         ["/desired_joint_states", "/shc/AR/state"])
+                         ["/desired_joint_states", "/shc/AR/state", "/odom"])
     joints = [m for m in messages if m["topic"] == "/desired_joint_states"]
     legs = [m for m in messages if m["topic"] == "/shc/AR/state"]
-    assert len(joints) > 300 and abs(len(legs) - len(joints)) <= 10
+    odom = [m for m in messages if m["topic"] == "/odom"]
+    assert len(joints) > 300 and abs(len(legs) - len(joints)) <= 10 and abs(len(odom) - len(joints)) <= 10
     _check_joints(joints, run / "joints.csv", "")
+    with (run / "body.csv").open(encoding="utf-8", newline="") as handle:
+        last = list(csv.DictReader(handle))[-1]
+    position = odom[-1]["message"]["pose"]["pose"]["position"]  # the leg odometry of the last cycle, as logged
+    assert float(last["odom_x"]) > 0.1 and abs(position["x"] - float(last["odom_x"])) < 1e-9
 
 
 @pytest.mark.slow

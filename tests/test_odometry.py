@@ -8,7 +8,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shc_cli.control.odometry import LegOdometry, euler_yaw_rate, level, rigid_increment
+from shc_cli.control.odometry import LegOdometry, euler_yaw_rate, level, quaternion_yaw, rigid_increment
 
 finite = st.floats(-0.5, 0.5, allow_nan=False)
 turns = st.floats(-0.3, 0.3, allow_nan=False)
@@ -33,6 +33,16 @@ def test_rigid_motion_of_the_feet_gives_the_opposite_body_motion(points: list[tu
     after = body_frame(feet, dx, dy, dyaw)  # the body moved by (dx, dy, dyaw): the feet move the other way
     got = rigid_increment(feet, after)
     assert np.allclose(got, (dx, dy, dyaw), atol=1e-12)
+
+
+def test_a_foot_without_load_does_not_count() -> None:
+    """Three planted feet and one sliding foot with no load: the weighted fit gives the planted feet's motion."""
+    before = np.array([[0.2, 0.2], [0.2, -0.2], [-0.2, 0.0], [0.0, 0.25]])
+    after = body_frame(before, 0.01, -0.004, 0.02)
+    after[3] += [0.05, 0.03]  # the fourth foot slides
+    got = rigid_increment(before, after, np.array([30.0, 25.0, 40.0, 0.0]))
+    assert np.allclose(got, (0.01, -0.004, 0.02), atol=1e-12)
+    assert not np.allclose(rigid_increment(before, after), (0.01, -0.004, 0.02), atol=1e-3)
 
 
 @settings(max_examples=100, deadline=None)
@@ -83,12 +93,12 @@ def test_the_gyro_carries_the_yaw_when_the_legs_slip() -> None:
     stance = np.ones(3, dtype=bool)
     fused, legs_only = LegOdometry(dt, yaw_time_constant=1.0), LegOdometry(dt)
     for _ in range(10):
-        fused.update(feet, stance, yaw_rate=1.0)
+        fused.update(feet, stance, turn=1.0 * dt)
         legs_only.update(feet, stance)
     assert legs_only.yaw == 0.0
     assert 0.085 < fused.yaw < 0.1  # 0.1 rad from the gyro, pulled back by ≈ 5 % towards the legs' 0
     for _ in range(2000):
-        fused.update(feet, stance, yaw_rate=0.0)
+        fused.update(feet, stance, turn=0.0)
     assert abs(fused.yaw) < 1e-6
 
 
@@ -156,6 +166,18 @@ def test_simulate_logs_odometry_and_analyze_measures_its_drift(tmp_path, capsys,
     result = json.loads(stdout)
     assert 0.0 <= result["odometry_drift_percent"] < 5.0 and 0.0 <= result["odometry_heading_error_deg"] < 3.0
     assert (tmp_path / "analysis" / "trajectory.png").stat().st_size > 10_000
+    code, _, err = run(["export", "bag", str(out), "--out", str(tmp_path / "bag")], capsys, monkeypatch)
+    assert code == 0, err
+    from shc_cli.interop.bag import read_topics
+
+    topics = read_topics(tmp_path / "bag")
+    last = topics["/odom"][-1][1].pose.pose.position  # /odom is the estimate, /ground_truth/odom the truth
+    assert math.isclose(last.x, odometry[0], abs_tol=1e-5) and math.isclose(last.y, odometry[1], abs_tol=1e-5)
+    assert topics["/ground_truth/odom"][-1][1].header.frame_id == "world"
+    code, stdout, err = run(["analyze", str(tmp_path / "bag"), "--json"], capsys, monkeypatch)
+    from_bag = json.loads(stdout)
+    for key in ("odometry_drift_percent", "odometry_heading_error_deg"):
+        assert math.isclose(from_bag[key], result[key], rel_tol=1e-6, abs_tol=1e-6), key
 
 
 def test_a_plan_run_has_odometry_columns_and_its_drift_is_small(tmp_path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
@@ -211,3 +233,13 @@ def test_rigid_increment_equals_the_numpy_form_to_the_bit() -> None:
                          pose[1] + (math.sin(heading) * dx + math.cos(heading) * dy), heading + turn])
         assert odometry.update(moved, stance) == tuple(pose.tolist())
         feet = moved
+
+
+def test_quaternion_yaw_is_the_matrix_yaw() -> None:
+    from shc_cli.control.pose import euler_from_matrix
+    from shc_cli.control.sensing import quaternion_matrix
+
+    rng = np.random.default_rng(5)
+    for q in rng.normal(size=(200, 4)):
+        q /= np.linalg.norm(q)
+        assert math.isclose(quaternion_yaw(q), euler_from_matrix(quaternion_matrix(q))[2], abs_tol=1e-12)

@@ -22,7 +22,7 @@ from shc_cli.control.gait import StepCycle, step_cycle
 from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.manipulation import MAX_MANUAL_LEGS as MAX_MANUAL_LEGS
 from shc_cli.control.manipulation import LegManipulation
-from shc_cli.control.odometry import LegOdometry, euler_yaw_rate, level
+from shc_cli.control.odometry import LegOdometry, euler_yaw_rate, level, quaternion_yaw
 from shc_cli.control.pose import Pose, PoseController, PoseReset
 from shc_cli.control.sensing import (
     ContactDetector,
@@ -287,6 +287,7 @@ class Controller(LegManipulation):
         """Leg odometry (an shc addition): read by :attr:`CycleOutput.odometry`."""
         self._stance_before = np.zeros(len(robot.legs), dtype=bool)
         self._contact_before: np.ndarray | None = None
+        self._imu_yaw: float | None = None
 
     # -- inputs ------------------------------------------------------------------------------------------------
 
@@ -359,8 +360,9 @@ class Controller(LegManipulation):
 
         Measured joints (``sensors.joints``) are the feet at the start of this cycle: the motion since the last
         reading is the previous cycle's, so the feet in stance then are used; commanded joints are this cycle's
-        targets, used with this cycle's stance. Foot contact, where measured, must hold at both readings. Roll and
-        pitch come from the IMU or else the commanded body pose; the gyro's yaw rate, where measured, is fused.
+        targets, used with this cycle's stance. Foot contact, where measured, must hold at both readings; measured
+        foot forces weigh the feet. Roll and pitch come from the IMU or else the commanded body pose; the IMU's
+        heading change (of its orientation; of its angular rate × dt without one) is fused.
         """
         if sensors is not None and sensors.joints is not None:
             feet = self.model.chains.tips(np.asarray(sensors.joints, dtype=float))
@@ -373,14 +375,21 @@ class Controller(LegManipulation):
             if self._contact_before is not None:
                 use = use & contact & self._contact_before
             self._contact_before = contact
-        yaw_rate = None
+        turn = None
         if sensors is not None and sensors.orientation is not None:
             roll, pitch = quaternion_roll_pitch(sensors.orientation)
-            if sensors.angular_rate is not None:
-                yaw_rate = euler_yaw_rate(roll, pitch, np.asarray(sensors.angular_rate, dtype=float))
+            yaw = quaternion_yaw(sensors.orientation)
+            if self._imu_yaw is not None:  # the IMU's own heading change (integrated at its rate, not ours)
+                turn = math.remainder(yaw - self._imu_yaw, 2.0 * math.pi)
+            self._imu_yaw = yaw
         else:
             roll, pitch, _ = self.poser.current.euler()
-        return self.odometry.update(level(feet, roll, pitch), use, yaw_rate)
+            if sensors is not None and sensors.angular_rate is not None:
+                turn = euler_yaw_rate(roll, pitch, np.asarray(sensors.angular_rate, dtype=float)) * self.dt
+        weights = None
+        if sensors is not None and sensors.foot_forces is not None:  # loaded feet slip less: weigh by load
+            weights = np.clip(np.asarray(sensors.foot_forces, dtype=float), 0.0, None)
+        return self.odometry.update(level(feet, roll, pitch), use, turn, weights)
 
     def _update_pose(self) -> None:
         """The body pose of this cycle, from the previous cycle's leg states (OpenSHC ``updateCurrentPose``)."""

@@ -16,12 +16,16 @@ Method (an shc addition; OpenSHC has no odometry):
    longer does) and, where the backend reports contact, touching at both ends. Feet in stance do not move in the world,
    so their positions before (``p``) and after (``q``) one cycle satisfy ``p ≈ R(dψ)·q + d`` where ``(d, dψ)`` is
    the body's motion over the cycle, in the body's previous level frame. The least-squares ``(d, dψ)`` is the 2-D
-   Kabsch/Umeyama solution: ``dψ = atan2(Σ q̃×p̃, Σ q̃·p̃)`` over the centred points, ``d = p̄ − R(dψ)·q̄``. With one
+   Kabsch/Umeyama solution: ``dψ = atan2(Σ w q̃×p̃, Σ w q̃·p̃)`` over the centred points, ``d = p̄ − R(dψ)·q̄``, each
+   foot weighted by its measured normal force where the backend measures it (a lightly loaded foot — touching
+   down, lifting off — slips more), else equally. With one
    foot only ``d`` is found (``dψ`` = 0, or the gyro's); with none the pose holds (or turns with the gyro).
-3. **Yaw fusion (complementary filter).** With an IMU, the heading is ``ψ ← ψ + dψ_gyro + k·(ψ_legs − ψ −
-   dψ_gyro)`` with ``k = dt/τ``: the gyro's yaw increment (body rates turned into the Euler yaw rate
-   ``(ω_y sin φ + ω_z cos φ)/cos θ``) carries the fast part, the legs' integrated heading ``ψ_legs`` the slow part
-   (time constant ``τ`` = :data:`YAW_TIME_CONSTANT`), so neither a gyro bias nor a slipping foot drifts freely.
+3. **Yaw fusion (complementary filter).** With an IMU, the heading is ``ψ ← ψ + dψ_imu + k·(ψ_legs − ψ −
+   dψ_imu)`` with ``k = dt/τ``: the IMU's heading change over the cycle — the yaw change of its orientation (an
+   IMU integrates its gyro at its own, faster rate), or without an orientation its body rates turned into the
+   Euler yaw rate ``(ω_y sin φ + ω_z cos φ)/cos θ`` × dt — carries the fast part, the legs' integrated heading
+   ``ψ_legs`` the slow part (time constant ``τ`` = :data:`YAW_TIME_CONSTANT`), so neither a drifting IMU heading nor
+   slipping feet drift freely.
 4. **Composition.** ``x, y ← x, y + R(ψ)·d``: each increment is rotated by the heading it was walked at.
 
 Compared with CHAMP (``champ/odometry``): CHAMP averages each stance foot's displacement in the body frame and the
@@ -41,9 +45,9 @@ import math
 import numpy as np
 
 YAW_TIME_CONSTANT = 60.0
-"""Time constant τ of the complementary yaw filter [s]: the legs' heading corrects the gyro-integrated heading over
-τ. Long, because the legs under-read turns (feet scuff while the body turns: bullet's tripod at 0.3 turning throttle
-ends 1.1 % / 0.9° off with τ = 60 s, 2.5 % / 4.2° with τ = 2 s, docs/odometry.md); a constant gyro bias b leaves a
+"""Time constant τ of the complementary yaw filter [s]: the legs' heading corrects the IMU's heading over τ. Long,
+because the legs under-read turns (feet scuff while the body turns: bullet's tripod at 0.3 turning throttle ended
+2.5 % / 4.2° off with τ = 2 s, 1.1 % / 0.9° with τ = 60 s, docs/odometry.md); a constant IMU heading drift b leaves a
 heading error of about b·τ."""
 
 
@@ -53,6 +57,12 @@ def euler_yaw_rate(roll: float, pitch: float, rate: np.ndarray) -> float:
     return float((rate[1] * math.sin(roll) + rate[2] * math.cos(roll)) / max(math.cos(pitch), 1e-6))
 
 
+def quaternion_yaw(q: np.ndarray) -> float:
+    """Z-Y-X Euler yaw [rad] of a unit quaternion (x, y, z, w): ``atan2(R₁₀, R₀₀)`` from the two entries it needs."""
+    x, y, z, w = np.asarray(q, dtype=float).tolist()
+    return math.atan2(2 * (x * y + z * w), 1 - 2 * (y * y + z * z))
+
+
 def level(feet: np.ndarray, roll: float, pitch: float) -> np.ndarray:
     """Feet ``(L, 3)`` in base_link turned by ``Ry(pitch)·Rx(roll)`` into the body's level frame [m]."""
     cr, sr, cp, sp = math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch)
@@ -60,9 +70,20 @@ def level(feet: np.ndarray, roll: float, pitch: float) -> np.ndarray:
     return np.asarray(np.asarray(feet, dtype=float) @ rotation.T)
 
 
-def rigid_increment(before: np.ndarray, after: np.ndarray) -> tuple[float, float, float]:
+def rigid_increment(before: np.ndarray, after: np.ndarray,
+                    weights: np.ndarray | None = None) -> tuple[float, float, float]:
     """Body motion ``(dx, dy, dψ)`` [m, m, rad] over one cycle, in the body's earlier level frame, from the
-    planar positions ``(K, 2)`` of the same K ≥ 1 world-fixed feet before and after (least squares, 2-D Kabsch)."""
+    planar positions ``(K, 2)`` of the same K ≥ 1 world-fixed feet before and after (least squares, 2-D Kabsch;
+    ``weights`` ``(K,)`` ≥ 0 weigh the feet, default — or all zero — equally)."""
+    if weights is not None and float(np.sum(weights)) > 0.0:
+        w = np.asarray(weights, dtype=float) / float(np.sum(weights))
+        p_mean, q_mean = w @ before, w @ after
+        p, q = before - p_mean, after - q_mean
+        turn = math.atan2(float(w @ (q[:, 0] * p[:, 1] - q[:, 1] * p[:, 0])),
+                          float(w @ (q[:, 0] * p[:, 0] + q[:, 1] * p[:, 1]))) if len(before) > 1 else 0.0
+        c, s = math.cos(turn), math.sin(turn)
+        return (float(p_mean[0] - (c * q_mean[0] - s * q_mean[1])), float(p_mean[1] - (s * q_mean[0] + c * q_mean[1])),
+                turn)
     if len(before) < PAIRWISE_FROM:
         return _increment_of_lists(np.asarray(before, dtype=float).tolist(), np.asarray(after, dtype=float).tolist())
     p_mean, q_mean = before.mean(axis=0), after.mean(axis=0)
@@ -114,11 +135,11 @@ def _increment_of_lists(before: list[list[float]], after: list[list[float]]) -> 
 
 
 class LegOdometry:
-    """The body's planar pose in the odom frame, from stance-foot increments and (optionally) the gyro.
+    """The body's planar pose in the odom frame, from stance-foot increments and (optionally) the IMU's heading.
 
     Args:
         time_delta: control period [s].
-        yaw_time_constant: τ of the complementary yaw filter [s] (used only with a gyro).
+        yaw_time_constant: τ of the complementary yaw filter [s] (used only with an IMU).
     """
 
     def __init__(self, time_delta: float, yaw_time_constant: float = YAW_TIME_CONSTANT) -> None:
@@ -136,13 +157,16 @@ class LegOdometry:
         """(x [m], y [m], yaw [rad]) in the odom frame."""
         return (self.x, self.y, self.yaw)
 
-    def update(self, feet: np.ndarray, stance: np.ndarray, yaw_rate: float | None = None) -> tuple[float, float, float]:
+    def update(self, feet: np.ndarray, stance: np.ndarray, turn: float | None = None,
+               weights: np.ndarray | None = None) -> tuple[float, float, float]:
         """Advance one cycle.
 
         Args:
             feet: every foot in the body's level frame ``(L, 3)`` [m] (:func:`level`), now.
             stance: feet that stood on the ground since the last update ``(L,)``.
-            yaw_rate: the gyro's Euler yaw rate over the cycle [rad/s] (:func:`euler_yaw_rate`), or None.
+            turn: the IMU's heading change over the cycle [rad] (its orientation's yaw change, or the Euler yaw
+                rate :func:`euler_yaw_rate` × dt), or None.
+            weights: each foot's weight in the fit ``(L,)`` (its measured normal force), or None (equal).
 
         Returns:
             the new pose (x, y, yaw).
@@ -154,7 +178,10 @@ class LegOdometry:
         if self._feet is not None:
             chosen = [i for i, standing in enumerate(stance.tolist()) if standing]
             used = len(chosen)
-            if 0 < used < PAIRWISE_FROM:
+            if used and weights is not None:
+                dx, dy, legs_turn = rigid_increment(self._feet[stance, :2], feet[stance, :2],
+                                                    np.asarray(weights, dtype=float)[stance])
+            elif 0 < used < PAIRWISE_FROM:
                 before, after = self._feet.tolist(), feet.tolist()
                 dx, dy, legs_turn = _increment_of_lists([before[i] for i in chosen], [after[i] for i in chosen])
             elif used:
@@ -162,11 +189,10 @@ class LegOdometry:
         self._feet, self.feet_used = feet, used
         self.leg_yaw += legs_turn
         heading = self.yaw
-        if yaw_rate is None:
+        if turn is None:
             self.yaw += legs_turn
         else:
-            gyro = yaw_rate * self.dt
-            predicted = self.yaw + gyro
+            predicted = self.yaw + turn
             self.yaw = predicted + self.gain * (self.leg_yaw - predicted) if used > 1 else predicted
         mid = heading  # the increment is in the level frame the body had at the start of the cycle
         c, s = math.cos(mid), math.sin(mid)

@@ -6,11 +6,12 @@ Topics (stamps = run time from 0; frames as in the generated URDF, ``shc export 
 |---|---|---|
 | ``/robot_description`` | std_msgs/String | the generated URDF, once at the start |
 | ``/tf_static`` | tf2_msgs/TFMessage | ``base_link → LEG_base`` (the legs' DH base frames), once |
-| ``/tf`` | tf2_msgs/TFMessage | ``odom → base_link`` (body pose); ``base_link →`` each ``LEG_J_link``, ``LEG_foot`` |
+| ``/tf`` | tf2_msgs/TFMessage | ``odom → base_link`` (odometry); ``base_link →`` each ``LEG_J_link``, ``LEG_foot``|
 | ``/joint_states`` | sensor_msgs/JointState | measured positions, velocity by differences, efforts; plan: commanded |
 | ``/desired_joint_states`` | sensor_msgs/JointState | commanded positions and their differences |
 | ``/cmd_vel`` | geometry_msgs/Twist | the velocity input (x, y, yaw) |
-| ``/odom`` | nav_msgs/Odometry | body pose in ``odom``, body velocity in ``base_link`` |
+| ``/odom`` | nav_msgs/Odometry | the controller's leg odometry in ``odom``, its velocity in ``base_link`` |
+| ``/ground_truth/odom`` | nav_msgs/Odometry | true body pose in ``world`` (plan: ideal path), its velocity |
 | ``/imu/data`` | sensor_msgs/Imu | orientation, angular rate, specific force (simulate) |
 | ``/LEG/foot_force`` | geometry_msgs/WrenchStamped | contact normal force along z of ``LEG_foot`` (simulate) |
 | ``/shc/LEG/state`` | syropod_highlevel_controller/LegState | OpenSHC's per-leg record (fields below) |
@@ -21,6 +22,11 @@ Topics (stamps = run time from 0; frames as in the generated URDF, ``shc export 
 LegState (OpenSHC's ``LegState.msg``, registered in the bag): ``walker_tip_pose``, ``poser_tip_pose`` (plan),
 ``model_tip_pose`` (forward kinematics of the commanded joints), ``actual_tip_pose`` (of the measured joints),
 joint positions/velocities/efforts, stance and swing progress (plan; −1 otherwise); the other fields are zero.
+
+The leg odometry (docs/odometry.md) is planar: ``/odom`` and the ``odom → base_link`` transform carry its x, y and
+yaw with the body's logged height, roll and pitch (the engine's in simulate, the commanded pose in plan), so the
+robot stands on the ground in a 3-D view. A run logged before the odometry columns existed has no odometry: its
+``/odom`` and ``odom → base_link`` are then the true pose, as they were, and there is no ``/ground_truth/odom``.
 """
 
 from __future__ import annotations
@@ -282,6 +288,11 @@ def _topics(run: RunLog, m: Messages) -> list[Topic]:
     # /tf: odom → base_link, base_link → every joint link (DH frame k turned by q_k) and foot (the DH tip).
     body_rotation = rotation_rpy(run.rpy)
     body = np.hstack([run.position, quaternions(body_rotation)])
+    if run.odometry is not None:  # the odometry's x, y, yaw with the body's height, roll and pitch
+        odometry_rotation = rotation_rpy(np.column_stack([run.rpy[:, :2], run.odometry[:, 2]]))
+        estimate = np.hstack([run.odometry[:, :2], run.position[:, 2:3], quaternions(odometry_rotation)])
+    else:
+        odometry_rotation, estimate = body_rotation, body
     frames = chains.frames_in_base(run.joints)
     links: list[tuple[str, np.ndarray]] = []
     for i, leg in enumerate(legs):
@@ -292,7 +303,7 @@ def _topics(run: RunLog, m: Messages) -> list[Topic]:
             turn[:, 2, 2] = turn[:, 3, 3] = 1.0
             links.append((link, frames[:, i, k] @ turn))
         links.append((names[leg].foot, frames[:, i, len(names[leg].links)]))
-    tf_values = [body] + [np.hstack([matrix[:, :3, 3], quaternions(matrix[:, :3, :3])]) for _, matrix in links]
+    tf_values = [estimate] + [np.hstack([matrix[:, :3, 3], quaternions(matrix[:, :3, :3])]) for _, matrix in links]
     child_names = ["base_link"] + [name for name, _ in links]
 
     def tf(sec: int, nanosec: int, v: np.ndarray) -> Any:
@@ -340,8 +351,24 @@ def _topics(run: RunLog, m: Messages) -> list[Topic]:
                 twist=T["geometry_msgs/msg/Twist"](linear=m.vector(v[7:10]), angular=m.vector(v[10:13])),
                 covariance=np.zeros(36)))
 
-    topics.append(("/odom", "nav_msgs/msg/Odometry", odometry, 13, np.hstack([body, body_linear, body_angular]),
-                   False))
+    if run.odometry is None:
+        topics.append(("/odom", "nav_msgs/msg/Odometry", odometry, 13, np.hstack([body, body_linear, body_angular]),
+                       False))
+    else:
+        def truth(sec: int, nanosec: int, v: np.ndarray) -> Any:
+            message = odometry(sec, nanosec, v)
+            message.header.frame_id = "world"
+            return message
+
+        topics.append(("/ground_truth/odom", "nav_msgs/msg/Odometry", truth, 13,
+                       np.hstack([body, body_linear, body_angular]), False))
+        planar = np.column_stack([run.odometry[:, :2], np.unwrap(run.odometry[:, 2])])
+        rates = _differences(planar, dt)
+        odometry_linear = np.einsum("nji,nj->ni", odometry_rotation,
+                                    np.column_stack([rates[:, :2], np.zeros(n)]))
+        odometry_angular = np.column_stack([np.zeros((n, 2)), rates[:, 2]])
+        topics.append(("/odom", "nav_msgs/msg/Odometry", odometry, 13,
+                       np.hstack([estimate, odometry_linear, odometry_angular]), False))
 
     if run.imu is not None:
         def imu(sec: int, nanosec: int, v: np.ndarray) -> Any:

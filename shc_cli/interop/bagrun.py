@@ -46,7 +46,15 @@ def read_bag_run(path: Path) -> RunLog:
         return out
 
     stamps = np.array([stamp for stamp, _ in topics["/joint_states"]], dtype=np.int64)
-    odom = [m for _, m in topics["/odom"]]
+    estimated = None
+    if "/ground_truth/odom" in topics:  # since the leg odometry: /odom is the estimate, the truth is apart
+        estimate = [m.pose.pose for _, m in topics["/odom"]]
+        estimated = np.array([[p.position.x, p.position.y, 0.0] for p in estimate])
+        estimated[:, 2] = np.unwrap(rpy_of(quaternion_matrix(np.array(
+            [[p.orientation.x, p.orientation.y, p.orientation.z, p.orientation.w] for p in estimate])))[:, 2])
+        odom = [m for _, m in topics["/ground_truth/odom"]]
+    else:
+        odom = [m for _, m in topics["/odom"]]
     position = np.array([[o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z] for o in odom])
     quaternion = np.array([[o.pose.pose.orientation.x, o.pose.pose.orientation.y, o.pose.pose.orientation.z,
                             o.pose.pose.orientation.w] for o in odom])
@@ -85,6 +93,6 @@ def read_bag_run(path: Path) -> RunLog:
         imu=np.array([[m.orientation.x, m.orientation.y, m.orientation.z, m.orientation.w, m.angular_velocity.x,
                        m.angular_velocity.y, m.angular_velocity.z, m.linear_acceleration.x, m.linear_acceleration.y,
                        m.linear_acceleration.z] for m in imu]) if simulated else None,
-        progress=None if simulated else progress, states=states,
+        progress=None if simulated else progress, states=states, odometry=estimated,
     )
 

@@ -3,9 +3,11 @@
 ``/desired_joint_states`` (all joints: desired position without offset, desired velocity, the last measured effort),
 the per-joint ``/<LEG>_<joint>_joint/command`` (Float64, desired position + offset) when the individual interface
 is on, ``/shc/<LEG>/state`` (OpenSHC's LegState), ``/shc/velocity`` and ``/shc/pose`` (Twist), ``/shc/walkspace``
-(Float32MultiArray, RUNNING only) and ``/tf`` (``odom_ideal → base_link``, ``base_link → walk_plane``,
-``base_link → <LEG>_tip``). Headers carry the wall clock. The publisher is an observer of the run loop; after
-publishing it lets the remote input take its snapshot, as OpenSHC's ``spinOnce`` follows its publications.
+(Float32MultiArray, RUNNING only), ``/tf`` (``odom_ideal → base_link``, ``base_link → walk_plane``,
+``base_link → <LEG>_tip``) and shc's ``/odom`` (nav_msgs/Odometry: the leg odometry, ``odom → base_link``,
+planar pose and its velocity in base_link; an shc addition, docs/odometry.md). Headers carry the wall clock. The
+publisher is an observer of the run loop; after publishing it lets the remote input take its snapshot, as OpenSHC's
+``spinOnce`` follows its publications.
 """
 
 from __future__ import annotations
@@ -91,6 +93,8 @@ class NodeOutputs:
         self.pose = node.advertise("/shc/pose", "geometry_msgs/Twist")
         self.walkspace_pub = node.advertise("/shc/walkspace", "std_msgs/Float32MultiArray")
         self.tf = node.advertise("/tf", "tf2_msgs/TFMessage")
+        self.odom = node.advertise("/odom", "nav_msgs/Odometry")
+        self._odometry: tuple[float, float, float] | None = None
         self.sensors = sensors
         self.measured_joints = joint_states and not sensors
         if sensors or joint_states:
@@ -189,6 +193,7 @@ class NodeOutputs:
                 self.walkspace_pub.publish(T["std_msgs/msg/Float32MultiArray"](
                     layout=layout, data=np.asarray(values, dtype=np.float32)))
         self.tf.publish(self._tf(sec, nanosec, out))
+        self.odom.publish(self._odom(sec, nanosec, out.odometry))
         self.seq += 1
 
     def _twist(self, linear: Any, angular: Any) -> Any:
@@ -222,6 +227,25 @@ class NodeOutputs:
             stance_progress=float(out.stance_progress[i]), swing_progress=float(out.swing_progress[i]),
             time_to_swing_end=0.0, pose_delta=zero_pose, auto_pose=zero_pose, tip_force=m.vector(np.zeros(3)),
             admittance_delta=m.vector(np.zeros(3)), virtual_stiffness=0.0)
+
+    def _odom(self, sec: int, nanosec: int, pose: tuple[float, float, float]) -> Any:
+        """The leg odometry as nav_msgs/Odometry: pose in ``odom``, velocity (the change since the last published
+        cycle ÷ the control period) in base_link axes."""
+        T, m = self.m.T, self.m
+        x, y, yaw = pose
+        last = self._odometry or pose
+        self._odometry = pose
+        c, s = math.cos(yaw), math.sin(yaw)
+        vx, vy = (x - last[0]) / self.period, (y - last[1]) / self.period
+        linear = np.array([c * vx + s * vy, -s * vx + c * vy, 0.0])
+        angular = np.array([0.0, 0.0, (yaw - last[2]) / self.period])
+        quaternion = np.array([0.0, 0.0, math.sin(yaw / 2.0), math.cos(yaw / 2.0)])
+        return T["nav_msgs/msg/Odometry"](
+            header=m.header(sec, nanosec, "odom"), child_frame_id="base_link",
+            pose=T["geometry_msgs/msg/PoseWithCovariance"](pose=m.pose(np.array([x, y, 0.0, *quaternion])),
+                                                           covariance=np.zeros(36)),
+            twist=T["geometry_msgs/msg/TwistWithCovariance"](twist=self._twist(linear, angular),
+                                                             covariance=np.zeros(36)))
 
     def _tf(self, sec: int, nanosec: int, out: CycleOutput) -> Any:
         T, m = self.m.T, self.m
