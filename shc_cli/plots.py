@@ -132,10 +132,16 @@ def plot_simulation(robot: Robot, series: dict[str, list[Any]], folder: Path, ga
     position = np.array(series["position"])
     title = run_title(robot, gait)
     paths = {"ground truth": position[:, :2]}
-    if series.get("odometry") is not None and series.get("yaw") is not None:
-        paths["leg odometry"] = odometry_in_world(np.array(series["odometry"]), position[0, :2],
-                                                  float(np.array(series["yaw"])[0]))
-    plot_trajectory(paths, folder / "trajectory.png", f"{title}: body trajectory")
+    points = None
+    if series.get("yaw") is not None:
+        heading = float(np.array(series["yaw"])[0])
+        if series.get("odometry") is not None:
+            paths["leg odometry"] = odometry_in_world(np.array(series["odometry"]), position[0, :2], heading)
+        planned = planned_path(folder)  # a --path run keeps its path file: drawn where the odom frame is
+        if planned is not None:
+            paths["planned path"] = odometry_in_world(planned, position[0, :2], heading)
+            points = {"waypoints": paths["planned path"][1:]}
+    plot_trajectory(paths, folder / "trajectory.png", f"{title}: body trajectory", points)
 
     running = np.array(series["running"], dtype=bool) if "running" in series else np.ones(len(t), dtype=bool)
     _power_plot(t, np.array(series["power"], dtype=float), running, robot.time_delta, f"{title}: total servo power",
@@ -145,6 +151,20 @@ def plot_simulation(robot: Robot, series: dict[str, list[Any]], folder: Path, ga
     startup = ~running if "running" in series else None
     _leg_bars(list(robot.legs), t, robot.time_delta, ~contact, f"{title}: gait diagram (measured foot contacts)",
               folder / "contacts.png", startup, off_label="foot off the ground")
+
+
+def planned_path(folder: Path) -> Any:
+    """The planned path of a ``--path`` run in ``folder`` (its ``path.csv`` or ``path.toml``): the start (0, 0) and
+    every waypoint ``(K + 1, 2)`` in the odom frame [m]; ``None`` for a run without one."""
+    import numpy as np
+
+    from shc_cli.spec.path import load_path
+
+    for name in ("path.csv", "path.toml"):
+        if (folder / name).is_file():
+            waypoints = load_path(folder / name).waypoints
+            return np.array([(0.0, 0.0), *((w.x, w.y) for w in waypoints)])
+    return None
 
 
 def odometry_in_world(odometry: Any, origin: Any, heading: float) -> Any:
@@ -160,6 +180,7 @@ def odometry_in_world(odometry: Any, origin: Any, heading: float) -> Any:
 TRAJECTORY_STYLES: dict[str, dict[str, Any]] = {
     "ground truth": {"lw": 1.2, "color": "C0"},
     "leg odometry": {"lw": 1.0, "ls": "--", "color": "C1"},
+    "planned path": {"lw": 0.8, "ls": ":", "color": "k"},
 }
 """Line styles of :func:`plot_trajectory` by path name; other names get matplotlib's next colour."""
 
@@ -402,9 +423,13 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
         name = "trajectory.png" if len(results) == 1 else f"trajectory_{_label(result)}.png"
         drift = result.get("odometry_drift_percent")
         note = f" (drift {drift:.2f} %)" if drift is not None else ""
-        written.append(plot_trajectory({"ground truth": found.truth[:, :2], "leg odometry": found.odometry[:, :2]},
-                                       folder / name, f"{_label(result)} ({_robots_and_gaits([result])}): "
-                                       f"odom frame{note}"))
+        paths = {"ground truth": found.truth[:, :2], "leg odometry": found.odometry[:, :2]}
+        planned = planned_path(Path(str(result["run"])))
+        if planned is not None:
+            paths["planned path"] = planned
+        marks = {"waypoints": planned[1:]} if planned is not None else None
+        written.append(plot_trajectory(paths, folder / name, f"{_label(result)} ({_robots_and_gaits([result])}): "
+                                       f"odom frame{note}", marks))
 
     placed = [{**r, "terrain": r.get("terrain") or run.summary.terrain}
               for r, run in zip(results, runs, strict=True)]
