@@ -264,6 +264,7 @@ def ros(
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
     live: LiveOption = False,
     live_port: LivePortOption = 8765,
+    path: PathOption = None,
 ) -> None:
     """Run as OpenSHC's ROS 1 node: its topics, messages and parameters, driven by syropod_remote."""
     from shc_cli.commands.ros import run_ros
@@ -273,7 +274,7 @@ def ros(
     check_choice("--backend", backend, ("none", "mujoco", "pybullet"), "a backend")
     run_ros(NodeConfig(robot=robot, backend=backend, name=name, master_uri=master, duration=duration, out=out,  # type: ignore[arg-type]
                        individual=individual, combined=combined, overwrite=overwrite, namespace=namespace,
-                       live=live, live_port=live_port))
+                       live=live, live_port=live_port, path=path))
 
 
 @app.command()

@@ -3,7 +3,7 @@
 A **holonomic** go-to-pose controller (docs/path-following.md says why not pure pursuit): a legged robot walks
 sideways as well as ahead, so it need not face where it goes. For each waypoint in turn the follower
 
-1. **walks** along the segment from the previous waypoint (the start (0, 0) for the first) to this one, holding
+1. **walks** along the segment from the previous waypoint (where it started for the first) to this one, holding
    the heading it had when the segment began: the velocity along the segment is the smallest of the speed limit
    (a share of the walkspace's speed in that body direction), ``sqrt(2·a·d)`` (it can still brake to a stop in the
    remaining distance ``d`` at a share of the acceleration limit ``a``) and ``k·d``; across the segment it is
@@ -80,7 +80,7 @@ class FollowerOptions:
     heading_tolerance_rad: float = math.radians(3.0)
     arrive_m: float = 0.02
     arrive_rad: float = math.radians(1.0)
-    speed_share: float = 0.9
+    speed_share: float = 1.0
     brake_share: float = 0.5
     gain: float = 1.5
     heading_gain: float = 2.0
@@ -153,7 +153,8 @@ class PathFollower:
         self.time_s = 0.0
         self._segment_start_s = 0.0
         self._hold_yaw: float | None = None
-        self._from = (0.0, 0.0)
+        self._from: tuple[float, float] | None = None
+        """Where the segment being walked begins: the first pose seen, then each waypoint left."""
 
     @property
     def done(self) -> bool:
@@ -176,6 +177,8 @@ class PathFollower:
         x, y, yaw = pose
         if self._hold_yaw is None:
             self._hold_yaw = yaw
+        if self._from is None:
+            self._from = (x, y)
         o = self.options
         while not self.done:
             target = self.waypoints[self.index]
@@ -214,6 +217,7 @@ class PathFollower:
         """Along the segment towards ``target``, pulled onto it, heading held."""
         x, y, yaw = pose
         o = self.options
+        assert self._from is not None
         ax, ay = self._from
         sx, sy = target.x - ax, target.y - ay
         length = math.hypot(sx, sy)

@@ -50,6 +50,8 @@ class NodeConfig:
         overwrite: replace an existing run directory.
         namespace: the parameter tree read for ``robot = "server"``.
         live: also stream the session on a Foxglove WebSocket server on 127.0.0.1:``live_port``.
+        path: a path file to walk once the robot runs (more paths and goals arrive on ``<name>/path`` and
+            ``/move_base_simple/goal``: :mod:`shc_cli.ros.path_remote`).
     """
 
     robot: str = "bullet"
@@ -64,6 +66,7 @@ class NodeConfig:
     namespace: str = "/syropod"
     live: bool = False
     live_port: int = 8765
+    path: Path | None = None
 
 
 def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) -> RunResult:
@@ -78,6 +81,10 @@ def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) 
     from shc_cli.ros.node import RosNode
 
     directory = config.out or default_run_directory("ros")
+    if config.path is not None:  # a bad path file is a one-line error before the node registers
+        from shc_cli.spec.path import load_path
+
+        load_path(config.path)
     node = RosNode(config.name, MessageTypes(), config.master_uri)
     try:
         robot, gait, pose_sets, gaits = _robot(node, config, directory)
@@ -154,15 +161,30 @@ class _Session:
                  gaits: dict[str, Gait], sensors: bool) -> None:
         from shc_cli.loop.pacing import WallClock
         from shc_cli.ros.outputs import NodeOutputs
+        from shc_cli.ros.path_remote import RemotePath
         from shc_cli.ros.remote import RemoteInput
+        from shc_cli.spec.path import load_path
 
         self.requested: Callable[[], bool] = lambda: False
         self.limit = None if config.duration is None else time.monotonic() + config.duration
         self.remote = RemoteInput(node, robot, gaits, stopped=self.stopped)
+        self.path = load_path(config.path) if config.path is not None else None
+        self.source = RemotePath(self.remote, controller, self.path)
+        self.source.subscribe(node)
         self.outputs = NodeOutputs(node, robot, config.individual, config.combined,
                                    walkspace=lambda: controller.walkspace, after=self.remote.latch, sensors=sensors,
                                    always=True)
         self.clock = WallClock(robot.time_delta)
+
+    def keep_path(self, directory: Path) -> Callable[[], dict[str, object]]:
+        """The ``--path`` file copied into the run ``directory``; the summary's path fields when called."""
+        name = None
+        if self.path is not None and self.path.source is not None:
+            import shutil
+
+            name = "path.toml" if self.path.source.suffix.lower() == ".toml" else "path.csv"
+            shutil.copyfile(self.path.source, directory / name)
+        return lambda: {**({"path_file": name} if name else {}), **self.source.summary()}
 
     def stopped(self) -> bool:
         """A stop was requested, or the duration passed (also while waiting for OPERATIONAL)."""
@@ -198,7 +220,8 @@ def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gai
     stream = open_live(config.live_port, robot, controller, sensors=False) if config.live else None
     if stream is not None:
         observers.insert(2, stream[1])
-    loop = RunLoop(controller, KinematicBackend(), session.remote, writer, None, observers=observers,
+    path_fields = session.keep_path(writer.partial)
+    loop = RunLoop(controller, KinematicBackend(), session.source, writer, None, observers=observers,
                    flush_every=100)
     session.requested = lambda: loop.requested
     session.ready(node, config, robot, gait, on_ready)
@@ -207,7 +230,7 @@ def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gai
     def summarise(_: object) -> RunSummary:
         summary = plan_summary(robot, controller, record, time.perf_counter() - started, writer.partial)
         return summary.updated(backend=config.backend, ros_master=node.master_uri, node=node.name,
-                               **session.clock.statistics())
+                               **session.clock.statistics(), **path_fields())
 
     try:
         path, summary, _ = execute(loop, writer, summarise, None)
@@ -243,7 +266,8 @@ def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, 
             stream = open_live(config.live_port, robot, controller, sensors=True) if config.live else None
             if stream is not None:
                 observers.insert(2, stream[1])
-            loop = RunLoop(controller, backend, session.remote, LogRecorder(run, robot, backend), None,
+            path_fields = session.keep_path(run.partial)
+            loop = RunLoop(controller, backend, session.source, LogRecorder(run, robot, backend), None,
                            observers=observers, flush_every=100)
             session.requested = lambda: loop.requested
             session.ready(node, config, robot, gait, on_ready)
@@ -252,7 +276,7 @@ def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, 
                 return record.summary(run.partial, sim.scenario, controller.gait.name, controller).updated(
                     engine=world.name, engine_version=world.version, engine_warnings=world.warnings,
                     backend=config.backend, ros_master=node.master_uri, node=node.name,
-                    **session.clock.statistics())
+                    **session.clock.statistics(), **path_fields())
 
             try:
                 path, summary, _ = execute(loop, run, summarise, None)

@@ -46,10 +46,11 @@ class PathInput:
         controller: the controller whose walker's limits bound the commands (read, never changed).
         cycles: the most cycles to follow for (the run's duration); the input ends then, done or not.
         options: the follower's tolerances and gains (the path file's ``tolerance`` wins over the default).
+        cycle: the loop's cycles so far (a path given while the run goes on: ``shc ros``).
     """
 
     def __init__(self, path: Path2D, controller: Controller, cycles: int | None = None,
-                 options: FollowerOptions | None = None) -> None:
+                 options: FollowerOptions | None = None, cycle: int = 0) -> None:
         if options is None:
             options = FollowerOptions()
             if path.tolerance_m is not None:
@@ -64,7 +65,7 @@ class PathInput:
         self._throttle = controller.robot.walker.velocity_input_mode == "throttle"
         self._pose: tuple[float, float, float] | None = None
         self._walk_state = WalkState.STOPPED
-        self._observed = 0
+        self._observed = cycle
         self.start_cycle: int | None = None
         """The loop's cycle of the input's first command (the follower's time 0)."""
         self._announced = 0
