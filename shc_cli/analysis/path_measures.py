@@ -1,12 +1,13 @@
 """How well a ``--path`` run walked its path, against the ground truth (``shc analyze``).
 
 The follower steers by the odometry; these measures hold the **ground truth** (the simulator's body pose, or a
-plan's ideal path) against the path, both in the odometry frame: the truth is taken relative to the body's pose
-where the follower started (``summary.path_start_cycle``), which is the odometry frame's origin.
+plan's ideal path) against the path, both in the odometry frame: the truth is placed so that where the follower
+started (``summary.path_start_cycle``) it is where the odometry was (the origin, for a path given at the start).
 
 * ``cross_track_rms_m`` — RMS over the cycles from the follower's start to the goal (the last waypoint left, else
-  the run's end) of the body's distance to the segment it was walking (from the previous waypoint, the start for the
-  first, to the current one; the distance to the segment's nearest point, so running past a waypoint counts too).
+  the run's end) of the body's distance to the segment it was walking (from the previous waypoint — for the first,
+  where the follower started — to the current one; the distance to the segment's nearest point, so running past a
+  waypoint counts too).
 * ``waypoints_reached`` / ``waypoints_total`` — waypoints where, when the follower moved on from them, the truth
   was within the run's tolerance (``path_tolerance_m``) and, when a heading was asked, its heading within
   ``path_heading_tolerance_rad``.
@@ -42,13 +43,21 @@ def segment_distance(points: np.ndarray, start: np.ndarray, end: np.ndarray) -> 
 
 
 def truth_in_odometry_frame(run: RunLog, start_row: int) -> tuple[np.ndarray, np.ndarray]:
-    """The body's xy ``(N, 2)`` [m] and yaw ``(N,)`` [rad] relative to its pose before the row ``start_row``."""
+    """The body's ground-truth xy ``(N, 2)`` [m] and yaw ``(N,)`` [rad] in the odometry frame: placed so that its
+    pose before the row ``start_row`` is the odometry's pose there (the origin for a run logged without odometry,
+    or a path given at the run's start)."""
     before = max(start_row - 1, 0)
     origin, heading = run.position[before, :2], float(run.rpy[before, 2])
     c, s = math.cos(heading), math.sin(heading)
     shifted = run.position[:, :2] - origin
     xy = np.column_stack([c * shifted[:, 0] + s * shifted[:, 1], -s * shifted[:, 0] + c * shifted[:, 1]])
-    return xy, np.unwrap(run.rpy[:, 2]) - heading
+    yaw = np.unwrap(run.rpy[:, 2]) - heading
+    if run.odometry is not None:
+        ox, oy, oyaw = (float(v) for v in run.odometry[before])
+        c, s = math.cos(oyaw), math.sin(oyaw)
+        xy = np.column_stack([ox + c * xy[:, 0] - s * xy[:, 1], oy + s * xy[:, 0] + c * xy[:, 1]])
+        yaw = yaw + oyaw
+    return xy, yaw
 
 
 def path_measures(run: RunLog) -> dict[str, Any]:
@@ -74,7 +83,8 @@ def path_measures(run: RunLog) -> dict[str, Any]:
     heading_errors: list[float | None] = []
     reached = 0
     squares: list[np.ndarray] = []
-    previous, begin = np.zeros(2), start
+    previous = run.odometry[max(start - 1, 0), :2] if run.odometry is not None else np.zeros(2)
+    begin = start
     for waypoint, row in zip(waypoints, row_of, strict=True):
         target = np.array([waypoint.x, waypoint.y])
         end = rows - 1 if row is None else row
