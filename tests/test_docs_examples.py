@@ -45,6 +45,7 @@ EXEMPT: dict[str, str] = {
     "taplo check": "taplo is an editor tool, not installed here (tests/test_robot_files.py checks the schema)",
     "shc ros": "needs a ROS 1 master (tests/test_ros_session.py runs it against Debian's roscore)",
     "rosparam": "needs a ROS 1 master (tests/test_ros_node.py reads rosparam values)",
+    "rostopic pub": "needs a ROS 1 master and shc ros running (tests/test_path_ros.py publishes a goal with it)",
     "shc run-hw": "needs the robot's servos (tests/test_run_hw.py runs it against the servo emulator)",
 }
 """Command prefixes that are not run, and why."""
