@@ -228,3 +228,43 @@ def test_every_field_of_every_topic_is_the_runs(walked: Path, tmp_path: Path, fm
             direct = bytes(serialize(build(sec, nanosec, values[row].copy() if len(values[row]) else values[row]),
                                      msgtype))
             assert raw[topic][row] == direct, (topic, row)
+
+
+def test_a_robot_with_a_servo_map_is_exported_with_its_own_joint_names(tmp_path: Path) -> None:
+    """The imported PhantomX's [hardware.servos] names each joint as its URDF does (j_c1_rf, …): the bag's
+    /joint_states, /desired_joint_states and /robot_description use those names (as the robot's own driver would
+    publish them), and /shc/servo_map ties each to its servo id."""
+    import json
+    import subprocess
+    import sys
+    import xml.etree.ElementTree as ET
+
+    from rosbags.rosbag2 import Reader
+
+    from .conftest import ROOT
+
+    urdf = ROOT / "tests/data/robots/phantomx_description/urdf/phantomx.urdf"
+    revolute = {j.get("name") for j in ET.parse(urdf).getroot().iter("joint") if j.get("type") == "revolute"}
+    shc = [sys.executable, "-m", "shc_cli.cli"]
+    for args in (["import", "urdf", str(urdf), "--out", str(tmp_path / "px")],
+                 ["plan", str(tmp_path / "px/robots/PhantomX.toml"), "--duration", "1", "--out", str(tmp_path / "run"),
+                  "--no-plots"],
+                 ["export", "bag", str(tmp_path / "run"), "--out", str(tmp_path / "bag")]):
+        done = subprocess.run([*shc, *args], capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr
+    store = typestore_for("mcap")
+    found: dict[str, object] = {}
+    with Reader(tmp_path / "bag") as reader:
+        for connection, _, data in reader.messages():
+            if connection.topic not in found:
+                found[connection.topic] = store.deserialize_cdr(data, connection.msgtype)
+    names = list(found["/joint_states"].name)  # type: ignore[attr-defined]
+    assert len(names) == 18 and set(names) == revolute
+    assert list(found["/desired_joint_states"].name) == names  # type: ignore[attr-defined]
+    description = found["/robot_description"].data  # type: ignore[attr-defined]
+    assert all(f'<joint name="{name}"' in description for name in names)
+    servo_map = json.loads(found["/shc/servo_map"].data)  # type: ignore[attr-defined]
+    assert list(servo_map) == names
+    assert servo_map["j_c1_rf"] == {"key": "AR_c1", "bus": 0, "id": 11, "model": "XM430-W350", "direction": 1,
+                                    "zero_ticks": None}
+    assert servo_map["j_tibia_lf"]["id"] == 63  # the left front leg is AL, the sixth: ids 61-63

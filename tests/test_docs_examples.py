@@ -47,6 +47,8 @@ EXEMPT: dict[str, str] = {
     "rosparam": "needs a ROS 1 master (tests/test_ros_node.py reads rosparam values)",
     "rostopic pub": "needs a ROS 1 master and shc ros running (tests/test_path_ros.py publishes a goal with it)",
     "shc run-hw": "needs the robot's servos (tests/test_run_hw.py runs it against the servo emulator)",
+    "shc hw": "needs the robot's servos (tests/test_howto_your_robot.py runs docs/your-robot.md against emulated "
+              "buses)",
 }
 """Command prefixes that are not run, and why."""
 

@@ -27,10 +27,12 @@ def run_jog(robot: str, ports: list[str], joints: list[str], angle: float, torqu
             typer.echo(f"> {answer}")
         elif sys.stdin.isatty():
             answer = typer.prompt(">", default="", show_default=False).strip().lower()
-        else:
-            raise SpecError([Issue(None, None, "--answers", f"no answer for {question.joint}'s question and no "
-                                   "terminal to ask on; nothing written", "give one answer per question, e.g. "
-                                   "--answers y,k")])
+        else:  # answers piped in, one a line
+            answer = sys.stdin.readline().strip().lower()
+            if not answer:
+                raise SpecError([Issue(None, None, "--answers", f"no answer for {question.joint}'s question (end of "
+                                       "input); nothing written", "give one answer per question, e.g. --answers y,k")])
+            typer.echo(f"> {answer}")
         answer = answer[:1]
         if answer not in question.choices:
             raise SpecError([Issue(None, None, "--answers", f"{answer!r} answers none of {question.joint}'s choices "

@@ -18,6 +18,13 @@ Topics (stamps = run time from 0; frames as in the generated URDF, ``shc export 
 | ``/shc/power`` | std_msgs/Float64 | total electrical power [W] (simulate) |
 | ``/shc/state`` | std_msgs/Float64MultiArray | robot and walk state (OpenSHC values), height [m], desired velocity |
 | ``/shc/robot``, ``/shc/summary`` | std_msgs/String | the run's expanded robot TOML and summary JSON, once |
+| ``/shc/servo_map`` | std_msgs/String | with ``[hardware.servos]``: per joint its bus, id, model, direction, zero |
+
+Joint names: a robot whose ``[hardware.servos]`` names its joints (``joint = "j_c1_rf"``: an imported URDF's names)
+is written with those names in ``/joint_states``, ``/desired_joint_states`` and the joints of ``/robot_description``
+— as the robot's own driver publishes them, so the bag plays beside the maker's description and recordings — and
+``/shc/servo_map`` ties each name to its servo; other joints keep OpenSHC's ``AR_coxa_joint``. Links and ``/tf``
+frames keep the generated URDF's names.
 
 LegState (OpenSHC's ``LegState.msg``, registered in the bag): ``walker_tip_pose``, ``poser_tip_pose`` (plan),
 ``model_tip_pose`` (forward kinematics of the commanded joints), ``actual_tip_pose`` (of the measured joints),
@@ -36,7 +43,7 @@ import shutil
 from collections.abc import Callable
 from functools import partial
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -47,6 +54,9 @@ from shc_cli.interop.batch import BatchSerializer
 from shc_cli.loop.runlog import ROBOT_FILE
 from shc_cli.loop.runread import RunLog
 from shc_cli.model.chains import joint_slots
+
+if TYPE_CHECKING:
+    from shc_cli.spec.robot import Robot
 
 FORMATS = ("mcap", "sqlite3", "ros1")
 ROBOT_STATES = {state.name: int(state) for state in RobotState}
@@ -184,6 +194,28 @@ def _serialize_as(serialize: Callable[[Any, str], bytes], msgtype: str, message:
     return serialize(message, msgtype)
 
 
+def _renamed_joints(urdf: str, names: dict[str, str]) -> str:
+    """The generated URDF with its joints named as ``/joint_states`` names them (links and frames unchanged)."""
+    for old, new in names.items():
+        if old != new:
+            urdf = urdf.replace(f'<joint name="{old}"', f'<joint name="{new}"')
+    return urdf
+
+
+def servo_map(robot: Robot, names: list[str]) -> dict[str, dict[str, Any]]:
+    """``/shc/servo_map``: per joint (by its ``/joint_states`` name) the robot file's key and its servo — bus, id,
+    model, direction, zero_ticks (None: the middle of the model's range) — as ``[hardware.servos]`` gives them."""
+    keys = [f"{leg}_{joint}" for leg, spec in robot.legs.items() for joint in spec.joints]
+    hardware = robot.hardware
+    out: dict[str, dict[str, Any]] = {}
+    for name, key in zip(names, keys, strict=True):
+        servo = hardware.servos.get(key)
+        if servo is not None:
+            out[name] = {"key": key, "bus": servo.bus, "id": servo.id, "model": servo.model or hardware.model,
+                         "direction": servo.direction, "zero_ticks": servo.zero_ticks}
+    return out
+
+
 def _differences(values: np.ndarray, dt: float) -> np.ndarray:
     """Backward differences per cycle (0 for the first) [unit/s]."""
     out = np.zeros_like(values)
@@ -245,7 +277,7 @@ def _topics(run: RunLog, m: Messages) -> list[Topic]:
     """Every topic: (name, type, builder, numbers per message, numbers ``(N, width)``, written once)."""
     from shc_cli.analysis.metrics import rotation_rpy
     from shc_cli.backends.pybullet_.urdf import robot_urdf
-    from shc_cli.model.body import leg_names
+    from shc_cli.model.body import hardware_joint_names, leg_names
     from shc_cli.model.chains import Chains
 
     T = m.T
@@ -256,7 +288,8 @@ def _topics(run: RunLog, m: Messages) -> list[Topic]:
     names = leg_names(robot)
     chains = Chains.from_robot(robot)
     rows_, cols_ = joint_slots(robot)
-    joint_ids = [joint for leg in names.values() for joint in leg.joints]
+    generated = [joint for leg in names.values() for joint in leg.joints]
+    joint_ids = hardware_joint_names(robot)  # as the robot's own driver names them (the servo map's), if it says
     measured = run.joints[:, rows_, cols_]
     commanded = (run.commanded if run.commanded is not None else run.joints)[:, rows_, cols_]
     efforts = run.efforts[:, rows_, cols_] if run.efforts is not None else np.zeros_like(measured)
@@ -273,7 +306,7 @@ def _topics(run: RunLog, m: Messages) -> list[Topic]:
     topics.append(("/desired_joint_states", "sensor_msgs/msg/JointState", joint_state, 3 * count,
                    np.hstack([commanded, _differences(commanded, dt), np.zeros_like(commanded)]), False))
 
-    urdf = robot_urdf(robot)
+    urdf = _renamed_joints(robot_urdf(robot), dict(zip(generated, joint_ids, strict=True)))
     def description(sec: int, nanosec: int, v: np.ndarray) -> Any:
         return T["std_msgs/msg/String"](data=urdf)
 
@@ -326,6 +359,10 @@ def _topics(run: RunLog, m: Messages) -> list[Topic]:
                    0, np.zeros((n, 0)), True))
     topics.append(("/shc/summary", "std_msgs/msg/String",
                    lambda s, ns, v: T["std_msgs/msg/String"](data=summary_text), 0, np.zeros((n, 0)), True))
+    if robot.hardware.servos:
+        servo_text = json.dumps(servo_map(robot, joint_ids))
+        topics.append(("/shc/servo_map", "std_msgs/msg/String",
+                       lambda s, ns, v: T["std_msgs/msg/String"](data=servo_text), 0, np.zeros((n, 0)), True))
     states = run.states if run.states is not None else np.full((n, 2), "UNKNOWN")
     robot_codes = np.array([ROBOT_STATES.get(str(x), -1) for x in states[:, 0]], dtype=float)
     walk_codes = np.array([WALK_STATES.get(str(x), 3) for x in states[:, 1]], dtype=float)

@@ -98,6 +98,15 @@ def joint_names(robot: Robot) -> list[str]:
     return [name for names in leg_names(robot).values() for name in names.joints]
 
 
+def hardware_joint_names(robot: Robot) -> list[str]:
+    """The joints' names on the robot itself, in leg order: ``[hardware.servos]``'s ``joint`` where given (an
+    imported URDF's joint names, what the robot's own driver publishes in ``/joint_states``), else
+    :func:`joint_names`'s ``AR_coxa_joint``."""
+    servos = robot.hardware.servos
+    return [(servos[f"{leg}_{joint}"].joint if f"{leg}_{joint}" in servos else None) or f"{leg}_{joint}_joint"
+            for leg, spec in robot.legs.items() for joint in spec.joints]
+
+
 def foot_names(robot: Robot) -> list[str]:
     """Foot link names in leg order (``AR_foot``, …); each foot's frame is its leg's DH tip."""
     return [names.foot for names in leg_names(robot).values()]

@@ -32,11 +32,10 @@ def joint_names(robot: Robot) -> list[str]:
 
 def robot_joint_names(robot: Robot) -> list[str]:
     """The joints' names on the robot, in leg order: ``[hardware.servos]``'s ``joint`` where given (an imported
-    URDF's joint names), else OpenSHC's (:func:`joint_names`)."""
-    servos = robot.hardware.servos
-    return [servos[f"{leg}_{joint}"].joint or f"{leg}_{joint}_joint"
-            if f"{leg}_{joint}" in servos else f"{leg}_{joint}_joint"
-            for leg, spec in robot.legs.items() for joint in spec.joints]
+    URDF's joint names), else OpenSHC's (:func:`joint_names`); see :func:`shc_cli.model.body.hardware_joint_names`."""
+    from shc_cli.model.body import hardware_joint_names
+
+    return hardware_joint_names(robot)
 
 
 @dataclass
