@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -144,6 +145,7 @@ def test_plan_odometry_follows_the_commanded_walk_and_measured_joints_give_the_s
     assert np.allclose(np.array(measured[1:]), np.array(commanded[:-1]), atol=1e-9)
 
 
+@pytest.mark.slow
 def test_simulate_logs_odometry_and_analyze_measures_its_drift(tmp_path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """End to end on MuJoCo: a short turning walk logs ``odom_*``, its summary has the final odometry and true poses,
     and ``shc analyze --json`` gives the drift measures, small on flat ground; ``--out`` draws trajectory.png."""
