@@ -487,7 +487,8 @@ def import_urdf(
 
 hw_app = typer.Typer(help="Bring a robot's servos up: find them, check where they stand, jog each joint to confirm "
                      "its direction and zero, emulate a robot's buses.", no_args_is_help=True)
-app.add_typer(hw_app, name="hw")
+app.add_typer(hw_app, name="hw", short_help="Bring a robot's servos up: find them (scan), check where they stand, "
+              "jog each joint to confirm its direction and zero, emulate a bus.")
 PortsOption = Annotated[list[str], typer.Option("--port", metavar="DEV", help="Serial device of a servo bus, e.g. "
                                                 "/dev/ttyUSB0; once per bus, bus 0 first.")]
 HwBaudOption = Annotated[int | None, typer.Option(help="Baud rate [default: hardware.baud].")]
