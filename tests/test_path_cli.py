@@ -96,6 +96,10 @@ def test_path_and_commands_together_are_refused(tmp_path: Path, capsys, monkeypa
                        capsys, monkeypatch)
     assert code == 2 and "--path and --commands both give the run's input" in err
     assert not (tmp_path / "r").exists()
+    code, _, err = run(["simulate", "--path", str(SQUARE), "--input", "stdin", "--out", str(tmp_path / "r")],
+                       capsys, monkeypatch)
+    assert code == 2 and "--path and --input stdin both give the run's input" in err
+    assert not (tmp_path / "r").exists()
 
 
 def test_validate_knows_a_path_file(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
