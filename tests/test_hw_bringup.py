@@ -188,3 +188,23 @@ def test_emulate_serves_the_robot_until_stopped(tmp_path: Path) -> None:
         process.wait(timeout=30)
     assert result.returncode == 0 and result.stdout.splitlines()[-1] == "18 servos found", result.stdout
     assert process.returncode == 0 and not link.exists()
+
+
+@pytest.mark.parametrize(("model", "expected"), [
+    ("XM430-W350", [(100, 266), (116, 2048), (64, 1), (116, 2048 + 65), (116, 2048), (64, 0), (100, 885)]),
+    ("STS3215", [(48, 300), (42, 2048), (40, 1), (42, 2048 + 65), (42, 2048), (40, 0), (48, 1000)]),
+])
+def test_jog_on_protocol_2_and_feetech_limits_the_torque_and_returns(model: str, expected: list[tuple[int, int]],
+                                                                    tmp_path: Path) -> None:
+    """The other families: Protocol 2.0 limits Goal PWM (address 100: 30 % of 885; 885 is the emulator's power-up
+    value), Feetech Torque Limit (48: 30 % of 1000); the goal goes 0.1 rad out (4096 ticks a turn: 65 ticks) and
+    back, the torque off, the limit restored."""
+    robot = _robot(tmp_path, model)
+    with EmulatorProcess({k + 1: model for k in range(18)}) as bus:
+        result = _shc("hw", "jog", str(robot), "--port", bus.port, "--joint", "AR_coxa", "--answers", "y,k")
+        packets = bus.packets()
+    assert result.returncode == 0, result.stderr
+    wide = model.startswith("XM")  # Protocol 2.0: 2-byte addresses
+    writes = [(int.from_bytes(p[2][:2], "little"), int.from_bytes(p[2][2:], "little")) if wide else
+              (p[2][0], int.from_bytes(p[2][1:], "little")) for p in packets if p[0] == 1 and p[1] == p1.WRITE]
+    assert writes == expected, writes

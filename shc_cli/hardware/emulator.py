@@ -93,6 +93,8 @@ class EmulatedServo:
         self.write(self.model.return_delay_time, bytes([250]))  # 500 µs return delay (not waited for here)
         self.write(self.model.max_position_limit, (4095).to_bytes(4, "little"))
         self.write(self.model.current_limit, (2047).to_bytes(2, "little"))
+        self.write(36, (885).to_bytes(2, "little"))  # PWM Limit, and Goal PWM at power-up (its value: e-Manual)
+        self.write(100, (885).to_bytes(2, "little"))
         self.set_position(2048)
         self.write(self.model.goal_position, (2048).to_bytes(4, "little", signed=True))
 
