@@ -16,7 +16,8 @@ CHECK_NOTE = [
     "# [hardware.servos] below is TO CHECK on the robot: written by the import, not read from it. Ids are numbered",
     "# 10 x leg + joint in leg order (AR 11, 12, …), every servo on bus 0, direction +1, zero at the middle of the",
     "# servo's range, and hardware.model is a guess from the joints' efforts. Set each servo's id, direction and",
-    "# zero_ticks before shc run-hw (docs/robot-files.md, section 9).",
+    "# zero_ticks before shc run-hw: shc hw scan finds the ids, shc hw jog writes direction and zero",
+    "# (docs/your-robot.md).",
 ]
 """Comment lines written above the table."""
 
