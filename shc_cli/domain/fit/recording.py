@@ -69,12 +69,15 @@ class Recording:
 
     def cut(self, seconds: float) -> Recording:
         """The first ``seconds`` of the run."""
+        from dataclasses import replace
+
         n = max(2, round(seconds / self.dt))
-        parts = {name: (None if value is None else value[:n]) for name, value in
-                 (("running", self.running), ("commanded", self.commanded), ("position", self.position),
-                  ("current", self.current), ("torque", self.torque), ("power", self.power))}
-        return Recording(self.path, self.robot, self.scenario, self.terrain, self.seed, self.measured_start,
-                         **parts)  # type: ignore[arg-type]
+
+        def first(values: np.ndarray | None) -> np.ndarray | None:
+            return None if values is None else values[:n]
+
+        return replace(self, running=self.running[:n], commanded=self.commanded[:n], position=self.position[:n],
+                       current=first(self.current), torque=first(self.torque), power=first(self.power))
 
 
 def speeds(position: np.ndarray, dt: float) -> np.ndarray:

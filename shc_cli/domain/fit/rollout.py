@@ -19,7 +19,7 @@ from shc_cli.domain.fit.recording import Recording, speeds
 
 if TYPE_CHECKING:
     from shc_cli.backends.engine_registry import EngineName
-    from shc_cli.spec.robot import Servo
+    from shc_cli.spec.robot import Robot, Servo
 
 PHYSICS_RATE = 400.0
 """Physics steps per second of the replay [Hz] (``simulate``'s default)."""
@@ -82,10 +82,11 @@ def replay(recording: Recording, servo: Servo, engine: EngineName = "mujoco") ->
     return Trace(position, torque)
 
 
-def world_rows(robot: object) -> tuple[np.ndarray, np.ndarray]:
+def world_rows(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
+    """Leg and joint index of each servo in the padded ``(L, n)`` arrays."""
     from shc_cli.model.chains import joint_slots
 
-    return joint_slots(robot)  # type: ignore[arg-type]
+    return joint_slots(robot)
 
 
 def _padded(slots: tuple[np.ndarray, np.ndarray], values: np.ndarray) -> np.ndarray:

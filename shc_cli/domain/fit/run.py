@@ -18,7 +18,7 @@ from shc_cli.errors import Issue, SpecError, check_choice
 if TYPE_CHECKING:
     from shc_cli.backends.engine_registry import EngineName
     from shc_cli.domain.fit.params import Parameter
-    from shc_cli.domain.fit.solve import Solution
+    from shc_cli.domain.fit.solve import Problem, Solution
     from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
@@ -135,13 +135,13 @@ def fit(config: FitConfig) -> FitResult:
     return FitResult(out, fits, time.perf_counter() - started)
 
 
-def _fit_group(problem: object, group: str, config: FitConfig, robot: Robot, folder: Path) -> GroupFit:
+def _fit_group(problem: Problem, group: str, config: FitConfig, robot: Robot, folder: Path) -> GroupFit:
+    """Solve one problem and write its files into ``folder``."""
     import numpy as np
 
     from shc_cli.domain.fit import outputs
-    from shc_cli.domain.fit.solve import Problem, solve
+    from shc_cli.domain.fit.solve import solve
 
-    assert isinstance(problem, Problem)
     x0 = np.array([p.initial for p in problem.parameters])
     before = problem.channel_errors(x0)
     solution = solve(problem, config.max_evaluations)
