@@ -159,3 +159,13 @@ def test_by_joint_fits_each_joint_name_in_its_own_folder(logs: dict[str, Path], 
         assert data["params"]["coulomb_friction"]["value"] == pytest.approx(TRUTH["coulomb_friction"], rel=0.10)
         assert (tmp_path / "fit" / group / "robot.toml").is_file()
     assert "[femur]" in out
+
+
+def test_a_fit_stopped_by_its_budget_says_so(logs: dict[str, Path], tmp_path: Path, cli: Cli) -> None:
+    argv = ["fit", str(logs["WA"]), "--robot", str(logs["robot"]), "--params", "coulomb,holding",
+            "--max-evaluations", "1", "--no-plots", "--out", str(tmp_path / "fit")]
+    code, _, err = run(argv, *cli)
+    assert code == 0, err
+    assert "stopped at its budget of 1 evaluations before converging" in err
+    data = json.loads((tmp_path / "fit" / "fit.json").read_text(encoding="utf-8"))
+    assert data["residuals"]["converged"] is False and data["residuals"]["evaluations"] == 1

@@ -28,6 +28,10 @@ def run_fit(runs: list[Path], robot: str, params: str | None, engine: str, out: 
             typer.echo(f"  {parameter.name:24s} {parameter.initial:9.4g} → {solution.x[index]:9.4g} {spread}{flag}")
         errors = ", ".join(f"{name} {group.before[name]:.3g} → {group.after[name]:.3g}" for name in group.after)
         typer.echo(f"  RMS error: {errors}")
+        if not solution.converged:
+            typer.echo(f"warning: {group.group}: the solver stopped at its budget of {max_evaluations} evaluations "
+                       "before converging: the values and uncertainties are where it stopped (raise "
+                       "--max-evaluations, or fit runs on a stand and standing rather than walking)", err=True)
     first = result.fits[0]
     typer.echo(f"{len(runs)} run{'s' if len(runs) != 1 else ''}, {first.solution.replays} replays, "
                f"{result.elapsed_s:.1f} s → {result.path / 'robot.toml' if by == 'model' else result.path}")

@@ -57,7 +57,7 @@ def fit_json(parameters: list[Parameter], solution: Solution, before: dict[str, 
                           "identifiable": bool(solution.identifiable[index])}
     residuals = {"before": before, "after": after, "units": {k: UNITS[k] for k in after},
                  "cost_before": solution.cost_before, "cost_after": solution.cost_after,
-                 "evaluations": solution.iterations, "replays": solution.replays,
+                 "evaluations": solution.iterations, "replays": solution.replays, "converged": solution.converged,
                  "singular_values": [float(s) for s in solution.singular_values]}
     return {"params": params, "residuals": residuals}
 

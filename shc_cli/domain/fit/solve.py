@@ -188,6 +188,8 @@ class Solution:
         iterations: solver evaluations of the residuals.
         replays: engine replays of every recording.
         singular_values: of the Jacobian in typical-size units, largest first.
+        converged: the solver met its tolerances (False: it stopped at its evaluation budget, and the values and
+            uncertainties describe where it stopped, not a minimum).
     """
 
     x: np.ndarray
@@ -198,6 +200,7 @@ class Solution:
     iterations: int
     replays: int
     singular_values: np.ndarray
+    converged: bool = True
 
 
 def solve(problem: Problem, max_evaluations: int = 30) -> Solution:
@@ -222,7 +225,7 @@ def solve(problem: Problem, max_evaluations: int = 30) -> Solution:
     log.info("fit: %d evaluations, %d replays, cost %.4g → %.4g", result.nfev, problem.replays,
              0.5 * float(start @ start), 0.5 * float(residual @ residual))
     return Solution(x, sigma, identifiable, 0.5 * float(start @ start), 0.5 * float(residual @ residual),
-                    int(result.nfev), problem.replays, singular)
+                    int(result.nfev), problem.replays, singular, bool(result.status > 0))
 
 
 def uncertainty(residual: np.ndarray, jacobian: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
