@@ -422,6 +422,19 @@ class ServoBus:
                                     * self._ticks_per_rad[index]).astype(np.int64)
         return ticks
 
+    def ticks_per_radian(self, index: int) -> float:
+        """Slot ``index``'s servo ticks per radian (its model's units)."""
+        return float(self._ticks_per_rad[index])
+
+    def angle_to_ticks(self, index: int, angle: float) -> int:
+        """Slot ``index``'s joint angle [rad] → its servo's ticks (zero, direction and the joint's offset)."""
+        return int(self._to_ticks(index, np.array(angle)))
+
+    def ticks_to_angle(self, index: int, ticks: float) -> float:
+        """Slot ``index``'s servo ticks → its joint angle [rad]."""
+        return float(self._direction[index] * (ticks - self._zero[index]) / self._ticks_per_rad[index]
+                     - self._offset[index])
+
     def read_mode(self) -> str:
         """How the state is read (for messages)."""
         return "sync read"

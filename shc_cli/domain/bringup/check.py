@@ -110,8 +110,7 @@ def check(robot: Robot, ports: list[str], baud: int | None = None) -> CheckRepor
         readings = []
         for index, slot in enumerate(bus.slots):
             angle = float(state.positions[slot.leg, slot.joint])
-            ticks = round(bus._zero[index] + bus._direction[index] * (angle + bus._offset[index])
-                              * bus._ticks_per_rad[index])
+            ticks = bus.angle_to_ticks(index, angle)
             readings.append(JointReading(slot.key, slot.servo_id, ticks, angle, slot.limits[0], slot.limits[1],
                                          standing[slot.key]))
         return CheckReport(robot.name, bus.port_name, readings)

@@ -58,15 +58,19 @@ class JogReport:
     """Joint → the servo-map fields written."""
 
 
-def _words(delta: np.ndarray) -> str:
-    """The main direction of a tip displacement in the body frame, in words."""
-    names = [("forward", "backward"), ("left", "right"), ("up", "down")]
+WORDS = [("forward", "backward"), ("left", "right"), ("up", "down")]
+"""Directions along the body's x, y and z axes."""
+
+
+def _words(delta: np.ndarray) -> tuple[str, str]:
+    """The main direction of a tip displacement in the body frame, and its opposite, in words."""
     axis = int(np.argmax(np.abs(delta)))
-    return names[axis][0 if delta[axis] > 0 else 1]
+    forward, back = WORDS[axis]
+    return (forward, back) if delta[axis] > 0 else (back, forward)
 
 
-def positive_hints(robot: Robot) -> dict[str, str]:
-    """For each joint, which way a positive turn moves its foot at the standing pose ("the foot moves up")."""
+def positive_hints(robot: Robot) -> dict[str, tuple[str, str]]:
+    """For each joint, which way a positive turn moves its foot at the standing pose, and a negative one."""
     from shc_cli.domain.bringup.check import standing_joints
     from shc_cli.model.chains import Chains
 
@@ -83,7 +87,7 @@ def positive_hints(robot: Robot) -> dict[str, str]:
         for k, key in enumerate(row):
             moved = q.copy()
             moved[i, k] += 0.05
-            hints[key] = f"at the standing pose its foot moves {_words(chains.tips(moved)[i] - base[i])}"
+            hints[key] = _words(chains.tips(moved)[i] - base[i])
     return hints
 
 
@@ -104,13 +108,13 @@ def _jog_one(bus: ServoBus, index: int, angle: float, torque: float) -> tuple[in
     servo = OneServo(bus, index)
     slot = servo.slot
     start = servo.ticks()
-    per_rad = float(bus._ticks_per_rad[index])
-    q0 = slot.direction * (start - slot.zero) / per_rad - slot.offset
+    per_rad = bus.ticks_per_radian(index)
+    q0 = bus.ticks_to_angle(index, start)
     low, high = slot.limits
     q1 = q0 + angle if q0 + angle <= high else q0 - angle
     if not low <= q1 <= high:
         return None
-    target = int(bus._to_ticks(index, np.array(q1)))
+    target = bus.angle_to_ticks(index, q1)
     saved = servo.limit_torque(torque)
     servo.goal(start)
     servo.torque(True)
@@ -165,9 +169,10 @@ def jog(robot: Robot, path: Path, ports: list[str], ask: Callable[[Question], st
             sign = "+" if (target - start) * slot.direction > 0 else "-"
             event(log, NOTICE, "hw_jog", "%s (servo %d): ticks %d → %d → %d (%s%.2f rad) and back", key,
                   slot.servo_id, start, reached, start, sign, angle)
-            answer = ask(Question(key, f"{key} turned {sign}{angle:.2f} rad and back. Positive is the robot file's "
-                                       f"({hints[key]}): did it turn {'that way' if sign == '+' else 'against it'}? "
-                                       "[y]es / [n]o, reversed / [s]kip", ("y", "n", "s")))
+            expected = hints[key][0 if sign == "+" else 1]
+            answer = ask(Question(key, f"{key} turned {sign}{angle:.2f} rad and back: by the robot file its foot "
+                                       f"moved {expected} (at the standing pose; on a stand, the way it would). Did "
+                                       "it? [y]es / [n]o, the other way / [s]kip", ("y", "n", "s")))
             if answer == "s":
                 continue
             direction = -slot.direction if answer == "n" else slot.direction
@@ -178,7 +183,7 @@ def jog(robot: Robot, path: Path, ports: list[str], ask: Callable[[Question], st
                 from shc_cli.hardware.servo_io import OneServo
 
                 here = OneServo(bus, index).ticks()
-                fields["zero_ticks"] = round(here - direction * slot.offset * float(bus._ticks_per_rad[index]))
+                fields["zero_ticks"] = round(here - direction * slot.offset * bus.ticks_per_radian(index))
             if fields:
                 report.changes[key] = fields
     except BaseException:
