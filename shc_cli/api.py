@@ -224,6 +224,18 @@ def fit(runs: Sequence[Path | str] | Path | str, *, robot: str | Path = "bullet"
     return run(config)
 
 
+def fit_plan(robot: str | Path = "bullet", *, out: Path | str | None = None, overwrite: bool = False) -> Path:
+    """``shc fit --plan``: write the recommended excitation for a fit of ``robot``'s servos, a plan script for
+    ``run-hw --commands`` (:func:`shc_cli.domain.excitation.write_plan`), to ``out`` (default ``fit-plan.toml``;
+    an existing file only with ``overwrite``); returns its path."""
+    from shc_cli.domain.excitation import write_plan
+    from shc_cli.outputs import refuse_existing
+
+    path = Path(out) if out is not None else Path("fit-plan.toml")
+    refuse_existing([path], overwrite)
+    return write_plan(str(robot), path)
+
+
 def _table(path: Path) -> list[dict[str, str]]:
     import csv
 

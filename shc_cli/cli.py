@@ -367,8 +367,9 @@ def optimize(
 
 @app.command()
 def fit(
-    runs: Annotated[list[Path], typer.Argument(help="Run directories (shc run-hw or shc simulate) of the robot.",
-                                               metavar="RUN...")],
+    runs: Annotated[list[Path] | None, typer.Argument(
+        help="Run directories (shc run-hw or shc simulate) of the robot.", metavar="RUN...", show_default=False)]
+    = None,
     robot: Annotated[str, typer.Option(help="Robot file or bundled name whose [servo] values are the start.")]
     = "bullet",
     params: Annotated[str | None, typer.Option(help="[servo] parameters to fit, comma-separated (short names: gain, "
@@ -378,18 +379,26 @@ def fit(
     engine: Annotated[str, typer.Option(help="Physics engine of the replays: mujoco or pybullet.")] = "mujoco",
     out: Annotated[Path | None, typer.Option(help="Output directory (default fits/<robot name>).")] = None,
     scenario: Annotated[str, typer.Option(help="Where a real robot's runs were recorded: SA, WA (body held in the "
-                                          "air), SG, WG (on the ground); a simulated run's own is used.")] = "WG",
+                                          "air), SG, WG (on the ground), BENCH (servos turning only their rotors: "
+                                          "off the robot, or the servo emulator); a simulated run's own is used.")]
+    = "WG",
     by: Annotated[str, typer.Option(help="model: one fit of every servo; joint: one fit per joint name.")] = "model",
     max_evaluations: Annotated[int, typer.Option(help="The solver's budget of residual evaluations.")] = 30,
     seconds: Annotated[float | None, typer.Option(help="Use only the first this many seconds of each run.")] = None,
     plots: Annotated[bool, typer.Option(help="Write the measured-against-simulated figures.")] = True,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing fit output directory.")] = False,
+    plan: Annotated[bool, typer.Option("--plan", help="Instead of fitting, write the recommended excitation: a plan "
+                                       "script for run-hw --commands (stand, sway, walk at several step "
+                                       "frequencies) to --out (default fit-plan.toml).")] = False,
 ) -> None:
     """Fit the robot's servo model ([servo]: gain, friction, holding ratio, armature, idle power, torque constant)
     to run logs by replaying their joint commands in the engine: robot.toml, fit.json and figures."""
-    from shc_cli.commands.fit import run_fit
+    from shc_cli.commands.fit import run_fit, write_fit_plan
 
-    run_fit(runs, robot, params, engine, out, scenario.upper(), by, max_evaluations, seconds, plots, overwrite)
+    if plan:
+        write_fit_plan(runs or [], robot, out, overwrite)
+        return
+    run_fit(runs or [], robot, params, engine, out, scenario.upper(), by, max_evaluations, seconds, plots, overwrite)
 
 
 @app.command()

@@ -95,20 +95,30 @@ class Response:
     """Motor current [A]."""
 
 
-def free_response(servo: Servo, goals: np.ndarray, period: float, start: np.ndarray | float = 0.0) -> Response:
-    """The readings of load-free joints driven by a goal log, as run-hw takes them: row ``k`` is the state read at
-    the start of cycle ``k``; goal ``k`` (written after that read) holds for one ``period`` [s] until the next read.
+def free_response(servo: Servo, goals: np.ndarray, period: float | np.ndarray, start: np.ndarray | float = 0.0,
+                  delay: np.ndarray | None = None) -> Response:
+    """The readings of load-free joints driven by a goal log, as a run's ``log.csv`` rows pair them: goal ``k`` is
+    written, held until the next reading, and row ``k`` is the state read then.
 
     Args:
         servo: the ``[servo]`` table.
         goals: goal angles ``(cycles, joints)`` [rad].
-        period: the control period [s].
-        start: the joints' angles at the first read [rad] (at rest).
+        period: the time from one reading to the next [s]: the control period, or one per cycle ``(cycles,)``.
+        start: the joints' angles before the first goal [rad] (at rest).
+        delay: per cycle ``(cycles,)``, the time from the previous reading to goal ``k``'s write [s], during which
+            goal ``k − 1`` still holds (run-hw's ``timing.csv`` cycle time); default 0.
     """
     goals = np.asarray(goals, dtype=float)
+    count = goals.shape[0]
+    periods = np.broadcast_to(np.asarray(period, dtype=float), (count,))
     joints = FreeJoints(servo, goals.shape[1], np.asarray(start, dtype=float))
     position, speed, current = (np.empty(goals.shape) for _ in range(3))
-    for k in range(goals.shape[0]):
+    previous = joints.position.copy()
+    for k in range(count):
+        late = 0.0 if delay is None else min(float(delay[k]), float(periods[k]))
+        if late > 0.0:
+            joints.advance(previous, late)
+        joints.advance(goals[k], float(periods[k]) - late)
         position[k], speed[k], current[k] = joints.position, joints.speed, joints.current
-        joints.advance(goals[k], period)
+        previous = goals[k]
     return Response(position, speed, current)

@@ -35,3 +35,16 @@ def run_fit(runs: list[Path], robot: str, params: str | None, engine: str, out: 
     first = result.fits[0]
     typer.echo(f"{len(runs)} run{'s' if len(runs) != 1 else ''}, {first.solution.replays} replays, "
                f"{result.elapsed_s:.1f} s → {result.path / 'robot.toml' if by == 'model' else result.path}")
+
+
+def write_fit_plan(runs: list[Path], robot: str, out: Path | None, overwrite: bool) -> None:
+    """``shc fit --plan``: write the excitation plan script and say where and how to record it."""
+    from shc_cli.api import fit_plan
+    from shc_cli.errors import Issue, SpecError
+
+    if runs:
+        raise SpecError([Issue(None, None, "--plan", "writes a plan, it fits no runs",
+                               f"drop the run directories ({runs[0]}) or --plan")])
+    path = fit_plan(robot, out=out, overwrite=overwrite)
+    typer.echo(f"{path}: record it with shc run-hw {robot} --commands {path} on a stand, then on the ground "
+               "(docs/hardware.md)")

@@ -24,6 +24,7 @@ bus set-up (NOTICE), warnings and faults are events (:mod:`shc_cli.events`).
 from __future__ import annotations
 
 import logging
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Literal
 
@@ -36,6 +37,7 @@ from shc_cli.loop.input_choice import check_input
 from shc_cli.loop.input_sources import STATES
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
 
     from shc_cli.backends.base import InputSource
     from shc_cli.hardware.bus import BusState
@@ -118,9 +120,11 @@ class HardwareConfig(BaseModel):
         return check_input(value)
 
 
-def run_hardware(config: HardwareConfig) -> RunResult:
+def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = None,
+                 sleep: Callable[[float], None] | None = None) -> RunResult:
     """Start up, run the input on the servos, stop and shut down safely; returns the run directory and its summary
-    (``summary["fault"]`` names a servo fault)."""
+    (``summary["fault"]`` names a servo fault). ``clock`` [s] and ``sleep`` replace the wall clock of the cycle's
+    pacing (tests: an emulated bus on a virtual clock, :class:`~shc_cli.backends.dynamixel.DynamixelBackend`)."""
     from shc_cli.backends.dynamixel import UNMEASURED, DynamixelBackend
     from shc_cli.control.controller import Controller
     from shc_cli.domain.live import open_live
@@ -168,7 +172,8 @@ def run_hardware(config: HardwareConfig) -> RunResult:
                   robot.time_delta * 1e3)
         directory = c.out or default_run_directory("run-hw")
         run = RunDirectory(directory, c.overwrite)
-        backend = DynamixelBackend(robot, bus, c.dry_run, run, c.on_fault, c.on_stop)
+        backend = DynamixelBackend(robot, bus, c.dry_run, run, c.on_fault, c.on_stop, clock=clock or time.perf_counter,
+                                   sleep=sleep or time.sleep)
         controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
                                 direct_shutdown=True)
         run.write_robot(robot)

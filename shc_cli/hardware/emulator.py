@@ -217,6 +217,7 @@ class BusEmulator:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._serve, name="dynamixel-emulator", daemon=True)
         self._lock = threading.Lock()
+        self._busy = False
 
     def start(self) -> BusEmulator:
         self._thread.start()
@@ -256,11 +257,13 @@ class BusEmulator:
             ready, _, _ = select.select([self._master], [], [], 0.05)
             if not ready:
                 continue
+            self._busy = True  # before the read: drain() sees either unread bytes or a busy emulator
             try:
                 chunk = os.read(self._master, 4096)
             except OSError:
                 return
             if not line_speed_matches(self._slave, self.baud):
+                self._busy = False
                 continue
             buffer += chunk
             while True:
@@ -278,6 +281,23 @@ class BusEmulator:
                     if self.return_delay:
                         time.sleep(self.return_delay)
                     os.write(self._master, reply)
+            self._busy = False
+
+    def drain(self, last: int | None = None, timeout: float = 1.0) -> None:
+        """Wait (up to ``timeout`` [s] of wall time) until the bus has handled every byte it has been sent and, with
+        ``last``, until the last packet it handled has that instruction (the one the host sent last: a pty delivers
+        bytes a moment after they are written, so "nothing unread" alone can come too early)."""
+        import fcntl
+        import struct
+        import termios
+
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            pending = struct.unpack("i", fcntl.ioctl(self._master, termios.FIONREAD, b"\0\0\0\0"))[0]
+            handled = last is None or (bool(self.packets) and self.packets[-1].instruction == last)
+            if handled and not pending and not self._busy:
+                return
+            time.sleep(0.0002)
 
     def _reply(self, servo: EmulatedServo, params: bytes = b"", error: int = 0) -> list[bytes]:
         if servo.faults.no_reply or not servo.present:
@@ -343,6 +363,29 @@ def line_speed_matches(fd: int, baud: int | None) -> bool:
     except termios.error:
         return True
     return constant is None or speed in (constant, getattr(termios, "BOTHER", -1))
+
+
+class VirtualClock:
+    """Virtual time [s] shared by emulated servos (their ``clock``) and the host loop that drives them (run-hw's
+    pacing: ``run_hardware(config, clock=virtual, sleep=virtual.sleep)``): a control period passes in no wall time,
+    so the servos see an exactly periodic host however loaded the machine. ``sleep`` first lets the emulator take
+    every packet sent (:meth:`BusEmulator.drain` up to a packet of ``last``: run-hw's cycle ends with its goal SYNC
+    WRITE), so a goal written in a cycle acts in that cycle, as on a real bus.
+    """
+
+    def __init__(self, start: float = 1000.0, last: int | None = p2.SYNC_WRITE) -> None:
+        self.now = start
+        self.last = last
+        self.bus: BusEmulator | None = None
+        """The emulator to drain before time moves on."""
+
+    def __call__(self) -> float:
+        return self.now
+
+    def sleep(self, seconds: float) -> None:
+        if self.bus is not None:
+            self.bus.drain(self.last)
+        self.now += max(0.0, seconds)
 
 
 def serve_promptly() -> None:

@@ -20,8 +20,10 @@ import numpy as np
 from shc_cli.errors import Issue, SpecError
 from shc_cli.spec.robot import Robot
 
-SCENARIOS = ("SA", "WA", "SG", "WG")
-"""Where a run was (paper §VII-A): stance or walk, in the air (body held) or on the ground."""
+SCENARIOS = ("SA", "WA", "SG", "WG", "BENCH")
+"""Where a run was (paper §VII-A): stance or walk, in the air (body held) or on the ground; or BENCH: servos that
+turn nothing but their own rotors (off the robot, or the servo emulator's load-free joints,
+:mod:`shc_cli.backends.servo_joint`)."""
 
 
 @dataclass(frozen=True)

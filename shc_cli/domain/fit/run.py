@@ -37,7 +37,8 @@ class FitConfig:
             :data:`~shc_cli.domain.fit.params.ALIASES`); None: :data:`~shc_cli.domain.fit.params.DEFAULT_PARAMS`.
         engine: the physics engine of the replays.
         out: the output directory (None: ``fits/<robot name>``).
-        scenario: where the runs of a real robot were recorded (SA, WA, SG, WG); a simulated run's own is used.
+        scenario: where the runs of a real robot were recorded (SA, WA, SG, WG; BENCH: servos turning only their
+            rotors, e.g. the servo emulator's); a simulated run's own is used.
         by: ``"model"`` (one fit of every servo) or ``"joint"`` (one fit per joint name).
         max_evaluations: the solver's budget of residual evaluations.
         seconds: use only the first this many seconds of each run (None: all).

@@ -76,7 +76,8 @@ def electrical(trace: Trace, servo: Servo, dt: float) -> Simulated:
 
     speed = trace.speed(dt)
     state = ServoModel(servo).electrical(trace.torque, speed)
-    return Simulated(trace.position, speed, state.current, trace.torque, state.power.sum(axis=1))
+    current = state.current if trace.current is None else trace.current
+    return Simulated(trace.position, speed, current, trace.torque, state.power.sum(axis=1))
 
 
 def measured_channels(recording: Recording) -> dict[str, np.ndarray]:
@@ -123,7 +124,8 @@ class Problem:
 
     def traces(self, x: np.ndarray) -> list[Trace]:
         """The replays of every recording at ``x`` (cached by the values that change the motion)."""
-        key = tuple(float(v) for p, v in zip(self.parameters, x, strict=True) if p.moves)
+        bench = any(recording.scenario == "BENCH" for recording in self.recordings)  # friction moves a bench's joints
+        key = tuple(float(v) for p, v in zip(self.parameters, x, strict=True) if p.moves or bench)
         cached = self._cache.get(key)
         if cached is None:
             servo = self.servo(x)
