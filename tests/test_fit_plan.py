@@ -88,3 +88,24 @@ def test_every_phase_moves_the_joints(tmp_path: Path) -> None:
     blocks = [at for at, change in changes if "parameters" in change]
     for start, end in itertools.pairwise(blocks):  # each step frequency walks a good part of its block
         assert (log.walk_state[(t >= start) & (t < end)] == "MOVING").mean() > 0.3
+
+
+def test_shc_fit_plan_writes_the_plan_and_refuses_to_overwrite_or_fit(tmp_path: Path) -> None:
+    """End to end: ``shc fit --plan`` writes a plan script that ``shc validate`` and the run commands accept, says
+    how to record it, and refuses (one line, exit 2) an existing file without --overwrite and run directories."""
+    import subprocess
+    import sys
+
+    shc = [sys.executable, "-m", "shc_cli.cli"]
+    out = tmp_path / "fit-plan.toml"
+    made = subprocess.run([*shc, "fit", "--plan", "--robot", "openshc_default", "--out", str(out)],
+                          capture_output=True, text=True, timeout=120)
+    assert made.returncode == 0, made.stderr
+    assert f"shc run-hw openshc_default --commands {out}" in made.stdout
+    assert load_timeline(out, 0.02).changes[0] == (0, {"velocity": (0.0, 0.0, 0.0)})
+    again = subprocess.run([*shc, "fit", "--plan", "--robot", "openshc_default", "--out", str(out)],
+                           capture_output=True, text=True, timeout=120)
+    assert again.returncode == 2 and "already exists" in again.stderr and len(again.stderr.splitlines()) == 1
+    mixed = subprocess.run([*shc, "fit", str(tmp_path), "--plan", "--out", str(tmp_path / "other.toml")],
+                           capture_output=True, text=True, timeout=120)
+    assert mixed.returncode == 2 and "--plan" in mixed.stderr and not (tmp_path / "other.toml").exists()
