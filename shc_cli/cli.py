@@ -251,7 +251,8 @@ def ros(
     = "bullet",
     backend: Annotated[str, typer.Option(help="none: outputs only, as OpenSHC (a hardware node of yours reads "
                                               "them); mujoco or pybullet: the robot simulated in real time, its "
-                                              "sensors published (/joint_states, /imu/data).")] = "none",
+                                              "sensors published (/joint_states, /imu/data); bus: the robot's "
+                                              "servos (--port), with run-hw's checks and safe stop.")] = "none",
     name: Annotated[str, typer.Option(help="Node name.")] = "/shc",
     master: Annotated[str | None, typer.Option(help="ROS master URI (default: $ROS_MASTER_URI).")] = None,
     duration: Annotated[float | None, typer.Option(help="Stop after this many seconds (default: until Ctrl-C).")]
@@ -265,16 +266,26 @@ def ros(
     live: LiveOption = False,
     live_port: LivePortOption = 8765,
     path: PathOption = None,
+    port: Annotated[list[str] | None, typer.Option(metavar="DEV", help="--backend bus: serial device of a servo "
+                                                                       "bus; once per bus, bus 0 first.")] = None,
+    baud: Annotated[int | None, typer.Option(help="--backend bus: baud rate [default: hardware.baud].")] = None,
+    dry_run: Annotated[bool, typer.Option(help="--backend bus: no current-limit, torque-enable or goal writes.")]
+    = False,
+    stop_state: Annotated[str, typer.Option(help="--backend bus: state to shut down to when the node stops.")]
+    = "packed",
+    on_fault: Annotated[str, typer.Option(help="--backend bus: on a servo fault, hold or torque-off.")]
+    = "torque-off",
+    on_stop: Annotated[str, typer.Option(help="--backend bus: after the shut-down, hold or torque-off.")]
+    = "torque-off",
 ) -> None:
     """Run as OpenSHC's ROS 1 node: its topics, messages and parameters, driven by syropod_remote."""
     from shc_cli.commands.ros import run_ros
     from shc_cli.domain.ros_node import NodeConfig
-    from shc_cli.errors import check_choice
 
-    check_choice("--backend", backend, ("none", "mujoco", "pybullet"), "a backend")
     run_ros(NodeConfig(robot=robot, backend=backend, name=name, master_uri=master, duration=duration, out=out,  # type: ignore[arg-type]
                        individual=individual, combined=combined, overwrite=overwrite, namespace=namespace,
-                       live=live, live_port=live_port, path=path))
+                       live=live, live_port=live_port, path=path, ports=tuple(port or ()), baud=baud,
+                       dry_run=dry_run, stop_state=stop_state, on_fault=on_fault, on_stop=on_stop))
 
 
 @app.command()

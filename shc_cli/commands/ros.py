@@ -9,12 +9,16 @@ from shc_cli.domain.ros_node import NodeConfig
 
 def run_ros(config: NodeConfig) -> None:
     """Run the node; print where it listens, then one line when it stops (exit 0 also after Ctrl-C: that is how an
-    open-ended node ends)."""
+    open-ended node ends; 3 after a servo fault, as run-hw)."""
     from shc_cli.api import ros_node
+    from shc_cli.commands.outcome import EXIT_FAULT
 
     result = ros_node(config, on_ready=lambda line: typer.echo(line, err=True))
     s = result.summary
     timing = (f" at {s.rate_hz:.1f} Hz (period p50 {s.cycle_time_p50_ms:.2f} ms, p99 {s.cycle_time_p99_ms:.2f} ms, max "
               f"{s.cycle_time_max_ms:.2f} ms)" if s.rate_hz and s.cycle_time_p50_ms is not None
               and s.cycle_time_p99_ms is not None and s.cycle_time_max_ms is not None else "")
-    typer.echo(f"{s.robot} / {s.gait}: {s.cycles} cycles{timing}, stopped by {s.stop_reason} → {result.path}")
+    fault = f", FAULT: {s.fault}" if s.fault else ""
+    typer.echo(f"{s.robot} / {s.gait}: {s.cycles} cycles{timing}, stopped by {s.stop_reason}{fault} → {result.path}")
+    if s.fault:
+        raise typer.Exit(EXIT_FAULT)

@@ -40,10 +40,11 @@ if TYPE_CHECKING:
     from collections.abc import Callable
 
     from shc_cli.backends.base import InputSource
-    from shc_cli.hardware.bus import BusState
+    from shc_cli.hardware.bus import BusState, ServoBus
     from shc_cli.live.foxglove_server import FoxgloveTransport
     from shc_cli.loop.run_loop import LoopResult
     from shc_cli.loop.summary import RunSummary
+    from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
 
@@ -120,6 +121,33 @@ class HardwareConfig(BaseModel):
         return check_input(value)
 
 
+def prepare_bus(bus: ServoBus, robot: Robot, dry_run: bool) -> None:
+    """Open ``bus`` and make it safe to drive, or refuse (:class:`~shc_cli.hardware.bus.HardwareError`, one line
+    naming every problem): every servo answers with its model, no hardware error, position mode and limits that
+    cover the joints' (:meth:`ServoBus.check`); the return delay and current limit written (not in ``dry_run``); the
+    measured read rate keeps the control period (only a warning in ``dry_run``). The caller closes the bus."""
+    from shc_cli.hardware.bus import HardwareError
+
+    bus.open()
+    problems = bus.check()
+    if problems:
+        raise HardwareError(f"{bus.port_name}: refusing to start: " + "; ".join(problems))
+    if not dry_run:
+        for done in bus.configure():
+            event(log, NOTICE, "bus_setup", "%s", done)
+    slow = bus.rate_problem(robot.time_delta)  # measured: the adapter's latency and per-servo reads count
+    if slow and not dry_run:
+        raise HardwareError(f"{bus.port_name}: refusing to start: {slow}")
+    if slow:
+        event(log, logging.WARNING, "bus_rate", "warning: %s", slow)
+    bus_time = bus.wire_time()
+    if bus_time > robot.time_delta:
+        event(log, logging.WARNING, "bus_time", "warning: one cycle needs %.1f ms on the bus (packets and return "
+              "delays at %s baud), more than the %.0f ms period: raise the baud rate, lower Return Delay Time "
+              "(hardware.return_delay_us) or split the servos over more buses", bus_time * 1e3, bus.baud,
+              robot.time_delta * 1e3)
+
+
 def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = None,
                  sleep: Callable[[float], None] | None = None) -> RunResult:
     """Start up, run the input on the servos, stop and shut down safely; returns the run directory and its summary
@@ -128,7 +156,6 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
     from shc_cli.backends.dynamixel import UNMEASURED, DynamixelBackend
     from shc_cli.control.controller import Controller
     from shc_cli.domain.live import open_live
-    from shc_cli.hardware.bus import HardwareError
     from shc_cli.hardware.buses import servo_bus
     from shc_cli.loop.input_choice import commands_file, open_input
     from shc_cli.loop.path_input import keep_path
@@ -152,24 +179,7 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
     faulted = False
     try:
         source = open_input(c.input_mode, robot, gait, inputs.commands(), c.watchdog)
-        bus.open()
-        problems = bus.check()
-        if problems:
-            raise HardwareError(f"{bus.port_name}: refusing to start: " + "; ".join(problems))
-        if not c.dry_run:
-            for done in bus.configure():
-                event(log, NOTICE, "bus_setup", "%s", done)
-        slow = bus.rate_problem(robot.time_delta)  # measured: the adapter's latency and per-servo reads count
-        if slow and not c.dry_run:
-            raise HardwareError(f"{bus.port_name}: refusing to start: {slow}")
-        if slow:
-            event(log, logging.WARNING, "bus_rate", "warning: %s", slow)
-        bus_time = bus.wire_time()
-        if bus_time > robot.time_delta:
-            event(log, logging.WARNING, "bus_time", "warning: one cycle needs %.1f ms on the bus (packets and return "
-                  "delays at %s baud), more than the %.0f ms period: raise the baud rate, lower Return Delay Time "
-                  "(hardware.return_delay_us) or split the servos over more buses", bus_time * 1e3, bus.baud,
-                  robot.time_delta * 1e3)
+        prepare_bus(bus, robot, c.dry_run)
         directory = c.out or default_run_directory("run-hw")
         run = RunDirectory(directory, c.overwrite)
         backend = DynamixelBackend(robot, bus, c.dry_run, run, c.on_fault, c.on_stop, clock=clock or time.perf_counter,

@@ -21,7 +21,6 @@ from shc_cli.domain.live import open_live
 from shc_cli.domain.result import RunResult
 
 if TYPE_CHECKING:
-    from shc_cli.control.controller import Controller
     from shc_cli.loop.summary import RunSummary
     from shc_cli.ros.node import RosNode
     from shc_cli.spec.gait import Gait
@@ -29,7 +28,8 @@ if TYPE_CHECKING:
 
 log = logging.getLogger(__name__)
 
-NodeBackend = Literal["none", "mujoco", "pybullet"]
+NodeBackend = Literal["none", "mujoco", "pybullet", "bus"]
+BACKENDS = ("none", "mujoco", "pybullet", "bus")
 SERVER = "server"
 """The robot name that reads the robot from the parameter server (``/syropod/parameters`` …)."""
 
@@ -52,6 +52,8 @@ class NodeConfig:
         live: also stream the session on a Foxglove WebSocket server on 127.0.0.1:``live_port``.
         path: a path file to walk once the robot runs (more paths and goals arrive on ``<name>/path`` and
             ``/move_base_simple/goal``: :mod:`shc_cli.ros.path_remote`).
+        ports, baud, dry_run, stop_state, on_fault, on_stop, profile_velocity: backend ``bus``: the servo buses and
+            their safety, as ``run-hw``'s options (:class:`~shc_cli.domain.hardware.HardwareConfig`).
     """
 
     robot: str = "bullet"
@@ -67,6 +69,27 @@ class NodeConfig:
     live: bool = False
     live_port: int = 8765
     path: Path | None = None
+    ports: tuple[str, ...] = ()
+    baud: int | None = None
+    dry_run: bool = False
+    stop_state: str = "packed"
+    on_fault: str = "torque-off"
+    on_stop: str = "torque-off"
+    profile_velocity: bool = False
+
+    def __post_init__(self) -> None:
+        from shc_cli.errors import Issue, SpecError, check_choice
+        from shc_cli.loop.input_sources import STATES
+
+        check_choice("--backend", self.backend, BACKENDS, "a backend")
+        for option, value in (("--on-fault", self.on_fault), ("--on-stop", self.on_stop)):
+            check_choice(option, value, ("hold", "torque-off"), "hold or torque-off")
+        check_choice("--stop-state", self.stop_state, tuple(STATES), "a robot state")
+        if (self.backend == "bus") != bool(self.ports):
+            problem = ("the bus backend needs its serial ports" if self.ports == () else
+                       f"--port is for the bus backend, not '{self.backend}'")
+            raise SpecError([Issue(None, None, "--port", problem, "give --backend bus with --port DEV (once per "
+                                   "bus, bus 0 first)")])
 
 
 def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) -> RunResult:
@@ -151,54 +174,11 @@ def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets:
          directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     if config.backend == "none":
         return _run_outputs_only(node, config, robot, gait, pose_sets, gaits, directory, on_ready)
+    if config.backend == "bus":
+        from shc_cli.domain.ros_bus import run_on_bus
+
+        return run_on_bus(node, config, robot, gait, pose_sets, gaits, directory, on_ready)
     return _run_simulated(node, config, robot, gait, pose_sets, gaits, directory, on_ready)
-
-
-class _Session:
-    """What both backends share: the remote input, the outputs, the clock and the stop conditions."""
-
-    def __init__(self, node: RosNode, config: NodeConfig, robot: Robot, controller: Controller,
-                 gaits: dict[str, Gait], sensors: bool) -> None:
-        from shc_cli.loop.pacing import WallClock
-        from shc_cli.ros.outputs import NodeOutputs
-        from shc_cli.ros.path_remote import RemotePath
-        from shc_cli.ros.remote import RemoteInput
-        from shc_cli.spec.path import load_path
-
-        self.requested: Callable[[], bool] = lambda: False
-        self.limit = None if config.duration is None else time.monotonic() + config.duration
-        self.remote = RemoteInput(node, robot, gaits, stopped=self.stopped)
-        self.path = load_path(config.path) if config.path is not None else None
-        self.source = RemotePath(self.remote, controller, self.path)
-        self.source.subscribe(node)
-        self.outputs = NodeOutputs(node, robot, config.individual, config.combined,
-                                   walkspace=lambda: controller.walkspace, after=self.remote.latch, sensors=sensors,
-                                   always=True)
-        self.clock = WallClock(robot.time_delta)
-
-    def keep_path(self, directory: Path) -> Callable[[], dict[str, object]]:
-        """The ``--path`` file copied into the run ``directory``; the summary's path fields when called."""
-        name = None
-        if self.path is not None and self.path.source is not None:
-            import shutil
-
-            name = "path.toml" if self.path.source.suffix.lower() == ".toml" else "path.csv"
-            shutil.copyfile(self.path.source, directory / name)
-        return lambda: {**({"path_file": name} if name else {}), **self.source.summary()}
-
-    def stopped(self) -> bool:
-        """A stop was requested, or the duration passed (also while waiting for OPERATIONAL)."""
-        return self.requested() or (self.limit is not None and time.monotonic() >= self.limit)
-
-    def deadline(self, cycle: int, command: object, out: object, reading: object) -> str | None:
-        """An observer that ends the run when the duration has passed."""
-        return "end" if self.limit is not None and time.monotonic() >= self.limit else None
-
-    def ready(self, node: RosNode, config: NodeConfig, robot: Robot, gait: Gait,
-              on_ready: Callable[[str], None] | None) -> None:
-        if on_ready is not None:
-            on_ready(f"shc ros: {robot.name} / {gait.name} as node {node.name} on {node.master_uri} (backend "
-                     f"{config.backend}); waiting for /syropod_remote/system_state OPERATIONAL; Ctrl-C stops")
 
 
 def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: Any,
@@ -206,6 +186,7 @@ def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gai
     """Backend none: the controller's targets are taken as reached (OpenSHC with a hardware node of the user's)."""
     from shc_cli.backends.kinematic import KinematicBackend
     from shc_cli.control.controller import Controller
+    from shc_cli.domain.ros_session import NodeSession
     from shc_cli.loop.plan_summary import PlanRecord, plan_summary
     from shc_cli.loop.run_loop import Observer, RunLoop
     from shc_cli.loop.runlog import RunWriter
@@ -215,7 +196,7 @@ def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gai
     writer = RunWriter(directory, robot, config.overwrite)
     writer.write_robot(robot)
     record = PlanRecord(controller)
-    session = _Session(node, config, robot, controller, gaits, sensors=False)
+    session = NodeSession(node, config, robot, controller, gaits, sensors=False)
     observers: list[Observer[None]] = [record, session.outputs, session.clock, session.deadline]
     stream = open_live(config.live_port, robot, controller, sensors=False) if config.live else None
     if stream is not None:
@@ -249,6 +230,7 @@ def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, 
     from shc_cli.backends.simulated import SimulatedBackend, open_world
     from shc_cli.control.controller import Controller
     from shc_cli.domain.config import SimulationConfig
+    from shc_cli.domain.ros_session import NodeSession
     from shc_cli.loop.physics_summary import PhysicsRecord
     from shc_cli.loop.run_loop import Observer, RunLoop
     from shc_cli.loop.runlog import LogRecorder, RunDirectory
@@ -261,7 +243,7 @@ def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, 
             controller = Controller(robot, gait, joints=backend.start(), pose_sets=pose_sets)
             run.write_robot(robot)
             record = PhysicsRecord(robot, backend, sim.airborne)
-            session = _Session(node, config, robot, controller, gaits, sensors=True)
+            session = NodeSession(node, config, robot, controller, gaits, sensors=True)
             observers: list[Observer[Reading]] = [record, session.outputs, session.clock, session.deadline]
             stream = open_live(config.live_port, robot, controller, sensors=True) if config.live else None
             if stream is not None:

@@ -177,6 +177,11 @@ class RunSummary(BaseModel):
                                                                "waits while SUSPENDED left out [Hz].")
     pauses: NonNegativeInt | None = Field(None, description="ros: waits (SUSPENDED system) left out of the cycle "
                                                             "times.")
+    realtime_ratio: NonNegativeFloat | None = Field(None, description="--realtime, ros: simulated time ÷ wall time "
+                                                                      "from the first cycle's start to the last's end "
+                                                                      "(1: the run kept the clock).")
+    realtime_lag_max_ms: NonNegativeFloat | None = Field(None, description="--realtime, ros: the furthest a cycle "
+                                                                           "fell behind its due time [ms].")
     overruns: NonNegativeInt | None = Field(None, description="run-hw, ros: cycles longer than the control period.")
     node: str | None = Field(None, description="ros: the node's name.")
     ros_master: str | None = Field(None, description="ros: the ROS master's URI.")
@@ -190,7 +195,8 @@ class RunSummary(BaseModel):
                                                               "input's end, not a fault.")
     final_state: str | None = Field(None, description="run-hw: the controller's robot state at the end.")
     stop_state: str | None = Field(None, description="run-hw: the state a stop shuts down to (--stop-state).")
-    input: str | None = Field(None, description="run-hw: the input source (timeline, stdin, keyboard, gamepad).")
+    input: str | None = Field(None, description="run-hw, simulate: the input source (timeline, stdin, keyboard, "
+                                                "gamepad).")
     watchdog_trips: NonNegativeInt | None = Field(None, description="run-hw: times the stdin watchdog stopped the "
                                                                     "robot.")
     unmeasured: list[str] | None = Field(None, description="run-hw: log.csv columns a real robot does not measure "
