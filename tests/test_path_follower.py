@@ -144,3 +144,13 @@ def test_options_are_checked() -> None:
         FollowerOptions(tolerance_m=0.01, arrive_m=0.02)
     with pytest.raises(ValueError, match="at least one waypoint"):
         PathFollower([])
+
+
+def test_segment_distance_is_to_the_nearest_point_of_the_segment() -> None:
+    """``shc analyze``'s cross-track distance: perpendicular inside the segment, to the end beyond it."""
+    from shc_cli.analysis.path_measures import segment_distance
+
+    points = np.array([[1.0, 0.5], [1.0, -0.2], [-3.0, 4.0], [5.0, 0.0], [2.0, 0.0]])
+    distances = segment_distance(points, np.array([0.0, 0.0]), np.array([2.0, 0.0]))
+    assert distances == pytest.approx([0.5, 0.2, 5.0, 3.0, 0.0])
+    assert segment_distance(points[:1], np.zeros(2), np.zeros(2)) == pytest.approx([math.hypot(1.0, 0.5)])
