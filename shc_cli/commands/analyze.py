@@ -29,6 +29,13 @@ COLUMNS = (
     ("pitch_rate_median_rps", "pitch r/s", "{:.3f}"),
 )
 """Terminal table columns: result key, header, format."""
+PATH_COLUMNS = (
+    ("waypoints_reached", "reached", "{}"),
+    ("waypoints_total", "of", "{}"),
+    ("cross_track_rms_m", "x-track m", "{:.3f}"),
+    ("time_to_goal_s", "goal s", "{:.1f}"),
+)
+"""Columns added when a run walked a path (``--path``): its measures against the ground truth."""
 
 
 def _cell(value: Any, fmt: str) -> str:
@@ -39,8 +46,9 @@ def _cell(value: Any, fmt: str) -> str:
 
 def table(results: list[dict[str, Any]]) -> str:
     """One row per run, aligned columns."""
-    header = ["run", *[h for _, h, _ in COLUMNS]]
-    rows = [[Path(str(r["run"])).name, *[_cell(r.get(k), f) for k, _, f in COLUMNS]] for r in results]
+    columns = COLUMNS + (PATH_COLUMNS if any(r.get("waypoints_total") for r in results) else ())
+    header = ["run", *[h for _, h, _ in columns]]
+    rows = [[Path(str(r["run"])).name, *[_cell(r.get(k), f) for k, _, f in columns]] for r in results]
     widths = [max(len(row[i]) for row in [header, *rows]) for i in range(len(header))]
     lines = ["  ".join(cell.ljust(w) if i == 0 else cell.rjust(w) for i, (cell, w) in enumerate(zip(row, widths,
                                                                                                        strict=True)))
