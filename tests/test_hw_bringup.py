@@ -208,3 +208,11 @@ def test_jog_on_protocol_2_and_feetech_limits_the_torque_and_returns(model: str,
     writes = [(int.from_bytes(p[2][:2], "little"), int.from_bytes(p[2][2:], "little")) if wide else
               (p[2][0], int.from_bytes(p[2][1:], "little")) for p in packets if p[0] == 1 and p[1] == p1.WRITE]
     assert writes == expected, writes
+
+
+def test_the_emulator_process_answers_for_protocol_2_and_reports_a_wrong_request() -> None:
+    with EmulatorProcess({5: "XM430-W350"}) as bus:
+        assert bus.position(5) == 2048 and bus.goal(5) == 2048 and not bus.torque_on(5)
+        with pytest.raises(RuntimeError, match="the emulator refused goal: KeyError"):
+            bus.goal(6)
+        assert bus.position(5) == 2048  # still serving

@@ -243,6 +243,10 @@ class BusEmulator:
         servo = self.servos[servo_id]
         return servo._int(servo.model.goal_position, 4)
 
+    def torque_on(self, servo_id: int) -> bool:
+        servo = self.servos[servo_id]
+        return servo.table[servo.model.torque_enable] == 1
+
     def position(self, servo_id: int) -> int:
         servo = self.servos[servo_id]
         servo._advance()

@@ -84,7 +84,10 @@ def _serve(connection: Connection, servos: dict[int, str], options: dict[str, An
             if request == "stop":
                 connection.send(None)
                 return
-            connection.send(_answer(emulator, request, args))
+            try:
+                connection.send(("ok", _answer(emulator, request, args)))
+            except Exception as error:  # the parent raises it: a wrong request must not end the emulator
+                connection.send(("error", f"{request}: {type(error).__name__}: {error}"))
     finally:
         emulator.stop()
 
@@ -142,7 +145,13 @@ class EmulatorProcess:
 
     def _ask(self, *request: Any) -> Any:
         self._connection.send(request)
-        return self._connection.recv()
+        answer = self._connection.recv()
+        if request[0] == "stop":
+            return answer
+        status, value = answer
+        if status == "error":
+            raise RuntimeError(f"the emulator refused {value}")
+        return value
 
     def goal(self, servo_id: int) -> int:
         """The servo's Goal Position [ticks]."""
