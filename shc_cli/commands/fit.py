@@ -47,4 +47,4 @@ def write_fit_plan(runs: list[Path], robot: str, out: Path | None, overwrite: bo
                                f"drop the run directories ({runs[0]}) or --plan")])
     path = fit_plan(robot, out=out, overwrite=overwrite)
     typer.echo(f"{path}: record it with shc run-hw {robot} --commands {path} on a stand, then on the ground "
-               "(docs/hardware.md)")
+               "(docs/fitting-servos.md)")
