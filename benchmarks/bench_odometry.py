@@ -2,6 +2,7 @@
 
     .venv/bin/python benchmarks/bench_odometry.py            # the acceptance set and the gait × speed sweep
     .venv/bin/python benchmarks/bench_odometry.py --quick    # the acceptance walk only
+    .venv/bin/python benchmarks/bench_odometry.py --part sweep   # the gait × speed sweep only
 
 Prints a Markdown table: robot, gait, terrain, velocity input, duration, distance walked, odometry drift [% of the
 distance] and heading error [deg] at the end. Each run is 20 s of walking after start-up (``--duration``).
@@ -48,9 +49,11 @@ def measure(robot: str, gait: str, terrain: str, velocity: str, duration: float,
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="the acceptance walk only")
+    parser.add_argument("--part", choices=("all", "acceptance", "sweep"), default="all", help="which settings")
     parser.add_argument("--duration", type=float, default=20.0, help="seconds of walking per run")
     args = parser.parse_args()
-    settings = ACCEPTANCE[:1] if args.quick else ACCEPTANCE + SWEEP
+    parts = {"all": ACCEPTANCE + SWEEP, "acceptance": ACCEPTANCE, "sweep": SWEEP}
+    settings = ACCEPTANCE[:1] if args.quick else list(dict.fromkeys(parts[args.part]))  # each setting once
     print("| robot | gait | terrain | velocity | walked m | drift % | heading ° |")
     print("|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as folder:

@@ -18,8 +18,8 @@ Method (an shc addition; OpenSHC has no odometry):
    the body's motion over the cycle, in the body's previous level frame. The least-squares ``(d, dψ)`` is the 2-D
    Kabsch/Umeyama solution: ``dψ = atan2(Σ w q̃×p̃, Σ w q̃·p̃)`` over the centred points, ``d = p̄ − R(dψ)·q̄``, each
    foot weighted by its measured normal force where the backend measures it (a lightly loaded foot — touching
-   down, lifting off — slips more), else equally. With one
-   foot only ``d`` is found (``dψ`` = 0, or the gyro's); with none the pose holds (or turns with the gyro).
+   down, lifting off — slips more), else equally. With one foot only ``d`` is found (``dψ`` = 0, or the IMU's);
+   with none the pose holds (or turns with the IMU).
 3. **Yaw fusion (complementary filter).** With an IMU, the heading is ``ψ ← ψ + dψ_imu + k·(ψ_legs − ψ −
    dψ_imu)`` with ``k = dt/τ``: the IMU's heading change over the cycle — the yaw change of its orientation (an
    IMU integrates its gyro at its own, faster rate), or without an orientation its body rates turned into the
@@ -47,8 +47,8 @@ import numpy as np
 YAW_TIME_CONSTANT = 60.0
 """Time constant τ of the complementary yaw filter [s]: the legs' heading corrects the IMU's heading over τ. Long,
 because the legs under-read turns (feet scuff while the body turns: bullet's tripod at 0.3 turning throttle ended
-2.5 % / 4.2° off with τ = 2 s, 1.1 % / 0.9° with τ = 60 s, docs/odometry.md); a constant IMU heading drift b leaves a
-heading error of about b·τ."""
+2.5 % / 4.2° off with τ = 2 s, 1.1 % / 0.9° with τ = 60 s, both with the gyro-rate heading); a constant IMU heading
+drift b leaves a heading error of about b·τ."""
 
 
 def euler_yaw_rate(roll: float, pitch: float, rate: np.ndarray) -> float:
