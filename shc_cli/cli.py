@@ -349,11 +349,13 @@ def view(
                                            "only; 0.0.0.0 serves anyone who can reach it on the network.")]
     = "127.0.0.1",
     port: Annotated[int, typer.Option(help="Port to listen on.")] = 8080,
+    follow: Annotated[bool, typer.Option(help="A run in progress (its --out, written as OUT.partial): follow it "
+                                              "live as it is written, until it has finished.")] = False,
 ) -> None:
     """See a robot (joint sliders, body pose, workspaces) or replay a run in the browser; Ctrl-C stops it."""
     from shc_cli.commands.view import run_view
 
-    run_view(target, host, port)
+    run_view(target, host, port, follow)
 
 
 @app.command()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import json
 import os
 import shutil
 import socket
@@ -47,10 +48,10 @@ def _free_port() -> int:
 
 
 @contextmanager
-def served(target: str) -> Iterator[str]:
-    """Start ``shc view TARGET`` and yield its URL; Ctrl-C (SIGINT) stops it, which must exit 0."""
+def served(target: str, *options: str) -> Iterator[str]:
+    """Start ``shc view TARGET [OPTIONS]`` and yield its URL; Ctrl-C (SIGINT) stops it, which must exit 0."""
     port = _free_port()
-    process = subprocess.Popen([sys.executable, "-m", "shc_cli.cli", "view", target, "--port", str(port)],
+    process = subprocess.Popen([sys.executable, "-m", "shc_cli.cli", "view", target, "--port", str(port), *options],
                                stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=ROOT,
                                env={**os.environ, "PYTHONUNBUFFERED": "1"})
     assert process.stdout is not None
@@ -194,6 +195,51 @@ def test_view_run_replays_and_the_timeline_moves_the_robot(plan_run: Path, brows
         assert _robot_pixels(end) > 300
         moved = np.linalg.norm(_robot_centre(end) - _robot_centre(start))
         assert moved > 10.0, f"the robot moved only {moved:.1f} px"
+
+
+def _shown_time(page: Any) -> float:
+    """The time of the row the run page shows, from its status line ``t = 1.23 s — …`` [s]."""
+    import re
+
+    text = page.get_by_text(re.compile(r"t = [0-9.]+ s — ")).first.inner_text()
+    return float(re.search(r"t = ([0-9.]+) s", text).group(1))  # type: ignore[union-attr]
+
+
+@needs_chromium
+@pytest.mark.slow  # a real browser (Chromium) on shc view, beside a real-time simulation
+def test_view_follow_shows_a_simulation_while_it_runs(tmp_path: Path, browser: Any) -> None:
+    """``shc view RUN --follow`` on a ``--realtime`` simulation in progress: the page shows the newest rows as they
+    are written (the shown time advances with the wall clock and the robot moves), then the finished run."""
+    run = tmp_path / "walk"
+    sim = subprocess.Popen([sys.executable, "-m", "shc_cli.cli", "simulate", "--engine", "mujoco", "--realtime",
+                            "--duration", "30", "--no-plots", "--out", str(run)], cwd=ROOT,
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while not (run.with_name("walk.partial") / "log.csv").exists() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        with served(str(run), "--follow") as url:
+            page = _open(browser, url, "Following the run as it is written")
+            before = _settle(page, 1.0)
+            first = _shown_time(page)
+            time.sleep(5.0)
+            later = _shown_time(page)
+            assert sim.poll() is None, "the simulation ended before the page was checked"
+            assert later > first + 3.0, (first, later)  # the newest row, about as fresh as the wall clock
+            after = _shot(page)
+            changed = (np.abs(after - before).sum(axis=2) > 40).sum()
+            assert changed > 300, f"the followed robot changed only {changed} pixels"
+            assert sim.wait(timeout=120) == 0
+            deadline = time.monotonic() + 30
+            while page.get_by_text("Following the run as it is written").count() and time.monotonic() < deadline:
+                time.sleep(0.5)
+            assert not page.get_by_text("Following the run as it is written").count(), "never shown as finished"
+            assert _shown_time(page) == pytest.approx(float(json.loads((run / "summary.json").read_text())
+                                                            ["sim_time_s"]) - 0.01, abs=0.011)  # the last row
+    finally:
+        if sim.poll() is None:
+            sim.kill()
+            sim.wait()
 
 
 @needs_chromium

@@ -87,7 +87,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
                     observers.append(clock)
                 loop = RunLoop(controller, backend, source, LogRecorder(run, robot, backend),
                                StartUp.of(robot),
-                               observers=observers, flush_every=200)
+                               observers=observers, flush_every=FLUSH_PACED if o.paced else 200)
 
                 def summarise(_: LoopResult) -> RunSummary:  # from the finished log (run.partial)
                     import numpy as np
@@ -116,6 +116,9 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     return RunResult(path, summary)
 
 
+FLUSH_PACED = 20
+"""A run paced to the wall clock flushes its log every this many cycles (0.2 s at 100 Hz): ``shc view --follow``
+shows it that fresh."""
 OnProgress = Callable[[int, int], None]
 """Told ``(walked cycles, cycles to walk)`` before the run, every :data:`PROGRESS_EVERY` walking cycles and
 ``(total, total)`` when the run ends (e.g. a progress bar)."""

@@ -399,35 +399,28 @@ class PlotImage:
 
 
 class RunPage:
-    """One browser tab replaying a run."""
+    """One browser tab replaying a run; ``live``: a run in progress, which :meth:`refresh` extends as it is written
+    (``shc view RUN --follow``: :mod:`shc_cli.view.follow`)."""
 
-    def __init__(self, client: Any, data: RunScene) -> None:
+    def __init__(self, client: Any, data: RunScene, live: bool = False) -> None:
         self.client = client
         self.data = data
+        self.live = live
         run = data.run
         gui, api = client.gui, client.scene
         reach = max(math.hypot(leg.stance.x, leg.stance.y) for leg in run.robot.legs.values())
         _setup_scene(client, np.array([run.position[0, 0], run.position[0, 1], 0.0]), 2.5 * reach + 0.3)
         self._terrain(api)
         self.drawing = RobotDrawing(api, data.shape)
-        path = run.position.astype(np.float32)
-        api.add_line_segments("/path/actual", _outline_segments(path[:: max(1, len(path) // 800)]),
-                              (40, 90, 220), thickness=0.004)
-        command = data.commanded_path.astype(np.float32)
-        api.add_line_segments("/path/commanded", _outline_segments(command[:: max(1, len(command) // 800)]),
-                              (240, 140, 20), thickness=0.004)
+        self._paths()
         self.polygon: Any = None
         self.com = api.add_icosphere("/com", radius=0.012, color=(220, 30, 30))
         self.zmp = api.add_icosphere("/zmp", radius=0.012, color=(150, 40, 200), visible=False)
         duration = float(run.t[-1])
-        summary = run.summary
-        gui.add_markdown(f"**{run.robot.name}** / {summary.gait or ''} — {run.kind} run `{run.path.name}`, "
-                         f"{duration:.1f} s on {data.terrain.text}.  \nBlue: body path; orange: commanded path; red: "
-                         "CoM; purple: ZMP; green feet: on the ground."
-                         + ("" if run.complete else f"  \n**Partial run**: stopped by "
-                            f"{summary.stop_reason} after {duration:.1f} s."))
+        self.header = gui.add_markdown(self._header(finished=not live))
         self.timeline = gui.add_slider("time [s]", min=float(run.t[0]), max=duration, step=run.dt,
-                                       initial_value=float(run.t[0]))
+                                       initial_value=duration if live else float(run.t[0]))
+        self.newest = gui.add_checkbox("show the newest row", initial_value=True) if live else None
         buttons = gui.add_button_group("playback", ("Play", "Pause"))
         self.speed = gui.add_dropdown("speed", SPEEDS, initial_value="1")
         self.follow = gui.add_checkbox("camera follows the body", initial_value=True)  # else it walks out of view
@@ -442,6 +435,42 @@ class RunPage:
         self.timeline.on_update(lambda _event: self._show())
         self._show(force_plot=True)
         threading.Thread(target=self._play, name="shc-view-play", daemon=True).start()
+
+    def _header(self, finished: bool) -> str:
+        run, data = self.data.run, self.data
+        summary, duration = run.summary, float(run.t[-1])
+        text = (f"**{run.robot.name}** / {summary.gait or ''} — {run.kind} run `{run.path.name}`, {duration:.1f} s on "
+                f"{data.terrain.text}.  \nBlue: body path; orange: commanded path; red: CoM; purple: ZMP; green feet: "
+                "on the ground.")
+        if not finished:
+            return text + f"  \n**Following the run as it is written** ({duration:.1f} s so far)."
+        return text + ("" if run.complete else f"  \n**Partial run**: stopped by {summary.stop_reason} after "
+                                                f"{duration:.1f} s.")
+
+    def _paths(self) -> None:
+        """The body's path (blue) and the commanded path (orange), at most 800 segments each."""
+        api, data = self.client.scene, self.data
+        path = data.run.position.astype(np.float32)
+        api.add_line_segments("/path/actual", _outline_segments(path[:: max(1, len(path) // 800)]),
+                              (40, 90, 220), thickness=0.004)
+        command = data.commanded_path.astype(np.float32)
+        api.add_line_segments("/path/commanded", _outline_segments(command[:: max(1, len(command) // 800)]),
+                              (240, 140, 20), thickness=0.004)
+
+    def refresh(self, data: RunScene, finished: bool) -> None:
+        """The run has grown (or ``finished``): extend the timeline and the paths; show the newest row unless the
+        user turned that off (then the time shown stays)."""
+        with self.lock:
+            self.data = data
+            self.timeline.max = float(data.run.t[-1])
+            self._paths()
+            self.header.content = self._header(finished)
+        if self.newest is not None and self.newest.value and not self.playing:
+            self.timeline.value = float(data.run.t[-1])  # its update callback draws the row
+        else:
+            self._show(force_plot=True)
+        if finished and self.newest is not None:
+            self.newest.visible = False
 
     def _terrain(self, api: Any) -> None:
         if self.data.terrain.mesh is not None:
@@ -558,9 +587,16 @@ def check_target(target: str) -> None:
                             "simulate or run-hw, a bag, or a robot file or bundled robot name)")
 
 
-def serve(target: str, host: str, port: int) -> None:
-    """Serve ``target`` at ``http://host:port`` until Ctrl-C."""
-    check_target(target)
+def serve(target: str, host: str, port: int, follow: bool = False) -> None:
+    """Serve ``target`` at ``http://host:port`` until Ctrl-C; ``follow``: a run in progress, followed as it is
+    written (:mod:`shc_cli.view.follow`)."""
+    follower = None
+    if follow:
+        from shc_cli.view.follow import Follower, run_paths
+
+        follower = Follower(*run_paths(target), on_update=lambda run, finished: refresh(run, finished))
+    else:
+        check_target(target)
     try:
         import viser
     except ImportError as error:
@@ -573,7 +609,9 @@ def serve(target: str, host: str, port: int) -> None:
     from shc_cli.spec.loading import load_robot
 
     data: RunScene | None = None
-    if is_run(target):
+    if follower is not None:
+        data = run_scene(follower.first())
+    elif is_run(target):
         data = run_scene(read_run(Path(target)))
         note = data.run.partial_note()
         if note:
@@ -590,7 +628,17 @@ def serve(target: str, host: str, port: int) -> None:
     pages: dict[int, Any] = {}
 
     def connect(client: Any) -> None:
-        pages[client.client_id] = RunPage(client, data) if data is not None else RobotPage(client, target)
+        live = follower is not None and not follower.finished
+        pages[client.client_id] = RunPage(client, data, live) if data is not None else RobotPage(client, target)
+
+    def refresh(run: RunLog, finished: bool) -> None:
+        """The followed run has grown: every open page shows it (a page that went away meanwhile is skipped)."""
+        nonlocal data
+        data = run_scene(run)
+        for page in list(pages.values()):
+            if isinstance(page, RunPage):
+                with contextlib.suppress(*disconnect_errors()):
+                    page.refresh(data, finished)
 
     def disconnect(client: Any) -> None:
         page = pages.pop(client.client_id, None)
@@ -599,6 +647,8 @@ def serve(target: str, host: str, port: int) -> None:
 
     server.on_client_connect(connect)
     server.on_client_disconnect(disconnect)
+    if follower is not None:
+        follower.start()
     try:  # the URL inside: a Ctrl-C right after it is printed still stops the server here
         print(f"shc view: http://{host}:{server.get_port()}  (Ctrl-C to stop)", flush=True)
         while True:
@@ -606,6 +656,8 @@ def serve(target: str, host: str, port: int) -> None:
     except KeyboardInterrupt:
         pass
     finally:
+        if follower is not None:
+            follower.stop()
         for page in pages.values():
             if isinstance(page, RunPage):
                 page.close()
