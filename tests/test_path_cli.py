@@ -123,3 +123,20 @@ def test_simulate_walks_a_short_path_by_the_odometry(tmp_path: Path, capsys, mon
     assert isinstance(errors, list) and isinstance(headings, list)
     assert errors[0] <= 0.05 and abs(headings[0]) <= 3.0
     assert isinstance(result["cross_track_rms_m"], float) and result["cross_track_rms_m"] <= 0.03
+
+
+@pytest.mark.slow
+def test_the_square_in_mujoco_meets_issue_29s_acceptance(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """MuJoCo, bullet, flat ground, tripod, the bundled 2 m square by the leg odometry: every waypoint within 5 cm
+    (and 3°) of the ground truth, cross-track RMS ≤ 3 cm, the odometry's drift ≤ 2 % and ≤ 3° at the end."""
+    out = tmp_path / "square"
+    code, stdout, err = run(["simulate", "--path", str(SQUARE), "--out", str(out), "--no-plots"], capsys, monkeypatch)
+    assert code == 0, err
+    assert "path: 4/4 waypoints reached (odometry)" in stdout
+    result = _analysis(out, capsys, monkeypatch)
+    assert result["waypoints_reached"] == result["waypoints_total"] == 4, result
+    errors = result["waypoint_errors_m"]
+    assert isinstance(errors, list) and max(errors) <= 0.05
+    assert isinstance(result["cross_track_rms_m"], float) and result["cross_track_rms_m"] <= 0.03
+    assert isinstance(result["odometry_drift_percent"], float) and result["odometry_drift_percent"] <= 2.0
+    assert isinstance(result["odometry_heading_error_deg"], float) and result["odometry_heading_error_deg"] <= 3.0
