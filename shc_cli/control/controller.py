@@ -388,7 +388,7 @@ class Controller(LegManipulation):
                 turn = euler_yaw_rate(roll, pitch, np.asarray(sensors.angular_rate, dtype=float)) * self.dt
         weights = None
         if sensors is not None and sensors.foot_forces is not None:  # loaded feet slip less: weigh by load
-            weights = np.clip(np.asarray(sensors.foot_forces, dtype=float), 0.0, None)
+            weights = np.maximum(np.asarray(sensors.foot_forces, dtype=float), 0.0)  # = np.clip(…, 0.0, None)
         return self.odometry.update(level(feet, roll, pitch), use, turn, weights)
 
     def _update_pose(self) -> None:

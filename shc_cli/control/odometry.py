@@ -75,8 +75,9 @@ def rigid_increment(before: np.ndarray, after: np.ndarray,
     """Body motion ``(dx, dy, dψ)`` [m, m, rad] over one cycle, in the body's earlier level frame, from the
     planar positions ``(K, 2)`` of the same K ≥ 1 world-fixed feet before and after (least squares, 2-D Kabsch;
     ``weights`` ``(K,)`` ≥ 0 weigh the feet, default — or all zero — equally)."""
-    if weights is not None and float(np.sum(weights)) > 0.0:
-        w = np.asarray(weights, dtype=float) / float(np.sum(weights))
+    total = float(np.sum(weights)) if weights is not None else 0.0
+    if weights is not None and total > 0.0:
+        w = np.asarray(weights, dtype=float) / total
         p_mean, q_mean = w @ before, w @ after
         p, q = before - p_mean, after - q_mean
         turn = math.atan2(float(w @ (q[:, 0] * p[:, 1] - q[:, 1] * p[:, 0])),
