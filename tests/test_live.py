@@ -124,22 +124,15 @@ def test_a_foxglove_client_decodes_the_live_run_and_it_equals_the_log(tmp_path: 
 def test_a_live_run_hw_streams_the_servos_it_drives(tmp_path: Path) -> None:
     """``run-hw --live`` on the emulated servo bus: the client decodes the measured ``/joint_states`` (the bus's
     sync reads) and ``/desired_joint_states``; both equal the run's ``log.csv`` at their cycle."""
-    import gc
-
-    from shc_cli.hardware.emulator import BusEmulator
+    from shc_cli.hardware.emulator_process import EmulatorProcess
     from shc_cli.spec.loading import load_robot
 
     robot = load_robot("bullet").robot
     run = tmp_path / "hw"
-    gc.collect()
-    gc.disable()  # a full collection of this process can stall the emulator's thread (tests/test_run_hw.py)
-    try:
-        with BusEmulator({s.id: "MX-106" for s in robot.hardware.servos.values()}) as bus:
-            messages = _live_run(["run-hw", "bullet", "--port", bus.port, "--velocity", "1,0,0", "--duration", "3",
-                                  "--stop-state", "ready", "--out", str(run)],
-                                 ["/desired_joint_states", "/joint_states", "/tf"])
-    finally:
-        gc.enable()
+    with EmulatorProcess({s.id: "MX-106" for s in robot.hardware.servos.values()}) as bus:  # a process of its own
+        messages = _live_run(["run-hw", "bullet", "--port", bus.port, "--velocity", "1,0,0", "--duration", "3",
+                              "--stop-state", "ready", "--out", str(run)], ["/desired_joint_states", "/joint_states",
+                                                                            "/tf"])
     with (run / "log.csv").open(encoding="utf-8", newline="") as handle:
         rows = list(csv.DictReader(handle))
     measured = [m for m in messages if m["topic"] == "/joint_states"]
