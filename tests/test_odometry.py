@@ -245,3 +245,17 @@ def test_quaternion_yaw_is_the_matrix_yaw() -> None:
     for q in rng.normal(size=(200, 4)):
         q /= np.linalg.norm(q)
         assert math.isclose(quaternion_yaw(q), euler_from_matrix(quaternion_matrix(q))[2], abs_tol=1e-12)
+
+
+def test_the_weighted_list_form_equals_the_numpy_form() -> None:
+    """The odometry's per-cycle weighted fit (Python floats) against :func:`rigid_increment`'s NumPy form."""
+    from shc_cli.control.odometry import _weighted_increment
+
+    rng = np.random.default_rng(17)
+    for count in range(1, 9):
+        for _ in range(500):
+            before = rng.normal(size=(count, 2)) * 0.3
+            after = before + rng.normal(size=(count, 2)) * 1e-3
+            weights = rng.random(count) * 50.0
+            got = _weighted_increment(before.tolist(), after.tolist(), weights.tolist())
+            assert np.allclose(got, rigid_increment(before, after, weights), rtol=0.0, atol=1e-15)
