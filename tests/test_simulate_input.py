@@ -91,9 +91,14 @@ def test_stdin_lines_drive_the_simulated_robot(tmp_path: Path) -> None:
     assert log.rpy[-1, 2] - log.rpy[int(np.flatnonzero(turning)[0]), 2] > 0.1  # [rad]: it turned left
 
 
-def test_a_keyboard_without_a_terminal_is_a_one_line_error(tmp_path: Path) -> None:
-    result = subprocess.run([*SHC, "simulate", "--input", "keyboard", "--out", str(tmp_path / "run")], cwd=ROOT,
+@pytest.mark.parametrize(("input_mode", "message"), [
+    ("keyboard", "standard input is not a terminal"),
+    ("gamepad:/dev/input/event99", "/dev/input/event99: cannot open the gamepad"),
+    ("joystick", "'joystick' is not an input"),
+])
+def test_unusable_inputs_are_one_line_errors(input_mode: str, message: str, tmp_path: Path) -> None:
+    result = subprocess.run([*SHC, "simulate", "--input", input_mode, "--out", str(tmp_path / "run")], cwd=ROOT,
                             capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
-    assert result.returncode == 2 and "standard input is not a terminal" in result.stderr, result.stderr
+    assert result.returncode == 2 and message in result.stderr, result.stderr
     assert len(result.stderr.strip().splitlines()) == 1 and not (tmp_path / "run").exists()
     assert not (tmp_path / "run.partial").exists()
