@@ -283,12 +283,13 @@ def hw_jog(robot: str | Path, ports: list[str], ask: Callable[[Question], str], 
 
 
 def hw_emulate(robot: str | Path, on_ready: Callable[[list[str]], None], *, links: list[Path] | None = None,
-               baud: int | None = None, duration: float | None = None) -> None:
+               baud: int | None = None, duration: float | None = None, dynamics: bool = False) -> None:
     """``shc hw emulate``: the robot's servo buses emulated on pseudo-terminals until a signal (or ``duration``
-    [s]); ``on_ready`` gets their ports."""
+    [s]); ``on_ready`` gets their ports. ``dynamics``: the servos move as the robot's ``[servo]`` model (load-free
+    joints, :mod:`shc_cli.backends.servo_joint`)."""
     from shc_cli.domain.bringup.emulate import emulate
 
-    emulate(load_robot(robot), on_ready, links, baud, duration)
+    emulate(load_robot(robot), on_ready, links, baud, duration, dynamics)
 
 
 def warm_up() -> float:

@@ -571,12 +571,15 @@ def hw_emulate(
     baud: HwBaudOption = None,
     duration: Annotated[float | None, typer.Option(help="Stop after this many seconds [default: at Ctrl-C].")]
     = None,
+    dynamics: Annotated[bool, typer.Option(help="Move the servos as the robot file's [servo] model: load-free "
+                                           "joints (gain, friction, armature) whose present current follows; "
+                                           "default a plain first-order lag.")] = False,
 ) -> None:
     """Emulate the robot's servo buses on pseudo-terminals (their ports are printed), to try the hw commands and
     run-hw without hardware."""
     from shc_cli.commands.hw import run_emulate
 
-    run_emulate(robot, link or [], baud, duration)
+    run_emulate(robot, link or [], baud, duration, dynamics)
 
 
 @app.command()

@@ -125,3 +125,30 @@ def test_protocol1_and_feetech_servos_report_the_same_law_in_their_units(
     else:  # Dynamixel 1.0: bit 10 set = clockwise (negative); this one turns counter-clockwise
         assert speed_word == pytest.approx(speed / RPM / speed_rpm_per_unit, abs=1)
     assert load_word == pytest.approx(amps / sheet[1] * 1000.0, abs=1)
+
+
+def test_shc_hw_emulate_dynamics_gives_every_bus_the_robot_files_servo_model(tmp_path: object) -> None:
+    """``shc hw emulate ROBOT --dynamics``: every emulated servo moves as the robot's ``[servo]`` table (a Protocol
+    2.0 bus here); without it, the first-order lag."""
+    from pathlib import Path
+
+    from shc_cli.hardware.emulator import BusEmulator
+    from shc_cli.hardware.emulator_process import robot_emulators
+    from shc_cli.spec.loading import load_robot
+
+    path = Path(str(tmp_path)) / "xm.toml"
+    path.write_text('extends = "openshc_default"\nname = "xm"\n[servo]\nmodel = "XM430-W350"\ncoulomb_friction = 0.2\n'
+                    '[hardware]\nmodel = "XM430-W350"\n[hardware.servos]\n'
+                    + "".join(f"{leg}_{joint} = {{ id = {10 * k + j + 1} }}\n" for k, leg in
+                              enumerate(("AR", "BR", "CR", "CL", "BL", "AL"))
+                              for j, joint in enumerate(("coxa", "femur", "tibia"))))
+    robot = load_robot(path).robot
+    [bus] = robot_emulators(robot, dynamics=True)
+    assert isinstance(bus, BusEmulator) and len(bus.servos) == 18
+    assert all(servo.dynamics == robot.servo for servo in bus.servos.values())
+    assert robot.servo.coulomb_friction == 0.2
+    [plain] = robot_emulators(robot)
+    assert isinstance(plain, BusEmulator) and all(s.dynamics is None for s in plain.servos.values())
+    for emulator in (bus, plain):  # (closes their pseudo-terminals)
+        with emulator:
+            pass

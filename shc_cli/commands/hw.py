@@ -88,7 +88,8 @@ def faults_exit_3(call: Callable[[], T]) -> T:
         raise typer.Exit(EXIT_FAULT) from None
 
 
-def run_emulate(robot: str, links: list[Path], baud: int | None, duration: float | None) -> None:
+def run_emulate(robot: str, links: list[Path], baud: int | None, duration: float | None,
+                dynamics: bool = False) -> None:
     """Print each bus's port (bus 0 first) once it answers, then serve until Ctrl-C."""
     from shc_cli.api import hw_emulate
 
@@ -97,4 +98,4 @@ def run_emulate(robot: str, links: list[Path], baud: int | None, duration: float
             typer.echo(f"bus {bus}: {port}")
         typer.echo("emulating until Ctrl-C", err=True)
 
-    hw_emulate(robot, ready, links=links, baud=baud, duration=duration)
+    hw_emulate(robot, ready, links=links, baud=baud, duration=duration, dynamics=dynamics)

@@ -35,7 +35,8 @@ def make_emulator(servos: dict[int, str], **options: Any) -> BusEmulator | Proto
 
     families = {MODELS[name].family if name in MODELS else "?" for name in servos.values()}
     if families <= {"protocol2"}:
-        return BusEmulator(servos, return_delay=options.get("return_delay", 0.0), baud=options.get("baud"))
+        return BusEmulator(servos, return_delay=options.get("return_delay", 0.0), baud=options.get("baud"),
+                           dynamics=options.get("dynamics"), current_noise_ma=options.get("current_noise_ma", 0.0))
     missing = sorted({name for name in servos.values() if name not in EMULATED_MODELS})
     if missing:
         raise HardwareError(f"no emulator for {', '.join(missing)} (emulated: {', '.join(EMULATED_MODELS)} and "
@@ -43,9 +44,11 @@ def make_emulator(servos: dict[int, str], **options: Any) -> BusEmulator | Proto
     return Protocol1Emulator(servos, **options)
 
 
-def robot_emulators(robot: Robot, baud: int | None = None) -> list[BusEmulator | Protocol1Emulator]:
+def robot_emulators(robot: Robot, baud: int | None = None, dynamics: bool = False
+                    ) -> list[BusEmulator | Protocol1Emulator]:
     """One emulator per bus of the robot's servo map (bus 0 first), at the robot's baud rate, its servos at the
-    zero of the servo map (``zero_ticks`` or the middle of the range); not started."""
+    zero of the servo map (``zero_ticks`` or the middle of the range); not started. ``dynamics``: the servos move as
+    the robot's ``[servo]`` model (load-free joints, :mod:`shc_cli.backends.servo_joint`), not a first-order lag."""
     hardware = robot.hardware
     if not hardware.servos:
         raise HardwareError(f"{robot.name}: no [hardware.servos] table to emulate")
@@ -65,6 +68,8 @@ def robot_emulators(robot: Robot, baud: int | None = None) -> list[BusEmulator |
         servos = buses.get(bus, {})
         families = {MODELS[name].family for name in servos.values() if name in MODELS}
         options: dict[str, Any] = {"baud": rate}
+        if dynamics:
+            options["dynamics"] = robot.servo
         if families - {"protocol2"}:
             options.update(check_baud=True, positions=zeros.get(bus, {}))
         out.append(make_emulator(servos, **options))

@@ -18,13 +18,14 @@ if TYPE_CHECKING:
 
 
 def emulate(robot: Robot, on_ready: Callable[[list[str]], None], links: list[Path] | None = None,
-            baud: int | None = None, duration: float | None = None) -> None:
+            baud: int | None = None, duration: float | None = None, dynamics: bool = False) -> None:
     """Serve the robot's buses until SIGINT/SIGTERM (or ``duration`` [s]); ``on_ready`` gets the ports (bus 0
-    first) once they answer. ``links``: symbolic links made to the ports (removed at the end)."""
+    first) once they answer. ``links``: symbolic links made to the ports (removed at the end). ``dynamics``: the
+    servos move as the robot's ``[servo]`` model."""
     from shc_cli.errors import ShcError
     from shc_cli.hardware.emulator_process import robot_emulators
 
-    emulators = robot_emulators(robot, baud)
+    emulators = robot_emulators(robot, baud, dynamics)
     links = links or []
     if len(links) > len(emulators):
         raise ShcError(f"--link given {len(links)} times, but {robot.name} has {len(emulators)} bus"
