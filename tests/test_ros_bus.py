@@ -142,3 +142,36 @@ def test_the_bus_backend_needs_ports_and_ports_need_it(tmp_path: Path) -> None:
                                 capture_output=True, text=True, timeout=60)
         assert result.returncode == 2 and message in result.stderr, result.stderr
         assert len(result.stderr.strip().splitlines()) == 1
+
+
+def test_the_duration_ends_with_a_shut_down_and_no_remote_means_no_torque(ros_env: dict[str, str],
+                                                                          tmp_path: Path) -> None:
+    """``--duration``: the node walks the robot to a stop and shuts it down, as after Ctrl-C; a node whose remote
+    never becomes OPERATIONAL never enables the torque."""
+    with _bus() as bus:
+        node = subprocess.Popen([*SHC, "ros", "bullet", "--backend", "bus", "--port", bus.port, "--out",
+                                 str(tmp_path / "idle"), "--duration", "3"], cwd=ROOT, env=ros_env,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        _, err = node.communicate(timeout=120)
+        assert node.returncode == 0, err
+        assert not any(instruction == p2.SYNC_WRITE and params[0] == 64 and params[5] == 1
+                       for _, instruction, params in bus.packets())  # torque never enabled
+        assert not any(instruction == p2.SYNC_WRITE and int.from_bytes(params[0:2], "little") == 116
+                       for _, instruction, params in bus.packets())  # no goal written
+        run = tmp_path / "walk"
+        node = subprocess.Popen([*SHC, "ros", "bullet", "--backend", "bus", "--port", bus.port, "--out", str(run),
+                                 "--duration", "45", "--stop-state", "ready"], cwd=ROOT, env=ros_env,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            driver = subprocess.run([*DRIVER, "0.05"], env=ros_env, capture_output=True, text=True, timeout=240)
+            assert "done" in driver.stdout, driver.stdout + driver.stderr
+            _, err = node.communicate(timeout=120)
+        finally:
+            if node.poll() is None:
+                node.kill()
+        assert node.returncode == 0, err
+        assert _torque(bus) == {0}
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["stop_reason"] == "end" and summary["complete"] is True and summary["final_state"] == "READY"
+    idle = json.loads((tmp_path / "idle" / "summary.json").read_text())
+    assert idle["cycles"] == 0 and idle["fault"] is None  # no remote: not one cycle run, a run directory all the same
