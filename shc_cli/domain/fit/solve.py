@@ -9,7 +9,8 @@ weighs the same whatever its unit and length.
 **Solver.** :func:`scipy.optimize.least_squares` (trust-region reflective, bounds) from the robot's values, with
 this module's forward-difference Jacobian: a step of :data:`STEP` × the parameter's typical size; a parameter
 that changes the motion needs one replay per step, the others (:data:`~shc_cli.domain.fit.params.ELECTRICAL_ONLY`)
-only the electrical model on the cached replay.
+only the electrical model on the cached replay. Each solver run is checked by probes of :data:`PROBE` of each
+value up and down; one that lowers the cost restarts the solver from there (:func:`solve`).
 
 **Uncertainty.** ``cov = s²·(JᵀJ)⁻¹`` with ``s² = Σr²/(m − n)`` (m residuals, n parameters), through the SVD of
 the Jacobian in units of each parameter's typical size; a singular value below :data:`SINGULAR` × the largest is a
@@ -46,6 +47,10 @@ CORRELATION_CYCLES = 25.0
 """Control cycles over which model error stays correlated (the uncertainty's inflation is its square root)."""
 IDENTIFIABLE = 0.05
 """Relative uncertainty below which a parameter counts as identifiable."""
+PROBE = 0.1
+"""Probe step after each solver run [share of the parameter's value]."""
+ROUNDS = 4
+"""Solver runs at most (each but the first from a probe that lowered the cost)."""
 CHANNELS = ("position", "velocity", "current", "torque", "power")
 
 
@@ -206,28 +211,63 @@ class Solution:
 
 
 def solve(problem: Problem, max_evaluations: int = 30) -> Solution:
-    """Bounded least squares from the parameters' initial values; uncertainties at the solution."""
+    """Bounded least squares from the parameters' initial values, polished by probes; uncertainties at the solution.
+
+    Open-loop replays make the cost slightly rough at small scales, and the trust region can shrink to nothing on a
+    slope it cannot see (the Jacobian's model fails every small step): after each solver run every parameter is
+    probed :data:`PROBE` of its value (of its typical size near 0) up and down, and the best probe that lowers the
+    cost restarts the solver, at most :data:`ROUNDS` times; a solution whose probes still find a lower cost is
+    reported as not converged.
+    """
     from scipy.optimize import least_squares
 
     parameters = problem.parameters
-    x0 = np.array([p.initial for p in parameters])
     lower = np.array([p.lower for p in parameters])
     upper = np.array([p.upper for p in parameters])
-    x0 = np.clip(x0, lower, upper)
+    x = np.clip(np.array([p.initial for p in parameters]), lower, upper)
     scale = np.array([p.scale for p in parameters])
-    start = problem.residuals(x0)
-    result = least_squares(problem.residuals, x0, jac=lambda x: problem.jacobian(x), bounds=(lower, upper),
-                           x_scale=scale, method="trf", max_nfev=max_evaluations, xtol=1e-4, ftol=1e-6)
-    x = np.asarray(result.x, dtype=float)
+    start = problem.residuals(x)
+    evaluations, converged = 0, False
+    for _ in range(ROUNDS):
+        budget = max_evaluations - evaluations
+        if budget < 1:
+            break
+        result = least_squares(problem.residuals, x, jac=lambda x: problem.jacobian(x), bounds=(lower, upper),
+                               x_scale=scale, method="trf", max_nfev=budget, xtol=1e-4, ftol=1e-6)
+        x = np.asarray(result.x, dtype=float)
+        evaluations += int(result.nfev)
+        better = _probe(problem, x, lower, upper)
+        if better is None:
+            converged = bool(result.status > 0)
+            break
+        x = better
     residual = problem.residuals(x)
     jacobian = problem.jacobian(x)
     sigma, singular = uncertainty(residual, jacobian, scale)
     reference = np.maximum(np.abs(x), scale * IDENTIFIABLE)
     identifiable = np.isfinite(sigma) & (sigma <= IDENTIFIABLE * reference)
-    log.info("fit: %d evaluations, %d replays, cost %.4g → %.4g", result.nfev, problem.replays,
+    log.info("fit: %d evaluations, %d replays, cost %.4g → %.4g", evaluations, problem.replays,
              0.5 * float(start @ start), 0.5 * float(residual @ residual))
     return Solution(x, sigma, identifiable, 0.5 * float(start @ start), 0.5 * float(residual @ residual),
-                    int(result.nfev), problem.replays, singular, bool(result.status > 0))
+                    evaluations, problem.replays, singular, converged)
+
+
+def _probe(problem: Problem, x: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray | None:
+    """The best point ``PROBE`` up or down one parameter from ``x`` whose cost is lower than ``x``'s, or None."""
+    base = problem.residuals(x)
+    best, best_cost = None, 0.5 * float(base @ base) * (1.0 - 1e-6)
+    for j, p in enumerate(problem.parameters):
+        step = PROBE * max(abs(x[j]), p.scale * IDENTIFIABLE)
+        for sign in (1.0, -1.0):
+            moved = x.copy()
+            moved[j] = np.clip(x[j] + sign * step, lower[j], upper[j])
+            if moved[j] == x[j]:
+                continue
+            residual = problem.residuals(moved)
+            cost = 0.5 * float(residual @ residual)
+            if cost < best_cost:
+                best, best_cost = moved, cost
+    return best
 
 
 def uncertainty(residual: np.ndarray, jacobian: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
