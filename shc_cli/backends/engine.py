@@ -186,6 +186,6 @@ def rpy_from_matrix(rotation: np.ndarray) -> np.ndarray:
     One matrix per engine step, so plain ``math`` rather than the batched scipy
     :func:`shc_cli.analysis.metrics.rpy_of` (same convention), whose per-call overhead (≈ 50 µs against ≈ 1.3 µs
     here) would land on every step."""
-    r = rotation
-    pitch = math.asin(max(-1.0, min(1.0, -float(r[2, 0]))))
-    return np.array([math.atan2(float(r[2, 1]), float(r[2, 2])), pitch, math.atan2(float(r[1, 0]), float(r[0, 0]))])
+    r = np.asarray(rotation, dtype=float).tolist()  # the same floats as float(r[i, j]), in one call
+    pitch = math.asin(max(-1.0, min(1.0, -r[2][0])))
+    return np.array([math.atan2(r[2][1], r[2][2]), pitch, math.atan2(r[1][0], r[0][0])])

@@ -199,8 +199,8 @@ class MujocoWorld:
             qvel = self._qvel
             linear_origin = qvel[0:3].copy()
             angular = rotation @ qvel[3:6]  # a free joint's angular velocity is in the body frame
-        r = rotation @ self.com_offset
-        w = angular
+        r = (rotation @ self.com_offset).tolist()
+        w = angular.tolist()  # Python floats: the same products and differences as on NumPy scalars, cheaper
         velocity = linear_origin + np.array([w[1] * r[2] - w[2] * r[1], w[2] * r[0] - w[0] * r[2],
                                              w[0] * r[1] - w[1] * r[0]])  # of the centre of mass, as PyBullet
         specific_force, rate = self.imu.sense(rotation, velocity, angular)
