@@ -229,7 +229,9 @@ class SimulationConfig(BaseModel):
         return robot.start_up.simulation == "stand" if self.stand is None else self.stand
 
     def apply_switches(self, robot: Robot) -> Robot:
-        """The robot with the per-run switches (posture, imu_posing, inclination, admittance) applied."""
+        """The robot with the per-run switches (posture, imu_posing, inclination, admittance, and the start on a
+        stand or on the ground: ``start_up.simulation``, so the run's ``robot.toml`` says how it started — what a
+        replay of its log needs) applied."""
         pose, posture = robot.pose, robot.posture
         if self.imu_posing is not None:
             pose = pose.model_copy(update={"imu": self.imu_posing})
@@ -242,7 +244,11 @@ class SimulationConfig(BaseModel):
         admittance = robot.admittance
         if self.admittance is not None:
             admittance = admittance.model_copy(update={"enabled": self.admittance})
-        return robot.model_copy(update={"pose": pose, "posture": posture, "admittance": admittance})
+        start_up = robot.start_up
+        if self.stand is not None:
+            start_up = start_up.model_copy(update={"simulation": "stand" if self.stand else "ground"})
+        return robot.model_copy(update={"pose": pose, "posture": posture, "admittance": admittance,
+                                        "start_up": start_up})
 
     def engine_options(self, robot: Robot) -> EngineOptions:
         """What the physics engine needs for ``robot`` (the robot after :meth:`apply_switches`)."""

@@ -132,9 +132,12 @@ def _slots(robot: Robot) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _check_robot(path: Path, run_robot: Robot, robot: Robot) -> None:
-    """Refuse a run of another robot: everything but ``[servo]`` and ``[hardware]`` must be the same."""
-    mine = robot.model_dump(mode="json", exclude={"servo", "hardware", "name", "description"})
-    theirs = run_robot.model_dump(mode="json", exclude={"servo", "hardware", "name", "description"})
+    """Refuse a run of another robot: everything but ``[servo]``, ``[hardware]`` and where the simulator started
+    it (``start_up.simulation``: a run's ``--stand``/``--ground``) must be the same."""
+    skip: dict[str, bool | set[str]] = {"servo": True, "hardware": True, "name": True, "description": True,
+                                        "start_up": {"simulation"}}
+    mine = robot.model_dump(mode="json", exclude=skip)
+    theirs = run_robot.model_dump(mode="json", exclude=skip)
     if mine == theirs:
         return
     field = next((key for key in mine if mine[key] != theirs.get(key)), "?")
