@@ -111,7 +111,7 @@ def test_shc_ros_without_a_master_or_with_a_bad_backend_is_one_line(tmp_path: Pa
     env = dict(os.environ, ROS_MASTER_URI="http://127.0.0.1:9/")
     for args, text in ((["bullet"], "start roscore or set ROS_MASTER_URI"),
                        (["bullet", "--backend", "ode"],
-                        "--backend: 'ode' is not a backend (use none, mujoco or pybullet)")):
+                        "--backend: 'ode' is not a backend (use none, mujoco, pybullet or bus)")):
         result = subprocess.run([*shc, "ros", *args, "--out", str(tmp_path / "run")], env=env, capture_output=True,
                                 text=True, timeout=120)
         assert result.returncode == 2 and result.stderr.count("\n") == 1 and text in result.stderr, result.stderr
