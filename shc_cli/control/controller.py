@@ -22,7 +22,7 @@ from shc_cli.control.gait import StepCycle, step_cycle
 from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.manipulation import MAX_MANUAL_LEGS as MAX_MANUAL_LEGS
 from shc_cli.control.manipulation import LegManipulation
-from shc_cli.control.odometry import LegOdometry, euler_yaw_rate, level, quaternion_yaw
+from shc_cli.control.odometry import LegOdometry, euler_yaw_rate, quaternion_yaw
 from shc_cli.control.pose import Pose, PoseController, PoseReset
 from shc_cli.control.sensing import (
     ContactDetector,
@@ -386,10 +386,8 @@ class Controller(LegManipulation):
             roll, pitch, _ = self.poser.current.euler()
             if sensors is not None and sensors.angular_rate is not None:
                 turn = euler_yaw_rate(roll, pitch, np.asarray(sensors.angular_rate, dtype=float)) * self.dt
-        weights = None
-        if sensors is not None and sensors.foot_forces is not None:  # loaded feet slip less: weigh by load
-            weights = np.maximum(np.asarray(sensors.foot_forces, dtype=float), 0.0)  # = np.clip(…, 0.0, None)
-        return self.odometry.update(level(feet, roll, pitch), use, turn, weights)
+        forces = sensors.foot_forces if sensors is not None else None  # loaded feet slip less: weigh by load
+        return self.odometry.cycle(feet, roll, pitch, use, turn, forces)
 
     def _update_pose(self) -> None:
         """The body pose of this cycle, from the previous cycle's leg states (OpenSHC ``updateCurrentPose``)."""

@@ -160,6 +160,9 @@ def _weighted_increment(before: list[list[float]], after: list[list[float]],
 class LegOdometry:
     """The body's planar pose in the odom frame, from stance-foot increments and (optionally) the IMU's heading.
 
+    Each cycle is one call of the compiled :func:`shc_cli.control.odometry_kernels.odometry_cycle` (the formulas of
+    :func:`level` and :func:`rigid_increment` above, which stay as the reference: tests/test_odometry.py).
+
     Args:
         time_delta: control period [s].
         yaw_time_constant: τ of the complementary yaw filter [s] (used only with an IMU).
@@ -168,59 +171,78 @@ class LegOdometry:
     def __init__(self, time_delta: float, yaw_time_constant: float = YAW_TIME_CONSTANT) -> None:
         self.dt = time_delta
         self.gain = min(time_delta / yaw_time_constant, 1.0) if yaw_time_constant > 0.0 else 1.0
-        self.x = self.y = self.yaw = 0.0
-        self.leg_yaw = 0.0
-        """Heading from the legs alone [rad] (the slow input of the complementary filter)."""
+        self._state = np.zeros(4)
+        """x [m], y [m], yaw [rad] and the legs' heading [rad] (:mod:`shc_cli.control.odometry_kernels`)."""
         self._feet: np.ndarray | None = None
+        self._spare: np.ndarray | None = None
+        self._no_forces: np.ndarray | None = None
         self.feet_used = 0
         """Stance feet in the last increment."""
 
     @property
+    def x(self) -> float:
+        """x in the odom frame [m]."""
+        return float(self._state[0])
+
+    @property
+    def y(self) -> float:
+        """y in the odom frame [m]."""
+        return float(self._state[1])
+
+    @property
+    def yaw(self) -> float:
+        """Heading in the odom frame [rad]."""
+        return float(self._state[2])
+
+    @property
+    def leg_yaw(self) -> float:
+        """Heading from the legs alone [rad] (the slow input of the complementary filter)."""
+        return float(self._state[3])
+
+    @property
     def pose(self) -> tuple[float, float, float]:
         """(x [m], y [m], yaw [rad]) in the odom frame."""
-        return (self.x, self.y, self.yaw)
+        x, y, yaw, _ = self._state.tolist()
+        return (x, y, yaw)
 
     def update(self, feet: np.ndarray, stance: np.ndarray, turn: float | None = None,
                weights: np.ndarray | None = None) -> tuple[float, float, float]:
+        """Advance one cycle with feet already in the body's level frame (:func:`level`); see :meth:`cycle`."""
+        return self.cycle(feet, 0.0, 0.0, stance, turn, weights)
+
+    def cycle(self, feet: np.ndarray, roll: float, pitch: float, stance: np.ndarray, turn: float | None = None,
+              forces: np.ndarray | None = None) -> tuple[float, float, float]:
         """Advance one cycle.
 
         Args:
-            feet: every foot in the body's level frame ``(L, 3)`` [m] (:func:`level`), now.
+            feet: every foot in base_link ``(L, 3)`` [m], now.
+            roll, pitch: the body's roll and pitch [rad], which level the feet (:func:`level`).
             stance: feet that stood on the ground since the last update ``(L,)``.
             turn: the IMU's heading change over the cycle [rad] (its orientation's yaw change, or the Euler yaw
                 rate :func:`euler_yaw_rate` × dt), or None.
-            weights: each foot's weight in the fit ``(L,)`` (its measured normal force), or None (equal).
+            forces: each foot's weight in the fit ``(L,)`` (its measured normal force [N]; negative counts as 0),
+                or None (equal).
 
         Returns:
             the new pose (x, y, yaw).
         """
-        feet = np.asarray(feet, dtype=float)
-        stance = np.asarray(stance, dtype=bool)
-        dx = dy = legs_turn = 0.0
-        used = 0
-        if self._feet is not None:
-            chosen = [i for i, standing in enumerate(stance.tolist()) if standing]
-            used = len(chosen)
-            load = None if weights is None else [w for w, s in zip(np.asarray(weights, dtype=float).tolist(),
-                                                                   stance.tolist(), strict=True) if s]
-            if used and load is not None and sum(load) > 0.0:
-                before, after = self._feet.tolist(), feet.tolist()
-                dx, dy, legs_turn = _weighted_increment([before[i] for i in chosen], [after[i] for i in chosen], load)
-            elif 0 < used < PAIRWISE_FROM:
-                before, after = self._feet.tolist(), feet.tolist()
-                dx, dy, legs_turn = _increment_of_lists([before[i] for i in chosen], [after[i] for i in chosen])
-            elif used:
-                dx, dy, legs_turn = rigid_increment(self._feet[stance, :2], feet[stance, :2])
-        self._feet, self.feet_used = feet, used
-        self.leg_yaw += legs_turn
-        heading = self.yaw
-        if turn is None:
-            self.yaw += legs_turn
+        from shc_cli.control.odometry_kernels import odometry_cycle
+
+        feet = np.ascontiguousarray(feet, dtype=float)
+        after = self._spare
+        if after is None or after.shape != feet.shape:
+            after = np.empty_like(feet)
+        before = self._feet
+        if forces is None:
+            if self._no_forces is None or len(self._no_forces) != len(feet):
+                self._no_forces = np.zeros(len(feet))
+            load = self._no_forces
         else:
-            predicted = self.yaw + turn
-            self.yaw = predicted + self.gain * (self.leg_yaw - predicted) if used > 1 else predicted
-        mid = heading  # the increment is in the level frame the body had at the start of the cycle
-        c, s = math.cos(mid), math.sin(mid)
-        self.x += c * dx - s * dy
-        self.y += s * dx + c * dy
-        return self.pose
+            load = np.ascontiguousarray(forces, dtype=float)
+        self.feet_used = odometry_cycle(feet, roll, pitch, after if before is None else before, after,
+                                        np.ascontiguousarray(stance, dtype=bool), load, forces is not None,
+                                        before is not None, math.nan if turn is None else turn, self.gain,
+                                        self._state)
+        self._feet, self._spare = after, before
+        x, y, yaw, _ = self._state.tolist()
+        return (x, y, yaw)

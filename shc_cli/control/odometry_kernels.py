@@ -1,0 +1,91 @@
+"""The leg odometry's per-cycle arithmetic compiled with numba (:mod:`shc_cli.control.odometry`).
+
+One call a control cycle does what :class:`~shc_cli.control.odometry.LegOdometry` describes: the feet levelled by
+roll and pitch, the (weighted) 2-D Kabsch fit of the stance feet, the complementary yaw filter and the composition
+of the pose — the same formulas as :func:`~shc_cli.control.odometry.level` and
+:func:`~shc_cli.control.odometry.rigid_increment`, summed element by element from the first foot (the order of
+:func:`~shc_cli.control.odometry._increment_of_lists`). The levelling is written out instead of NumPy's matrix
+product, so a levelled foot may differ from :func:`level`'s in its last bit (tests/test_odometry.py compares them to
+1e-12 m); the Python and NumPy forms stay in :mod:`shc_cli.control.odometry` as the reference.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from shc_cli.model.jit import njit
+
+X, Y, YAW, LEG_YAW = range(4)
+"""Indices of the odometry's state vector: pose x, y [m], yaw [rad], and the legs' own heading [rad]."""
+
+
+@njit(cache=True)
+def odometry_cycle(feet: np.ndarray, roll: float, pitch: float, before: np.ndarray, after: np.ndarray,
+                   use: np.ndarray, forces: np.ndarray, weighted: bool, has_before: bool, turn: float,
+                   gain: float, state: np.ndarray) -> int:  # pragma: no cover (compiled)
+    """Advance the odometry ``state`` (x, y, yaw, leg yaw) one cycle; returns the stance feet used.
+
+    Args:
+        feet: every foot in base_link ``(L, 3)`` [m], now.
+        roll, pitch: the body's roll and pitch [rad] (levels ``feet`` into ``after``: ``Ry(pitch)·Rx(roll)``).
+        before: the levelled feet of the last cycle ``(L, 3)`` [m] (read when ``has_before``).
+        after: out, the levelled feet ``(L, 3)`` [m].
+        use: feet that stood on the ground since the last cycle ``(L,)``.
+        forces: measured normal foot forces ``(L,)`` [N] (negative ones count as 0), read when ``weighted``.
+        turn: the IMU's heading change over the cycle [rad], or NaN without an IMU.
+        gain: the complementary filter's ``dt/τ``.
+        state: ``(4,)`` x [m], y [m], yaw [rad], the legs' heading [rad]; updated in place.
+    """
+    cr, sr, cp, sp = math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch)
+    legs = feet.shape[0]
+    for i in range(legs):
+        fx, fy, fz = feet[i, 0], feet[i, 1], feet[i, 2]
+        after[i, 0] = cp * fx + sp * sr * fy + sp * cr * fz
+        after[i, 1] = cr * fy - sr * fz
+        after[i, 2] = -sp * fx + cp * sr * fy + cp * cr * fz
+    dx = dy = legs_turn = 0.0
+    used = 0
+    if has_before:
+        total = 0.0
+        for i in range(legs):
+            if use[i]:
+                used += 1
+                if weighted and forces[i] > 0.0:
+                    total += forces[i]
+        if used > 0:
+            loaded = weighted and total > 0.0
+            px = py = qx = qy = 0.0
+            for i in range(legs):
+                if use[i]:
+                    w = (forces[i] / total if forces[i] > 0.0 else 0.0) if loaded else 1.0
+                    px += w * before[i, 0]
+                    py += w * before[i, 1]
+                    qx += w * after[i, 0]
+                    qy += w * after[i, 1]
+            if not loaded:
+                px, py, qx, qy = px / used, py / used, qx / used, qy / used
+            if used > 1:
+                cross = dot = 0.0
+                for i in range(legs):
+                    if use[i]:
+                        w = (forces[i] / total if forces[i] > 0.0 else 0.0) if loaded else 1.0
+                        bx, by = before[i, 0] - px, before[i, 1] - py
+                        ax, ay = after[i, 0] - qx, after[i, 1] - qy
+                        cross += w * (ax * by - ay * bx)
+                        dot += w * (ax * bx + ay * by)
+                legs_turn = math.atan2(cross, dot)
+            c, s = math.cos(legs_turn), math.sin(legs_turn)
+            dx, dy = px - (c * qx - s * qy), py - (s * qx + c * qy)
+    state[LEG_YAW] += legs_turn
+    heading = state[YAW]
+    if math.isnan(turn):
+        state[YAW] += legs_turn
+    else:
+        predicted = state[YAW] + turn
+        state[YAW] = predicted + gain * (state[LEG_YAW] - predicted) if used > 1 else predicted
+    c, s = math.cos(heading), math.sin(heading)  # the increment is in the level frame at the cycle's start
+    state[X] += c * dx - s * dy
+    state[Y] += s * dx + c * dy
+    return used
