@@ -1,8 +1,9 @@
 """Compile shc's numba kernels into numba's cache ahead of the first real command (``shc warmup``).
 
-The kinematics (:mod:`shc_cli.model.kernels`), the walk (:mod:`shc_cli.control.stepping`) and admittance control
-(:mod:`shc_cli.control.admittance`) are compiled by numba on first use and cached beside their sources (the
-editable install's ``__pycache__``); later processes load them in milliseconds. Compiling takes ≈ 10 s on a 2-core
+The kinematics (:mod:`shc_cli.model.kernels`), the walk (:mod:`shc_cli.control.stepping`), the leg odometry
+(:mod:`shc_cli.control.odometry_kernels`) and admittance control (:mod:`shc_cli.control.admittance`) are compiled
+by numba on first use and cached beside their sources (the editable install's ``__pycache__``); later processes
+load them in milliseconds. Compiling takes ≈ 10 s on a 2-core
 machine (≈ 5× a short simulation; docs/performance.md), so the README's set-up command runs this once: the first
 ``shc simulate`` of a new install then starts as fast as the second.
 
