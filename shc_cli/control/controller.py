@@ -22,7 +22,7 @@ from shc_cli.control.gait import StepCycle, step_cycle
 from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.manipulation import MAX_MANUAL_LEGS as MAX_MANUAL_LEGS
 from shc_cli.control.manipulation import LegManipulation
-from shc_cli.control.odometry import LegOdometry, euler_yaw_rate, quaternion_yaw
+from shc_cli.control.odometry import LegOdometry, euler_yaw_rate
 from shc_cli.control.pose import Pose, PoseController, PoseReset
 from shc_cli.control.sensing import (
     ContactDetector,
@@ -30,7 +30,6 @@ from shc_cli.control.sensing import (
     PostureController,
     Sensors,
     inclination_pose,
-    quaternion_roll_pitch,
     support_centroid_pose,
 )
 from shc_cli.control.startup import iterations, plan_direct_startup
@@ -286,8 +285,6 @@ class Controller(LegManipulation):
         self.odometry = LegOdometry(self.dt)
         """Leg odometry (an shc addition): read by :attr:`CycleOutput.odometry`."""
         self._stance_before = np.zeros(len(robot.legs), dtype=bool)
-        self._contact_before: np.ndarray | None = None
-        self._imu_yaw: float | None = None
 
     # -- inputs ------------------------------------------------------------------------------------------------
 
@@ -364,30 +361,23 @@ class Controller(LegManipulation):
         foot forces weigh the feet. Roll and pitch come from the IMU or else the commanded body pose; the IMU's
         heading change (of its orientation; of its angular rate × dt without one) is fused.
         """
-        if sensors is not None and sensors.joints is not None:
-            feet = self.model.chains.tips(np.asarray(sensors.joints, dtype=float))
+        if sensors is None:
+            self._stance_before = stance
+            roll, pitch, _ = self.poser.current.euler()
+            return self.odometry.cycle(self.model.tips, roll, pitch, stance)
+        if sensors.joints is not None:
+            feet = self.model.chains.tips(sensors.joints)
             use = self._stance_before
         else:
             feet, use = self.model.tips, stance
         self._stance_before = stance
-        if sensors is not None and sensors.foot_contact is not None:
-            contact = np.asarray(sensors.foot_contact, dtype=bool)
-            if self._contact_before is not None:
-                use = use & contact & self._contact_before
-            self._contact_before = contact
-        turn = None
-        if sensors is not None and sensors.orientation is not None:
-            roll, pitch = quaternion_roll_pitch(sensors.orientation)
-            yaw = quaternion_yaw(sensors.orientation)
-            if self._imu_yaw is not None:  # the IMU's own heading change (integrated at its rate, not ours)
-                turn = math.remainder(yaw - self._imu_yaw, 2.0 * math.pi)
-            self._imu_yaw = yaw
-        else:
+        orientation, turn, roll, pitch = sensors.orientation, None, 0.0, 0.0
+        if orientation is None:
             roll, pitch, _ = self.poser.current.euler()
-            if sensors is not None and sensors.angular_rate is not None:
+            if sensors.angular_rate is not None:
                 turn = euler_yaw_rate(roll, pitch, np.asarray(sensors.angular_rate, dtype=float)) * self.dt
-        forces = sensors.foot_forces if sensors is not None else None  # loaded feet slip less: weigh by load
-        return self.odometry.cycle(feet, roll, pitch, use, turn, forces)
+        return self.odometry.cycle(feet, roll, pitch, use, turn, sensors.foot_forces, orientation,
+                                   sensors.foot_contact)
 
     def _update_pose(self) -> None:
         """The body pose of this cycle, from the previous cycle's leg states (OpenSHC ``updateCurrentPose``)."""

@@ -171,11 +171,14 @@ class LegOdometry:
     def __init__(self, time_delta: float, yaw_time_constant: float = YAW_TIME_CONSTANT) -> None:
         self.dt = time_delta
         self.gain = min(time_delta / yaw_time_constant, 1.0) if yaw_time_constant > 0.0 else 1.0
-        self._state = np.zeros(4)
-        """x [m], y [m], yaw [rad] and the legs' heading [rad] (:mod:`shc_cli.control.odometry_kernels`)."""
+        self._state = np.array([0.0, 0.0, 0.0, 0.0, math.nan, 0.0])
+        """x [m], y [m], yaw [rad], the legs' heading [rad], the IMU's last heading [rad] and whether foot contact
+        was measured last cycle (:mod:`shc_cli.control.odometry_kernels`)."""
         self._feet: np.ndarray | None = None
         self._spare: np.ndarray | None = None
-        self._no_forces: np.ndarray | None = None
+        self._zeros: np.ndarray | None = None
+        self._contact_before: np.ndarray | None = None
+        self._no_orientation = np.zeros(4)
         self.feet_used = 0
         """Stance feet in the last increment."""
 
@@ -211,17 +214,22 @@ class LegOdometry:
         return self.cycle(feet, 0.0, 0.0, stance, turn, weights)
 
     def cycle(self, feet: np.ndarray, roll: float, pitch: float, stance: np.ndarray, turn: float | None = None,
-              forces: np.ndarray | None = None) -> tuple[float, float, float]:
+              forces: np.ndarray | None = None, orientation: np.ndarray | None = None,
+              contact: np.ndarray | None = None) -> tuple[float, float, float]:
         """Advance one cycle.
 
         Args:
             feet: every foot in base_link ``(L, 3)`` [m], now.
-            roll, pitch: the body's roll and pitch [rad], which level the feet (:func:`level`).
+            roll, pitch: the body's roll and pitch [rad], which level the feet (:func:`level`), when there is no
+                ``orientation``.
             stance: feet that stood on the ground since the last update ``(L,)``.
-            turn: the IMU's heading change over the cycle [rad] (its orientation's yaw change, or the Euler yaw
-                rate :func:`euler_yaw_rate` × dt), or None.
+            turn: the heading change over the cycle from the IMU's rates [rad] (:func:`euler_yaw_rate` × dt) when
+                there is no ``orientation``, or None.
             forces: each foot's weight in the fit ``(L,)`` (its measured normal force [N]; negative counts as 0),
                 or None (equal).
+            orientation: the IMU's orientation (x, y, z, w), or None: it gives roll, pitch and the heading change
+                (the yaw change of the orientation since the last one: the IMU integrates its gyro at its own rate).
+            contact: measured foot contact ``(L,)``, or None: a foot counts only when touching at both readings.
 
         Returns:
             the new pose (x, y, yaw).
@@ -229,20 +237,25 @@ class LegOdometry:
         from shc_cli.control.odometry_kernels import odometry_cycle
 
         feet = np.ascontiguousarray(feet, dtype=float)
+        legs = len(feet)
         after = self._spare
         if after is None or after.shape != feet.shape:
             after = np.empty_like(feet)
         before = self._feet
-        if forces is None:
-            if self._no_forces is None or len(self._no_forces) != len(feet):
-                self._no_forces = np.zeros(len(feet))
-            load = self._no_forces
-        else:
-            load = np.ascontiguousarray(forces, dtype=float)
-        self.feet_used = odometry_cycle(feet, roll, pitch, after if before is None else before, after,
-                                        np.ascontiguousarray(stance, dtype=bool), load, forces is not None,
-                                        before is not None, math.nan if turn is None else turn, self.gain,
-                                        self._state)
+        zeros = self._zeros
+        if zeros is None or len(zeros) != legs:
+            zeros = self._zeros = np.zeros(legs)
+        if self._contact_before is None or len(self._contact_before) != legs:
+            self._contact_before = np.zeros(legs, dtype=bool)
+        has_orientation = orientation is not None
+        self.feet_used = odometry_cycle(
+            feet, np.ascontiguousarray(orientation, dtype=float) if has_orientation else self._no_orientation,
+            has_orientation, roll, pitch, after if before is None else before, after,
+            np.ascontiguousarray(stance, dtype=bool),
+            np.ascontiguousarray(contact, dtype=bool) if contact is not None else self._contact_before,
+            self._contact_before, contact is not None,
+            np.ascontiguousarray(forces, dtype=float) if forces is not None else zeros, forces is not None,
+            before is not None, math.nan if turn is None else turn, self.gain, self._state)
         self._feet, self._spare = after, before
-        x, y, yaw, _ = self._state.tolist()
+        x, y, yaw = self._state.tolist()[:3]
         return (x, y, yaw)

@@ -17,27 +17,45 @@ import numpy as np
 
 from shc_cli.model.jit import njit
 
-X, Y, YAW, LEG_YAW = range(4)
-"""Indices of the odometry's state vector: pose x, y [m], yaw [rad], and the legs' own heading [rad]."""
+X, Y, YAW, LEG_YAW, IMU_YAW, CONTACT_BEFORE = range(6)
+"""Indices of the odometry's state vector: pose x, y [m], yaw [rad], the legs' own heading [rad], the IMU's last
+heading [rad] (NaN before the first orientation) and whether the last cycle measured foot contact (1.0) or not."""
 
 
 @njit(cache=True)
-def odometry_cycle(feet: np.ndarray, roll: float, pitch: float, before: np.ndarray, after: np.ndarray,
-                   use: np.ndarray, forces: np.ndarray, weighted: bool, has_before: bool, turn: float,
-                   gain: float, state: np.ndarray) -> int:  # pragma: no cover (compiled)
-    """Advance the odometry ``state`` (x, y, yaw, leg yaw) one cycle; returns the stance feet used.
+def odometry_cycle(feet: np.ndarray, orientation: np.ndarray, has_orientation: bool, roll: float, pitch: float,
+                   before: np.ndarray, after: np.ndarray, use: np.ndarray, contact: np.ndarray,
+                   contact_before: np.ndarray, has_contact: bool, forces: np.ndarray, weighted: bool,
+                   has_before: bool, turn: float, gain: float, state: np.ndarray) -> int:  # pragma: no cover
+    """Advance the odometry ``state`` one cycle; returns the stance feet used.
 
     Args:
         feet: every foot in base_link ``(L, 3)`` [m], now.
-        roll, pitch: the body's roll and pitch [rad] (levels ``feet`` into ``after``: ``Ry(pitch)·Rx(roll)``).
+        orientation: the IMU's orientation quaternion (x, y, z, w), read when ``has_orientation``: it gives the
+            roll and pitch (as :func:`shc_cli.control.sensing.quaternion_roll_pitch`) and the heading change since
+            the last one (as :func:`shc_cli.control.odometry.quaternion_yaw`, wrapped to ±π).
+        roll, pitch: the body's roll and pitch [rad] without an orientation (levels ``feet`` into ``after``:
+            ``Ry(pitch)·Rx(roll)``).
         before: the levelled feet of the last cycle ``(L, 3)`` [m] (read when ``has_before``).
         after: out, the levelled feet ``(L, 3)`` [m].
-        use: feet that stood on the ground since the last cycle ``(L,)``.
+        use: feet that stood on the ground since the last cycle ``(L,)``; with ``has_contact`` only those also
+            touching now (``contact``) and at the last reading (``contact_before``, then set to ``contact``).
         forces: measured normal foot forces ``(L,)`` [N] (negative ones count as 0), read when ``weighted``.
-        turn: the IMU's heading change over the cycle [rad], or NaN without an IMU.
+        turn: the heading change over the cycle from the IMU's rates [rad] without an orientation, else NaN.
         gain: the complementary filter's ``dt/τ``.
-        state: ``(4,)`` x [m], y [m], yaw [rad], the legs' heading [rad]; updated in place.
+        state: ``(6,)`` (:data:`X` … :data:`CONTACT_BEFORE`); updated in place.
     """
+    if has_orientation:
+        x, y, z, w = orientation[0], orientation[1], orientation[2], orientation[3]
+        r20 = 2 * (x * z - y * w)
+        roll = math.atan2(2 * (y * z + x * w), 1 - 2 * (x * x + y * y))
+        pitch = math.asin(-min(max(r20, -1.0), 1.0)) if not math.isnan(r20) else r20
+        yaw = math.atan2(2 * (x * y + z * w), 1 - 2 * (y * y + z * z))
+        turn = math.nan
+        if not math.isnan(state[IMU_YAW]):  # the IMU's own heading change (integrated at its rate, not ours)
+            change = yaw - state[IMU_YAW]
+            turn = change - 2.0 * math.pi * np.rint(change / (2.0 * math.pi))
+        state[IMU_YAW] = yaw
     cr, sr, cp, sp = math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch)
     legs = feet.shape[0]
     for i in range(legs):
@@ -47,10 +65,18 @@ def odometry_cycle(feet: np.ndarray, roll: float, pitch: float, before: np.ndarr
         after[i, 2] = -sp * fx + cp * sr * fy + cp * cr * fz
     dx = dy = legs_turn = 0.0
     used = 0
+    masked = has_contact and state[CONTACT_BEFORE] == 1.0
+    chosen = np.empty(legs, dtype=np.bool_)
+    for i in range(legs):
+        chosen[i] = use[i] and (not masked or (contact[i] and contact_before[i]))
+    if has_contact:
+        for i in range(legs):
+            contact_before[i] = contact[i]
+        state[CONTACT_BEFORE] = 1.0
     if has_before:
         total = 0.0
         for i in range(legs):
-            if use[i]:
+            if chosen[i]:
                 used += 1
                 if weighted and forces[i] > 0.0:
                     total += forces[i]
@@ -58,7 +84,7 @@ def odometry_cycle(feet: np.ndarray, roll: float, pitch: float, before: np.ndarr
             loaded = weighted and total > 0.0
             px = py = qx = qy = 0.0
             for i in range(legs):
-                if use[i]:
+                if chosen[i]:
                     w = (forces[i] / total if forces[i] > 0.0 else 0.0) if loaded else 1.0
                     px += w * before[i, 0]
                     py += w * before[i, 1]
@@ -69,7 +95,7 @@ def odometry_cycle(feet: np.ndarray, roll: float, pitch: float, before: np.ndarr
             if used > 1:
                 cross = dot = 0.0
                 for i in range(legs):
-                    if use[i]:
+                    if chosen[i]:
                         w = (forces[i] / total if forces[i] > 0.0 else 0.0) if loaded else 1.0
                         bx, by = before[i, 0] - px, before[i, 1] - py
                         ax, ay = after[i, 0] - qx, after[i, 1] - qy
