@@ -173,7 +173,11 @@ class Model:
             joints[keep], velocities[keep], tips[keep] = self.joints[keep], self.joint_velocities[keep], self.tips[keep]
             flags = [1 if kept else f for kept, f in zip(keep.tolist(), flags, strict=True)]
         self.joints, self.joint_velocities, self.tips = joints, velocities, tips
-        return sum(1 for f in flags if not f & 1), sum(1 for f in flags if f & 6)
+        off = clamped = 0
+        for f in flags:
+            off += not f & 1
+            clamped += f & 6 != 0
+        return off, clamped
 
     @property
     def proximity(self) -> FloatArray:
@@ -285,6 +289,8 @@ class Controller(LegManipulation):
         self.odometry = LegOdometry(self.dt)
         """Leg odometry (an shc addition): read by :attr:`CycleOutput.odometry`."""
         self._stance_before = np.zeros(len(robot.legs), dtype=bool)
+        self._measured_feet = np.empty((len(robot.legs), 3))
+        """The feet of the measured joints [m] (the odometry reads them; it keeps only its levelled copy)."""
 
     # -- inputs ------------------------------------------------------------------------------------------------
 
@@ -365,8 +371,10 @@ class Controller(LegManipulation):
             self._stance_before = stance
             roll, pitch, _ = self.poser.current.euler()
             return self.odometry.cycle(self.model.tips, roll, pitch, stance)
-        if sensors.joints is not None:
-            feet = self.model.chains.tips(sensors.joints)
+        if sensors.joints is not None:  # Chains.tips's kernel, into a buffer of the odometry's
+            c, feet = self.model.chains, self._measured_feet
+            kernels.tips_kernel(c.base, c.d, c.theta, c.r, c.alpha, np.ascontiguousarray(sensors.joints, dtype=float),
+                                feet)
             use = self._stance_before
         else:
             feet, use = self.model.tips, stance
