@@ -1,5 +1,5 @@
 """Cycle times of ``shc run-hw`` on 18 emulated servos of each family (the emulator in its own process, keeping the
-1 Mbaud wire's time line), and the time one state read takes.
+1 Mbaud wire's time line: shc_cli/hardware/emulator_process.py), and the time one state read takes.
 
     .venv/bin/python benchmarks/bench_run_hw_families.py [--duration 60] [--models AX-12A MX-64(1.0) STS3215]
 
@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import multiprocessing
 import subprocess
 import sys
 import tempfile
 import time
+from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
 
@@ -26,20 +26,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from shc_cli.hardware.emulator_process import EmulatorProcess
 from tests.test_run_hw_families import JOINTS, _robot
 
 PERIODS = {"AX-12A": 0.04, "AX-18A": 0.04, "MX-64(1.0)": 0.01, "MX-106(1.0)": 0.01, "STS3215": 0.01}
-
-
-def _serve(model: str, ids: list[int], ports: Any, stop: Any, index: int) -> None:
-    import gc
-
-    from shc_cli.hardware.emulator_protocol1 import Protocol1Emulator
-
-    gc.disable()
-    with Protocol1Emulator({i: model for i in ids}, wire_time=True) as bus:
-        ports.put((index, bus.port))
-        stop.wait()
 
 
 def _reads(robot: Path, ports: list[str], count: int = 50) -> tuple[float, float]:
@@ -60,14 +50,15 @@ def _reads(robot: Path, ports: list[str], count: int = 50) -> tuple[float, float
 
 
 def run(model: str, duration: float, buses: int, folder: Path, period: float | None) -> dict[str, Any]:
-    context = multiprocessing.get_context("spawn")
-    queue, stop = context.Queue(), context.Event()
     groups = [list(range(1 + 18 // buses * b, 1 + 18 // buses * (b + 1))) for b in range(buses)]
-    servers = [context.Process(target=_serve, args=(model, ids, queue, stop, b), daemon=True)
-               for b, ids in enumerate(groups)]
-    for server in servers:
-        server.start()
-    ports = [name for _, name in sorted(queue.get(timeout=60) for _ in servers)]
+    with ExitStack() as stack:
+        ports = [stack.enter_context(EmulatorProcess({i: model for i in ids}, wire_time=True)).port for ids in groups]
+        return _measure(model, duration, buses, folder, period, ports)
+
+
+def _measure(model: str, duration: float, buses: int, folder: Path, period: float | None,
+             ports: list[str]) -> dict[str, Any]:
+    """The run and the reads on the served ``ports`` (bus 0 first)."""
     dt = period or PERIODS[model]
     robot = _robot(folder, model, period=dt)
     if buses > 1:
@@ -75,27 +66,22 @@ def run(model: str, duration: float, buses: int, folder: Path, period: float | N
         for k, key in enumerate(JOINTS):
             text = text.replace(f"{key} = {{ id = {k + 1}", f"{key} = {{ id = {k + 1}, bus = {k // (18 // buses)}")
         robot.write_text(text)
-    try:
-        fastest, median = _reads(robot, ports)
-        out = folder / f"run-{model}-{buses}"
-        port_options = [a for p in ports for a in ("--port", p)]
-        command = [sys.executable, "-m", "shc_cli.cli", "run-hw", str(robot), *port_options,
-                   "--velocity", "1,0,0", "--duration", str(duration), "--stop-state", "running", "--out", str(out)]
-        result = subprocess.run(command, capture_output=True, text=True, timeout=duration * 10 + 300)
-        if result.returncode != 0:
-            return {"model": model, "error": result.stderr.strip()}
-        summary = json.loads((out / "summary.json").read_text())
-        times = np.loadtxt(out / "timing.csv", delimiter=",", skiprows=1, usecols=2)
-        return {"model": model, "buses": buses, "period_ms": dt * 1e3, "cycles": summary["cycles"],
-                "p50_ms": round(float(np.percentile(times, 50)), 2),
-                "p99_ms": round(float(np.percentile(times, 99)), 2),
-                "max_ms": round(float(times.max()), 2), "overruns": summary["overruns"],
-                "read_fastest_ms": round(fastest, 2), "read_median_ms": round(median, 2),
-                "wire_time_ms": round(summary["wire_time_ms"], 2)}
-    finally:
-        stop.set()
-        for server in servers:
-            server.join(timeout=10)
+    fastest, median = _reads(robot, ports)
+    out = folder / f"run-{model}-{buses}"
+    port_options = [a for p in ports for a in ("--port", p)]
+    command = [sys.executable, "-m", "shc_cli.cli", "run-hw", str(robot), *port_options,
+               "--velocity", "1,0,0", "--duration", str(duration), "--stop-state", "running", "--out", str(out)]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=duration * 10 + 300)
+    if result.returncode != 0:
+        return {"model": model, "error": result.stderr.strip()}
+    summary = json.loads((out / "summary.json").read_text())
+    times = np.loadtxt(out / "timing.csv", delimiter=",", skiprows=1, usecols=2)
+    return {"model": model, "buses": buses, "period_ms": dt * 1e3, "cycles": summary["cycles"],
+            "p50_ms": round(float(np.percentile(times, 50)), 2),
+            "p99_ms": round(float(np.percentile(times, 99)), 2),
+            "max_ms": round(float(times.max()), 2), "overruns": summary["overruns"],
+            "read_fastest_ms": round(fastest, 2), "read_median_ms": round(median, 2),
+            "wire_time_ms": round(summary["wire_time_ms"], 2)}
 
 
 def main() -> None:

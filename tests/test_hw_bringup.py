@@ -216,3 +216,34 @@ def test_the_emulator_process_answers_for_protocol_2_and_reports_a_wrong_request
         with pytest.raises(RuntimeError, match="the emulator refused goal: KeyError"):
             bus.goal(6)
         assert bus.position(5) == 2048  # still serving
+
+
+def test_the_emulator_process_reads_and_writes_tables_logs_packets_and_injects_faults() -> None:
+    """What the real-time run-hw tests ask of the served emulator (tests/test_run_hw.py, test_run_hw_families.py):
+    control-table bytes, the packets heard, a fault with the packet count at that moment, a servo unplugged."""
+    from dynamixel_sdk import COMM_RX_TIMEOUT, COMM_SUCCESS, PacketHandler, PortHandler
+
+    with EmulatorProcess({1: "MX-106", 2: "MX-106"}) as bus:
+        assert bus.ids() == [1, 2] and bus.packet_count() == 0
+        assert bus.table(1, 7) == b"\x01" and bus.table(2, 132, 4) == (2048).to_bytes(4, "little")  # id; present
+        bus.poke(2, 11, bytes([1]))  # velocity mode
+        port = PortHandler(bus.port)
+        assert port.openPort() and port.setBaudRate(1_000_000)
+        handler = PacketHandler(2.0)
+        try:
+            assert handler.read1ByteTxRx(port, 2, 11) == (1, COMM_SUCCESS, 0)
+            assert handler.write1ByteTxRx(port, 1, 64, 1) == (COMM_SUCCESS, 0)
+            assert bus.torque_on(1) and bus.table(1, 64) == b"\x01"
+            assert bus.packets(1) == [(1, 0x03, bytes([64, 0, 1]))]  # WRITE: address 64, one byte
+            assert bus.packets()[1].params == bytes([64, 0, 1])
+            assert bus.fault(1, "hardware_error", 32) == 2
+            assert handler.read1ByteTxRx(port, 1, 64)[2] == 0x80  # the alert bit
+            assert bus.vanish(2) == 3
+            assert handler.ping(port, 2)[1] == COMM_RX_TIMEOUT
+            assert handler.ping(port, 1)[1] == COMM_SUCCESS
+        finally:
+            port.closePort()
+        with pytest.raises(RuntimeError, match="no fault 'melted'"):
+            bus.fault(1, "melted", True)
+        with pytest.raises(RuntimeError, match="outside the table"):
+            bus.table(1, 250, 10)

@@ -3,14 +3,13 @@ BULK READ) and a Feetech STS3215 bus: 18 emulated servos (shc_cli/hardware/emula
 wire's time line), a 3-DOF hexapod that extends openshc_default. Goals on the bus in the model's ticks, faults
 mid-walk, the rate check; the 60 s runs are slow-marked.
 
-The emulator is served by a thread of this process with the garbage collector off while run-hw runs in its own (see
-tests/test_run_hw.py: a full collection of a large pytest heap outlasts the SDKs' packet timeouts); the long walks
-serve it from a process of its own (shc_cli/hardware/emulator_process.py).
+The emulator is served by a process of its own (shc_cli/hardware/emulator_process.py) while run-hw runs in another:
+as a thread of pytest's process, on a loaded 2-core machine or beside CI's other test worker, it was kept off the CPU
+past the SDKs' packet timeouts (a false "no reply"; a real bus does not share the host's CPU).
 """
 
 from __future__ import annotations
 
-import gc
 import json
 import math
 import subprocess
@@ -24,7 +23,7 @@ import numpy as np
 import pytest
 
 from shc_cli.hardware import protocol1 as p1
-from shc_cli.hardware.emulator_protocol1 import Protocol1Emulator
+from shc_cli.hardware.emulator_process import EmulatorProcess, Heard
 from shc_cli.loop.runread import read_run
 
 SHC = [sys.executable, "-m", "shc_cli.cli"]
@@ -58,20 +57,15 @@ def _robot(folder: Path, model: str, period: float | None = None, extra: str = "
 
 
 @contextmanager
-def _bus(model: str, latency_s: float = 0.0) -> Iterator[Protocol1Emulator]:
-    gc.collect()
-    gc.disable()
-    try:
-        with Protocol1Emulator({k + 1: model for k in range(18)}, wire_time=True, latency_s=latency_s) as bus:
-            yield bus
-    finally:
-        gc.enable()
+def _bus(model: str, latency_s: float = 0.0) -> Iterator[EmulatorProcess]:
+    """18 servos of ``model`` (ids 1–18) on one emulated bus keeping the 1 Mbaud wire's time line."""
+    with EmulatorProcess({k + 1: model for k in range(18)}, wire_time=True, latency_s=latency_s) as bus:
+        yield bus
 
 
-def _goal_writes(bus: Protocol1Emulator, model: str, start: int = 0) -> list[p1.Packet]:
+def _goal_writes(bus: EmulatorProcess, model: str, start: int = 0) -> list[Heard]:
     address = FAMILIES[model][3]
-    with bus.lock:
-        return [p for p in bus.packets[start:] if p.instruction == p1.SYNC_WRITE and p.params[0] == address]
+    return [p for p in bus.packets(start) if p.instruction == p1.SYNC_WRITE and p.params[0] == address]
 
 
 def _wait_running(run: Path, process: subprocess.Popen[str], extra_s: float, timeout_s: float = 90.0) -> None:
@@ -130,14 +124,12 @@ def test_a_fault_mid_walk_stops_the_goals_names_the_servo_and_exits_3(model: str
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         try:
             _wait_running(tmp_path / "run", process, extra_s=0.5)
-            with bus.lock:
-                marker = len(bus.packets)
-                if fault == "overload":
-                    bus.protect(FAULTED)
-                elif fault == "vanish":
-                    bus.faults(FAULTED).vanish_after_packets = bus.servos[FAULTED].packets_seen
-                else:
-                    bus.faults(FAULTED).corrupt_checksum = True
+            if fault == "overload":
+                marker = bus.protect(FAULTED)
+            elif fault == "vanish":
+                marker = bus.vanish(FAULTED)
+            else:
+                marker = bus.fault(FAULTED, "corrupt_checksum", True)
             _, stderr = process.communicate(timeout=120)
         finally:
             if process.poll() is None:
@@ -161,7 +153,7 @@ def test_refuses_a_rate_the_bus_cannot_keep_and_says_which_it_can(tmp_path: Path
         result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run")],
                                 capture_output=True, text=True, timeout=120)
         assert not any(p.instruction == p1.SYNC_WRITE and p.params[0] == 24 and p.params[3] == 1
-                       for p in bus.packets)  # the torque never went on
+                       for p in bus.packets())  # the torque never went on
     assert result.returncode == 2, result.stderr
     assert "refusing to start: one cycle's reads and goal write take" in result.stderr
     assert "one read per servo, 18 servos on the busiest bus" in result.stderr and "set time_delta = " in result.stderr
@@ -185,9 +177,9 @@ def test_refuses_the_wrong_model_or_protocol(model: str, file_model: str, messag
 def test_refuses_wheel_mode_and_angle_limits_narrower_than_the_joints(tmp_path: Path) -> None:
     robot = _robot(tmp_path, "AX-12A")
     with _bus("AX-12A") as bus:
-        bus.servos[4].set(6, 0)
-        bus.servos[4].set(8, 0)  # both angle limits 0: wheel mode
-        bus.servos[9].set(6, 400)  # CW limit inside CR_tibia's range
+        bus.set(4, 6, 0)
+        bus.set(4, 8, 0)  # both angle limits 0: wheel mode
+        bus.set(9, 6, 400)  # CW limit inside CR_tibia's range
         result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run")],
                                 capture_output=True, text=True, timeout=120)
     assert result.returncode == 2, result.stderr
@@ -209,15 +201,10 @@ def test_validate_refuses_two_protocols_on_one_bus(tmp_path: Path) -> None:
 def test_a_long_walk_holds_the_rate(model: str, tmp_path: Path) -> None:
     """A long walk on 18 servos at the family's rate (100 Hz; AX-12A 25 Hz): no fault, and the cycle-time
     distribution (printed) keeps its median within the period. AX-12A walks 60 s (1,500 cycles of 18 reads), the
-    others 20 s (their 60 s figures are benchmarks/bench_run_hw_families.py's). The emulator is served by a process of
-    its own (hardware/emulator_process.py): as a thread of the test's process, beside the slow suite's other worker,
-    it was starved of CPU for a whole cycle of AX-12A's 18 reads (a false "no reply"; a real bus does not share the
-    host's CPU)."""
+    others 20 s (their 60 s figures are benchmarks/bench_run_hw_families.py's)."""
     duration = 60 if model == "AX-12A" else 20
-    from shc_cli.hardware.emulator_process import EmulatorProcess
-
     robot = _robot(tmp_path, model, period=RATES[model])
-    with EmulatorProcess({k + 1: model for k in range(18)}, wire_time=True) as bus:
+    with _bus(model) as bus:
         result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run"),
                                  "--velocity", "1,0,0", "--duration", str(duration), "--stop-state", "running"],
                                 capture_output=True, text=True, timeout=900)

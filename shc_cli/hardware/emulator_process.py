@@ -4,15 +4,17 @@ A real bus does not share the host's CPU; an emulator thread does, and beside a 
 waiting longer than the host's packet timeout (run-hw then rightly reports "no reply"). :class:`EmulatorProcess`
 runs :class:`~shc_cli.hardware.emulator.BusEmulator` (Protocol 2.0) or
 :class:`~shc_cli.hardware.emulator_protocol1.Protocol1Emulator` (Protocol 1.0, Feetech) in a spawned process, so
-it has an interpreter (and a GIL) to itself; the test asks it for goals, positions and torque, and injects faults,
-over a pipe. :func:`robot_emulators` builds one emulator per bus of a robot's ``[hardware.servos]``.
+it has an interpreter (and a GIL) to itself; the test asks it for goals, positions, torque, control-table bytes
+and the packets it heard, and injects faults, over a pipe: every test that runs ``shc run-hw``, ``shc ros --backend
+bus`` or ``shc hw`` in real time serves its bus this way (one emulator implementation: the process serves the same
+classes a thread would). :func:`robot_emulators` builds one emulator per bus of a robot's ``[hardware.servos]``.
 """
 
 from __future__ import annotations
 
 import contextlib
 import multiprocessing
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 
 from shc_cli.hardware.bus import HardwareError
 from shc_cli.hardware.models import MODELS
@@ -25,6 +27,14 @@ if TYPE_CHECKING:
     from shc_cli.spec.robot import Robot
 
 Kind = Literal["protocol2", "protocol1"]
+
+
+class Heard(NamedTuple):
+    """An instruction packet the emulator received."""
+
+    servo: int
+    instruction: int
+    params: bytes
 
 
 def make_emulator(servos: dict[int, str], **options: Any) -> BusEmulator | Protocol1Emulator:
@@ -77,7 +87,12 @@ def robot_emulators(robot: Robot, baud: int | None = None, dynamics: bool = Fals
 
 
 def _serve(connection: Connection, servos: dict[int, str], options: dict[str, Any]) -> None:
-    """The child: start the emulator, send its port, then answer the parent's requests until "stop"."""
+    """The child: start the emulator, send its port, then answer the parent's requests until "stop". The cyclic
+    garbage collector is off: the child makes little cyclic garbage, and a full collection of its growing packet log
+    would hold up the emulator thread."""
+    import gc
+
+    gc.disable()
     emulator = make_emulator(servos, **options).start()
     connection.send(emulator.port)
     try:
@@ -90,43 +105,64 @@ def _serve(connection: Connection, servos: dict[int, str], options: dict[str, An
                 connection.send(None)
                 return
             try:
-                connection.send(("ok", _answer(emulator, request, args)))
+                with _lock(emulator):
+                    answer = _answer(emulator, request, args)
+                connection.send(("ok", answer))
             except Exception as error:  # the parent raises it: a wrong request must not end the emulator
                 connection.send(("error", f"{request}: {type(error).__name__}: {error}"))
     finally:
         emulator.stop()
 
 
+def _lock(emulator: Any) -> Any:
+    """The lock the emulator's thread holds while it handles a packet (a request sees no packet half-handled)."""
+    return emulator.lock if hasattr(emulator, "lock") else emulator._lock
+
+
 def _answer(emulator: Any, request: str, args: list[Any]) -> Any:
-    """One request of the parent (see :class:`EmulatorProcess`'s methods)."""
+    """One request of the parent (see :class:`EmulatorProcess`'s methods), under the emulator's lock."""
     if request in ("goal", "position", "torque_on"):
         return getattr(emulator, request)(*args)
+    if request == "ids":
+        return sorted(emulator.servos)
     if request == "packets":
-        with emulator.lock if hasattr(emulator, "lock") else _Null():
-            return [(p.servo, p.instruction, bytes(p.params)) for p in emulator.packets[args[0]:]]
+        return [(p.servo, p.instruction, bytes(p.params)) for p in emulator.packets[args[0]:]]
+    if request == "packet_count":
+        return len(emulator.packets)
+    if request == "table":  # raw control-table bytes: (id, address, length)
+        servo_id, address, length = args
+        table = emulator.servos[servo_id].table
+        if address < 0 or address + length > len(table):
+            raise ValueError(f"bytes {address}..{address + length - 1} are outside the table ({len(table)} bytes)")
+        return bytes(table[address:address + length])
+    if request == "poke":  # raw control-table bytes written: (id, address, data)
+        servo_id, address, data = args
+        table = emulator.servos[servo_id].table
+        if address < 0 or address + len(data) > len(table):
+            raise ValueError(f"bytes {address}..{address + len(data) - 1} are outside the table ({len(table)} bytes)")
+        table[address:address + len(data)] = data
+        return None
     if request == "fault":
         servo_id, name, value = args
-        setattr(emulator.faults(servo_id), name, value)
-        return None
+        faults = emulator.faults(servo_id)
+        if not hasattr(faults, name):
+            raise AttributeError(f"no fault {name!r} (faults: {', '.join(vars(faults))})")
+        setattr(faults, name, value)
+        return len(emulator.packets)
+    if request == "vanish":
+        servo_id, = args
+        emulator.faults(servo_id).vanish_after_packets = emulator.servos[servo_id].packets_seen
+        return len(emulator.packets)
     if request == "protect":
         emulator.protect(*args)
-        return None
+        return len(emulator.packets)
     if request == "set":  # control-table item: (id, address, value)
         servo_id, address, value = args
-        with emulator.lock:
-            emulator.servos[servo_id].set(address, value)
-            if address == emulator.servos[servo_id].addr["position"]:
-                emulator.servos[servo_id].position = float(value)
+        emulator.servos[servo_id].set(address, value)
+        if address == emulator.servos[servo_id].addr["position"]:
+            emulator.servos[servo_id].position = float(value)
         return None
     raise ValueError(f"unknown request {request!r}")
-
-
-class _Null:
-    def __enter__(self) -> None:
-        return None
-
-    def __exit__(self, *exc: object) -> None:
-        return None
 
 
 class EmulatorProcess:
@@ -167,18 +203,42 @@ class EmulatorProcess:
         return int(self._ask("position", servo_id))
 
     def torque_on(self, servo_id: int) -> bool:
+        """Whether the servo's Torque Enable is set."""
         return bool(self._ask("torque_on", servo_id))
 
-    def packets(self, start: int = 0) -> list[tuple[int, int, bytes]]:
+    def ids(self) -> list[int]:
+        """The ids of the emulated servos, ascending."""
+        return list(self._ask("ids"))
+
+    def packets(self, start: int = 0) -> list[Heard]:
         """Instruction packets received from the ``start``-th on: (id, instruction, parameters)."""
-        return list(self._ask("packets", start))
+        return [Heard(*packet) for packet in self._ask("packets", start)]
 
-    def fault(self, servo_id: int, name: str, value: Any) -> None:
-        """Set one of the servo's :class:`Faults` fields."""
-        self._ask("fault", servo_id, name, value)
+    def packet_count(self) -> int:
+        """How many instruction packets the emulator has received."""
+        return int(self._ask("packet_count"))
 
-    def protect(self, servo_id: int, bits: int = 32) -> None:
-        self._ask("protect", servo_id, bits)
+    def table(self, servo_id: int, address: int, length: int = 1) -> bytes:
+        """``length`` bytes of the servo's control table from ``address`` (little-endian, as on the wire)."""
+        return bytes(self._ask("table", servo_id, address, length))
+
+    def poke(self, servo_id: int, address: int, data: bytes) -> None:
+        """Write bytes into the servo's control table directly, unchecked (a servo set up wrongly before the run)."""
+        self._ask("poke", servo_id, address, bytes(data))
+
+    def fault(self, servo_id: int, name: str, value: Any) -> int:
+        """Set one of the servo's ``Faults`` fields (:class:`shc_cli.hardware.emulator.Faults`, Protocol 2.0;
+        :class:`shc_cli.hardware.emulator_protocol1.Faults`); returns :meth:`packet_count` at that moment."""
+        return int(self._ask("fault", servo_id, name, value))
+
+    def vanish(self, servo_id: int) -> int:
+        """The servo answers nothing from now on (unplugged mid-run); returns :meth:`packet_count` at that moment."""
+        return int(self._ask("vanish", servo_id))
+
+    def protect(self, servo_id: int, bits: int = 32) -> int:
+        """The servo's protection trips (Protocol 1.0 / Feetech; overload by default); returns
+        :meth:`packet_count` at that moment."""
+        return int(self._ask("protect", servo_id, bits))
 
     def set(self, servo_id: int, address: int, value: int) -> None:
         """Write a control-table item directly (Protocol 1.0 / Feetech emulators; the present position moves the
