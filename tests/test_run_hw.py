@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from shc_cli.hardware import protocol2 as p2
-from shc_cli.hardware.emulator_process import EmulatorProcess
+from shc_cli.hardware.emulator_process import EmulatorProcess, promptly
 from shc_cli.loop.runread import read_run
 from shc_cli.spec.loading import load_robot
 
@@ -30,9 +30,10 @@ def _bus(skip: int | None = None) -> Iterator[EmulatorProcess]:
     """Bullet's 30 servos on an emulated bus served by a process of its own (hardware/emulator_process.py) while
     ``run-hw`` runs in another: as a thread of this (pytest) process, on a loaded 2-core machine or beside CI's other
     test worker, the emulator was kept off the CPU past the SDK's packet timeout and run-hw reported a false "no reply
-    from AR_coxa" (real servos answer on their own)."""
+    from AR_coxa" (real servos answer on their own). The run-hw the test starts meanwhile runs ahead of other work
+    where allowed (:func:`promptly`), as on a robot's computer."""
     robot = load_robot("bullet").robot
-    with EmulatorProcess({s.id: "MX-106" for s in robot.hardware.servos.values() if s.id != skip}) as bus:
+    with promptly(), EmulatorProcess({s.id: "MX-106" for s in robot.hardware.servos.values() if s.id != skip}) as bus:
         yield bus
 
 
@@ -262,7 +263,7 @@ def test_two_buses_profile_velocity_and_current_limit(tmp_path: Path) -> None:
     robot_file = _two_bus_robot(tmp_path)
     right = {i: "MX-106" for row in (1, 2, 3) for i in range(10 * row + 1, 10 * row + 6)}
     left = {i: "MX-106" for row in (4, 5, 6) for i in range(10 * row + 1, 10 * row + 6)}
-    with EmulatorProcess(right) as bus0, EmulatorProcess(left) as bus1:
+    with promptly(), EmulatorProcess(right) as bus0, EmulatorProcess(left) as bus1:
         missing = subprocess.run([*SHC, "run-hw", str(robot_file), "--port", bus0.port], capture_output=True,
                                  text=True, timeout=60)
         assert missing.returncode == 2 and "servos are on buses 0, 1, but 1 port given" in missing.stderr

@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from shc_cli.hardware import protocol1 as p1
-from shc_cli.hardware.emulator_process import EmulatorProcess, Heard
+from shc_cli.hardware.emulator_process import EmulatorProcess, Heard, promptly
 from shc_cli.loop.runread import read_run
 
 SHC = [sys.executable, "-m", "shc_cli.cli"]
@@ -58,8 +58,9 @@ def _robot(folder: Path, model: str, period: float | None = None, extra: str = "
 
 @contextmanager
 def _bus(model: str, latency_s: float = 0.0) -> Iterator[EmulatorProcess]:
-    """18 servos of ``model`` (ids 1–18) on one emulated bus keeping the 1 Mbaud wire's time line."""
-    with EmulatorProcess({k + 1: model for k in range(18)}, wire_time=True, latency_s=latency_s) as bus:
+    """18 servos of ``model`` (ids 1–18) on one emulated bus keeping the 1 Mbaud wire's time line; the run-hw the
+    test starts meanwhile runs ahead of other work where allowed (:func:`promptly`)."""
+    with promptly(), EmulatorProcess({k + 1: model for k in range(18)}, wire_time=True, latency_s=latency_s) as bus:
         yield bus
 
 

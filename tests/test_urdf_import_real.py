@@ -316,7 +316,7 @@ def test_run_hw_reads_the_imported_servo_map(tmp_path: Path, capsys, monkeypatch
     import subprocess
     import sys
 
-    from shc_cli.hardware.emulator_process import EmulatorProcess
+    from shc_cli.hardware.emulator_process import EmulatorProcess, promptly
 
     code, _, err, robot_file = _import(DESCRIPTIONS["phantomx"][0], tmp_path, capsys, monkeypatch)
     assert code == 0, err
@@ -325,8 +325,9 @@ def test_run_hw_reads_the_imported_servo_map(tmp_path: Path, capsys, monkeypatch
     assert sorted(s.id for s in hardware.servos.values()) == [10 * leg + joint for leg in range(1, 7)
                                                              for joint in range(1, 4)]
     for skip in (None, 42):  # all there; then BL's femur (leg 4, joint 2) missing: refused, naming it
-        # served by a process of its own: a thread of pytest's process was starved of CPU on a loaded machine
-        with EmulatorProcess({s.id: hardware.model for s in hardware.servos.values() if s.id != skip}) as bus:
+        # served by a process of its own, run-hw ahead of other work: on a loaded machine either starved said "no reply"
+        servos = {s.id: hardware.model for s in hardware.servos.values() if s.id != skip}
+        with promptly(), EmulatorProcess(servos) as bus:
             result = subprocess.run([sys.executable, "-m", "shc_cli.cli", "run-hw", str(robot_file), "--port",
                                      bus.port, "--out", str(tmp_path / f"dry{skip}"), "--dry-run", "--duration", "0.5",
                                      "--stop-state", "ready"], capture_output=True, text=True, timeout=120)

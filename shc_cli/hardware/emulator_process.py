@@ -5,15 +5,19 @@ waiting longer than the host's packet timeout (run-hw then rightly reports "no r
 runs :class:`~shc_cli.hardware.emulator.BusEmulator` (Protocol 2.0) or
 :class:`~shc_cli.hardware.emulator_protocol1.Protocol1Emulator` (Protocol 1.0, Feetech) in a spawned process, so
 it has an interpreter (and a GIL) to itself; the test asks it for goals, positions, torque, control-table bytes
-and the packets it heard, and injects faults, over a pipe: every test that runs ``shc run-hw``, ``shc ros --backend
-bus`` or ``shc hw`` in real time serves its bus this way (one emulator implementation: the process serves the same
-classes a thread would). :func:`robot_emulators` builds one emulator per bus of a robot's ``[hardware.servos]``.
+and the packets it heard, and injects faults, over a pipe. :func:`promptly` puts the host (the run-hw the test
+starts) ahead of other work too. Every test that runs ``shc run-hw``, ``shc ros --backend bus`` or ``shc hw`` in
+real time serves its bus this way (one emulator implementation: the process serves the same classes a thread
+would). :func:`robot_emulators` builds one emulator per bus of a robot's ``[hardware.servos]``.
 """
 
 from __future__ import annotations
 
 import contextlib
 import multiprocessing
+import os
+import threading
+from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any, Literal, NamedTuple
 
 from shc_cli.hardware.bus import HardwareError
@@ -84,6 +88,25 @@ def robot_emulators(robot: Robot, baud: int | None = None, dynamics: bool = Fals
             options.update(check_baud=True, positions=zeros.get(bus, {}))
         out.append(make_emulator(servos, **options))
     return out
+
+
+@contextlib.contextmanager
+def promptly() -> Iterator[None]:
+    """The calling thread, and the processes it starts meanwhile (they inherit its niceness), ahead of other work
+    where the system allows it (nice −10 as root, :func:`~shc_cli.hardware.emulator.serve_promptly`), then back to
+    its niceness. A robot's computer runs its run-hw alone; on a loaded test machine a starved run-hw reports "no
+    reply" though the reply is waiting: the Dynamixel SDK reads the port, then checks its ≈ 34 ms packet timeout,
+    and a host kept off the CPU between the two times out without reading again."""
+    from shc_cli.hardware.emulator import serve_promptly
+
+    thread = threading.get_native_id()
+    niceness = os.getpriority(os.PRIO_PROCESS, thread)
+    serve_promptly()
+    try:
+        yield
+    finally:
+        with contextlib.suppress(OSError):
+            os.setpriority(os.PRIO_PROCESS, thread, niceness)
 
 
 def _serve(connection: Connection, servos: dict[int, str], options: dict[str, Any]) -> None:
