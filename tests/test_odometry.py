@@ -247,15 +247,50 @@ def test_quaternion_yaw_is_the_matrix_yaw() -> None:
         assert math.isclose(quaternion_yaw(q), euler_from_matrix(quaternion_matrix(q))[2], abs_tol=1e-12)
 
 
-def test_the_weighted_list_form_equals_the_numpy_form() -> None:
-    """The odometry's per-cycle weighted fit (Python floats) against :func:`rigid_increment`'s NumPy form."""
-    from shc_cli.control.odometry import _weighted_increment
+def test_the_compiled_cycle_equals_the_reference_forms() -> None:
+    """LegOdometry's compiled cycle (shc_cli/control/odometry_kernels.py) against the reference forms written with
+    NumPy: feet levelled by :func:`level` (a matrix product: the kernel writes it out, so to 1e-12 m, not to the
+    bit), the force-weighted fit :func:`rigid_increment` (1e-12), the IMU's roll, pitch and heading change from its
+    orientation (:func:`quaternion_roll_pitch`, :func:`quaternion_yaw`), the complementary filter, the contact mask
+    (a foot counts only when touching at both readings) and the composition of the pose."""
+    from shc_cli.control.sensing import quaternion_roll_pitch
 
-    rng = np.random.default_rng(17)
-    for count in range(1, 9):
-        for _ in range(500):
-            before = rng.normal(size=(count, 2)) * 0.3
-            after = before + rng.normal(size=(count, 2)) * 1e-3
-            weights = rng.random(count) * 50.0
-            got = _weighted_increment(before.tolist(), after.tolist(), weights.tolist())
-            assert np.allclose(got, rigid_increment(before, after, weights), rtol=0.0, atol=1e-15)
+    rng = np.random.default_rng(23)
+    odometry = LegOdometry(0.01)
+    gain = odometry.gain
+    x = y = yaw = leg_yaw = 0.0
+    imu_yaw = None
+    levelled = None
+    contact_before = None
+    for _ in range(400):
+        feet = rng.normal(size=(6, 3)) * 0.2
+        q = np.array([*rng.normal(size=3) * 0.05, 1.0])
+        q /= np.linalg.norm(q)
+        stance = rng.random(6) < 0.7
+        contact = rng.random(6) < 0.9
+        forces = rng.normal(20.0, 15.0, size=6)  # some negative: they count as 0
+        got = odometry.cycle(feet, 0.3, -0.2, stance, None, forces, q, contact)  # roll, pitch: the IMU's instead
+        roll, pitch = quaternion_roll_pitch(q)
+        now = level(feet, roll, pitch)
+        assert np.allclose(odometry._feet, now, rtol=0.0, atol=1e-12)  # type: ignore[arg-type]
+        use = stance & contact & contact_before if contact_before is not None else stance
+        contact_before = contact
+        turn = None
+        heading = quaternion_yaw(q)
+        if imu_yaw is not None:
+            turn = math.remainder(heading - imu_yaw, 2.0 * math.pi)
+        imu_yaw = heading
+        dx = dy = legs_turn = 0.0
+        if levelled is not None and use.any():
+            dx, dy, legs_turn = rigid_increment(levelled[use, :2], now[use, :2], np.maximum(forces[use], 0.0))
+        levelled = now
+        leg_yaw += legs_turn
+        start = yaw
+        if turn is None:
+            yaw += legs_turn
+        else:
+            yaw = yaw + turn + gain * (leg_yaw - (yaw + turn)) if use.sum() > 1 else yaw + turn
+        x += math.cos(start) * dx - math.sin(start) * dy
+        y += math.sin(start) * dx + math.cos(start) * dy
+        assert np.allclose(got, (x, y, yaw), rtol=0.0, atol=1e-12), (got, (x, y, yaw))
+    assert odometry.feet_used == int(use.sum())

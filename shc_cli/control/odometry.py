@@ -135,28 +135,6 @@ def _increment_of_lists(before: list[list[float]], after: list[list[float]]) -> 
     return px - (c * qx - s * qy), py - (s * qx + c * qy), turn
 
 
-def _weighted_increment(before: list[list[float]], after: list[list[float]],
-                        weights: list[float]) -> tuple[float, float, float]:
-    """:func:`rigid_increment` with ``weights`` (summing to more than 0) on Python floats: the odometry's per-cycle
-    form when foot forces are measured (equal to the NumPy form to rounding, tested)."""
-    total = sum(weights)
-    w = [v / total for v in weights]
-    px = sum(wi * b[0] for wi, b in zip(w, before, strict=True))
-    py = sum(wi * b[1] for wi, b in zip(w, before, strict=True))
-    qx = sum(wi * a[0] for wi, a in zip(w, after, strict=True))
-    qy = sum(wi * a[1] for wi, a in zip(w, after, strict=True))
-    turn = 0.0
-    if len(before) > 1:
-        cross = dot = 0.0
-        for wi, b, a in zip(w, before, after, strict=True):
-            bx, by, ax, ay = b[0] - px, b[1] - py, a[0] - qx, a[1] - qy
-            cross += wi * (ax * by - ay * bx)
-            dot += wi * (ax * bx + ay * by)
-        turn = math.atan2(cross, dot)
-    c, s = math.cos(turn), math.sin(turn)
-    return px - (c * qx - s * qy), py - (s * qx + c * qy), turn
-
-
 class LegOdometry:
     """The body's planar pose in the odom frame, from stance-foot increments and (optionally) the IMU's heading.
 
