@@ -183,7 +183,7 @@ class LegOdometry:
     @property
     def pose(self) -> tuple[float, float, float]:
         """(x [m], y [m], yaw [rad]) in the odom frame."""
-        x, y, yaw, _ = self._state.tolist()
+        x, y, yaw = self._state.tolist()[:3]
         return (x, y, yaw)
 
     def update(self, feet: np.ndarray, stance: np.ndarray, turn: float | None = None,
