@@ -24,7 +24,9 @@ def run_fit(runs: list[Path], robot: str, params: str | None, engine: str, out: 
         for index, parameter in enumerate(group.parameters):
             sigma = float(solution.uncertainty[index])
             spread = f"± {sigma:.3g}" if math.isfinite(sigma) else "± inf"
-            flag = "" if solution.identifiable[index] else "  (not identifiable from these runs)"
+            partners = [group.parameters[k].name for k in solution.correlated[index]]
+            flag = "" if solution.identifiable[index] else \
+                f"  (not identifiable from these runs{_why(partners, bool(solution.unsettled[index]))})"
             typer.echo(f"  {parameter.name:24s} {parameter.initial:9.4g} → {solution.x[index]:9.4g} {spread}{flag}")
         errors = ", ".join(f"{name} {group.before[name]:.3g} → {group.after[name]:.3g}" for name in group.after)
         typer.echo(f"  RMS error: {errors}")
@@ -35,6 +37,13 @@ def run_fit(runs: list[Path], robot: str, params: str | None, engine: str, out: 
     first = result.fits[0]
     typer.echo(f"{len(runs)} run{'s' if len(runs) != 1 else ''}, {first.solution.replays} replays, "
                f"{result.elapsed_s:.1f} s → {result.path / 'robot.toml' if by == 'model' else result.path}")
+
+
+def _why(partners: list[str], unsettled: bool) -> str:
+    """Why a parameter is not identifiable, when it is more than its uncertainty: ``": trades with a, b"``."""
+    reasons = ([f"trades with {', '.join(partners)}"] if partners else []) + (
+        ["its probes still lowered the cost"] if unsettled else [])
+    return f": {'; '.join(reasons)}" if reasons else ""
 
 
 def write_fit_plan(runs: list[Path], robot: str, out: Path | None, overwrite: bool) -> None:

@@ -1,9 +1,12 @@
 """What ``shc fit`` writes into its output directory: ``robot.toml`` (the robot with the fitted ``[servo]`` values,
 extending the robot fitted), ``fit.json`` and the before/after figures.
 
-``fit.json`` is ``{"params": {NAME: {"value", "initial", "lower", "upper", "uncertainty", "identifiable"}},
-"residuals": {...}}``: NAME a ``[servo]`` field; ``uncertainty`` one standard deviation in the parameter's unit
-(``null`` when the data do not see it); ``residuals`` the RMS of each measured channel before and after (position
+``fit.json`` is ``{"params": {NAME: {"value", "initial", "lower", "upper", "uncertainty", "identifiable",
+"independence", "correlated_with"}}, "residuals": {...}}``: NAME a ``[servo]`` field; ``uncertainty`` one standard
+deviation in the parameter's unit (``null`` when the data do not see it); ``independence`` the share of its effect
+the other fitted parameters cannot reproduce and ``correlated_with`` the ones it trades with (when that share is
+too small to identify it), ``unsettled`` true when the solver stopped unconverged with a probe of it still lowering
+the cost; ``residuals`` the RMS of each measured channel before and after (position
 [rad], velocity [rad/s], current [A], torque [N·m], power [W]), the solver's costs, evaluations, replays and the
 Jacobian's singular values (:mod:`shc_cli.domain.fit.solve`).
 """
@@ -54,7 +57,10 @@ def fit_json(parameters: list[Parameter], solution: Solution, before: dict[str, 
         sigma = float(solution.uncertainty[index])
         params[p.name] = {"value": float(solution.x[index]), "initial": p.initial, "lower": p.lower, "upper": p.upper,
                           "uncertainty": sigma if math.isfinite(sigma) else None,
-                          "identifiable": bool(solution.identifiable[index])}
+                          "identifiable": bool(solution.identifiable[index]),
+                          "independence": round(float(solution.independence[index]), 4),
+                          "correlated_with": [parameters[k].name for k in solution.correlated[index]],
+                          "unsettled": bool(solution.unsettled[index])}
     residuals = {"before": before, "after": after, "units": {k: UNITS[k] for k in after},
                  "cost_before": solution.cost_before, "cost_after": solution.cost_after,
                  "evaluations": solution.iterations, "replays": solution.replays, "converged": solution.converged,

@@ -17,8 +17,20 @@ the Jacobian in units of each parameter's typical size; a singular value below :
 direction the data do not see, and every parameter with a share in it gets an infinite uncertainty. The residuals of
 successive cycles are correlated (model error, not white noise), so ``s²/m`` underestimates the variance: the
 uncertainty is multiplied by √(:data:`CORRELATION_CYCLES`), the number of control cycles over which a residual stays
-correlated. A parameter is **identifiable** when its uncertainty is below :data:`IDENTIFIABLE` of its value (of its
-typical size when the value is smaller).
+correlated. That σ measures noise, not collinearity: two parameters whose effects on the readings the other can mimic
+(a load-free joint's torque constant, armature and frictions scale together exactly) keep a small σ while the fit
+slides along the valley between them.
+
+**Independence.** So each parameter's sensitivity is also compared with the others': its *independent share*
+``‖(I − P_others)·J_i‖ / ‖J_i‖`` (:func:`independence`; ``P_others`` the projection on the span of the other
+fitted parameters' columns, through a QR of the column-normalised Jacobian) is the part of its effect no
+combination of the others can reproduce — 1 for an effect of its own, 0 for one the others reproduce exactly.
+Below :data:`INDEPENDENT` the parameter trades with the others whose columns make up that combination (a weight of
+at least :data:`PARTNER` each: ``fit.json``'s ``correlated_with``).
+
+A parameter is **identifiable** when (1) its uncertainty is below :data:`IDENTIFIABLE` of its value (of its typical
+size when the value is smaller), (2) its independent share is at least :data:`INDEPENDENT`, and (3) the solver
+converged, or did not but no probe of that parameter still lowered the cost (:func:`solve`).
 """
 
 from __future__ import annotations
@@ -47,6 +59,12 @@ CORRELATION_CYCLES = 25.0
 """Control cycles over which model error stays correlated (the uncertainty's inflation is its square root)."""
 IDENTIFIABLE = 0.05
 """Relative uncertainty below which a parameter counts as identifiable."""
+INDEPENDENT = 0.1
+"""Independent share of a parameter's sensitivity below which it counts as not identifiable (module docstring): the
+emulated bench's exactly degenerate torque constant, armature and frictions have shares of a few hundredths (the
+forward differences' noise), the parameters of a well-excited fit several tenths."""
+PARTNER = 0.1
+"""Weight (in column-normalised units) from which another parameter counts as a partner of a degenerate one."""
 PROBE = 0.1
 """Probe step after each solver run [share of the parameter's value]."""
 ROUNDS = 4
@@ -197,6 +215,10 @@ class Solution:
         singular_values: of the Jacobian in typical-size units, largest first.
         converged: the solver met its tolerances (False: it stopped at its evaluation budget, and the values and
             uncertainties describe where it stopped, not a minimum).
+        independence: each parameter's independent share (module docstring; 0 for one the data do not see).
+        correlated: for each parameter whose share is below :data:`INDEPENDENT`, the indices of those it trades
+            with (empty otherwise).
+        unsettled: the parameters whose probes still lowered the cost when the solver stopped unconverged.
     """
 
     x: np.ndarray
@@ -208,6 +230,9 @@ class Solution:
     replays: int
     singular_values: np.ndarray
     converged: bool = True
+    independence: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    correlated: tuple[tuple[int, ...], ...] = ()
+    unsettled: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
 
 
 def solve(problem: Problem, max_evaluations: int = 30) -> Solution:
@@ -228,6 +253,7 @@ def solve(problem: Problem, max_evaluations: int = 30) -> Solution:
     scale = np.array([p.scale for p in parameters])
     start = problem.residuals(x)
     evaluations, converged = 0, False
+    unsettled = np.zeros(len(parameters), dtype=bool)
     for _ in range(ROUNDS):
         budget = max_evaluations - evaluations
         if budget < 1:
@@ -236,26 +262,65 @@ def solve(problem: Problem, max_evaluations: int = 30) -> Solution:
                                x_scale=scale, method="trf", max_nfev=budget, xtol=1e-4, ftol=1e-6)
         x = np.asarray(result.x, dtype=float)
         evaluations += int(result.nfev)
-        better = _probe(problem, x, lower, upper)
+        better, unsettled = _probe(problem, x, lower, upper)
         if better is None:
             converged = bool(result.status > 0)
             break
         x = better
+    if converged:
+        unsettled[:] = False
     residual = problem.residuals(x)
     jacobian = problem.jacobian(x)
     sigma, singular = uncertainty(residual, jacobian, scale)
+    share, partners = independence(jacobian, scale)
     reference = np.maximum(np.abs(x), scale * IDENTIFIABLE)
-    identifiable = np.isfinite(sigma) & (sigma <= IDENTIFIABLE * reference)
-    log.info("fit: %d evaluations, %d replays, cost %.4g → %.4g", evaluations, problem.replays,
-             0.5 * float(start @ start), 0.5 * float(residual @ residual))
+    identifiable = (np.isfinite(sigma) & (sigma <= IDENTIFIABLE * reference) & (share >= INDEPENDENT)
+                    & ~unsettled)
+    log.info("fit: %d evaluations, %d replays, cost %.4g → %.4g; independent shares %s", evaluations,
+             problem.replays, 0.5 * float(start @ start), 0.5 * float(residual @ residual),
+             ", ".join(f"{p.name} {v:.3g}" for p, v in zip(parameters, share, strict=True)))
     return Solution(x, sigma, identifiable, 0.5 * float(start @ start), 0.5 * float(residual @ residual),
-                    evaluations, problem.replays, singular, converged)
+                    evaluations, problem.replays, singular, converged, share, partners, unsettled)
 
 
-def _probe(problem: Problem, x: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray | None:
-    """The best point ``PROBE`` up or down one parameter from ``x`` whose cost is lower than ``x``'s, or None."""
+def independence(jacobian: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, tuple[tuple[int, ...], ...]]:
+    """Each parameter's independent share ``‖(I − P_others)·J_i‖ / ‖J_i‖`` and, for a share below
+    :data:`INDEPENDENT`, the indices of the others whose least-squares weights (column-normalised) reach
+    :data:`PARTNER` (module docstring). A column of zeros (a parameter the data do not see) has share 0 and no
+    partners, and is no partner of the others.
+
+    The shares need only the Gram matrix of the normalised columns, so the ``(m, n)`` Jacobian is reduced once to
+    the ``n × n`` R of its QR and each column regressed on the others there.
+    """
+    n = jacobian.shape[1]
+    scaled = jacobian * scale
+    norms = np.linalg.norm(scaled, axis=0)
+    seen = np.flatnonzero(norms > 1e-12 * max(float(norms.max(initial=0.0)), 1e-300))
+    share = np.zeros(n)
+    partners: list[tuple[int, ...]] = [() for _ in range(n)]
+    if len(seen) == 0:
+        return share, tuple(partners)
+    r = np.asarray(np.linalg.qr(scaled[:, seen] / norms[seen], mode="r"))
+    for k, i in enumerate(seen):
+        others = [o for o in range(len(seen)) if o != k]
+        if not others:
+            share[i] = 1.0
+            continue
+        weights = np.linalg.lstsq(r[:, others], r[:, k], rcond=None)[0]
+        share[i] = float(np.linalg.norm(r[:, k] - r[:, others] @ weights))
+        if share[i] < INDEPENDENT:
+            partners[i] = tuple(int(seen[o]) for o, w in zip(others, weights, strict=True) if abs(w) >= PARTNER)
+    return np.clip(share, 0.0, 1.0), tuple(partners)
+
+
+def _probe(problem: Problem, x: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray | None,
+                                                                                                np.ndarray]:
+    """The best point ``PROBE`` up or down one parameter from ``x`` whose cost is lower than ``x``'s (or None), and
+    which parameters have such a probe."""
     base = problem.residuals(x)
     best, best_cost = None, 0.5 * float(base @ base) * (1.0 - 1e-6)
+    threshold = best_cost
+    lowering = np.zeros(len(problem.parameters), dtype=bool)
     for j, p in enumerate(problem.parameters):
         step = PROBE * max(abs(x[j]), p.scale * IDENTIFIABLE)
         for sign in (1.0, -1.0):
@@ -265,9 +330,10 @@ def _probe(problem: Problem, x: np.ndarray, lower: np.ndarray, upper: np.ndarray
                 continue
             residual = problem.residuals(moved)
             cost = 0.5 * float(residual @ residual)
+            lowering[j] |= cost < threshold
             if cost < best_cost:
                 best, best_cost = moved, cost
-    return best
+    return best, lowering
 
 
 def uncertainty(residual: np.ndarray, jacobian: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
