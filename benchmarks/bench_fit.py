@@ -85,7 +85,11 @@ def main() -> None:
           f"{group.solution.iterations} evaluations")
     for index, p in enumerate(group.parameters):
         value, sigma = group.solution.x[index], group.solution.uncertainty[index]
-        ok = "identifiable" if group.solution.identifiable[index] else "NOT identifiable"
+        partners = ", ".join(group.parameters[k].name for k in group.solution.correlated[index])
+        ok = ("identifiable" if group.solution.identifiable[index] else "NOT identifiable") + (
+            f", independence {group.solution.independence[index]:.3f}") + (
+            f", trades with {partners}" if partners else "") + (
+            ", probes still lowering the cost" if group.solution.unsettled[index] else "")
         print(f"  {p.name:20s} nominal {p.initial:9.4g} truth {truth[p.name]:9.4g} fitted {value:9.4g} "
               f"({value / truth[p.name] - 1:+.1%}) ± {sigma:.3g}  {ok}")
     held = load_recording(logs[-1], robot)

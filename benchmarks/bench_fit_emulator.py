@@ -47,7 +47,10 @@ def _fit(run: Path, robot: Path, params: str, out: Path) -> None:
         value = group.values[parameter.name]
         error = f"{value / truth - 1:+.1%}" if truth else "—"
         print(f"  {parameter.name:18s} {truth or parameter.initial:9.4g} {value:9.4g} {error:>7s} "
-              f"{float(group.solution.uncertainty[index]):9.2g}  {bool(group.solution.identifiable[index])}")
+              f"{float(group.solution.uncertainty[index]):9.2g}  {bool(group.solution.identifiable[index])} "
+              f"(independence {group.solution.independence[index]:.3f}"
+              + "".join(f", trades with {group.parameters[k].name}" for k in group.solution.correlated[index])
+              + (", still moving" if group.solution.unsettled[index] else "") + ")")
     print("  RMS " + ", ".join(f"{k} {group.before[k]:.3g} → {group.after[k]:.3g}" for k in group.after)
           + f"; {group.solution.replays} replays, {elapsed:.1f} s (load {os.getloadavg()[0]:.1f})")
 
