@@ -98,6 +98,7 @@ def main() -> None:
         print("same-run speed-ups, this tree over the compared one (pairs in run order):")
         for name, b_values, a_values in (("loop x real time", before.loop, after.loop),
                                          ("loop overhead (wall / mj_step)", after.overhead, before.overhead),
+                                         ("whole command on the wall clock", before.command, after.command),
                                          ("whole command on CPU time", before.command_cpu, after.command_cpu)):
             print(f"  {name}: {median([a / b for b, a in zip(b_values, a_values, strict=True)])}")
 
