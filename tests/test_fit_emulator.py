@@ -83,7 +83,7 @@ def _attempt(robot: Path, plan: Path, out: Path, truth: Servo) -> tuple[Path, st
     return result.path, None if fault is None else f"{fault} after {result.summary.cycles} cycles"
 
 
-@pytest.mark.slow  # ≈ 20 s of run-hw on the emulated bus and ≈ 25 s of fitting
+@pytest.mark.slow  # ≈ 20 s of run-hw on the emulated bus and ≈ 25 s of fitting, twice
 def test_shc_fit_recovers_the_emulated_servos(tmp_path: Path) -> None:
     from shc_cli.api import fit, fit_plan
 
@@ -98,3 +98,15 @@ def test_shc_fit_recovers_the_emulated_servos(tmp_path: Path) -> None:
         assert group.solution.identifiable[index], parameter.name
     assert group.after["position"] < 0.0015  # [rad]: the readings' tick (1.5 mrad)
     assert group.after["current"] < 0.007  # [A]: 5 mA of noise and 2.69 mA steps
+    # with the torque constant too: a load-free joint shows torque only through its current, so the torque
+    # constant, both frictions and the armature scale together exactly — none identifiable, each naming others of
+    # the four as its partners; the gain stays identifiable
+    result = fit([run], robot=robot, params="gain,coulomb,viscous,armature,kt", scenario="BENCH",
+                 out=tmp_path / "fit_kt", plots=False)
+    solution, names = result.fits[0].solution, [p.name for p in result.fits[0].parameters]
+    degenerate = {"coulomb_friction", "viscous_friction", "armature", "torque_constant"}
+    for index, name in enumerate(names):
+        partners = {names[k] for k in solution.correlated[index]}
+        if name in degenerate:
+            assert not solution.identifiable[index] and partners and partners <= degenerate - {name}, (name, partners)
+    assert solution.identifiable[names.index("position_p_gain")], solution.independence

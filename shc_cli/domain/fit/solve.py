@@ -28,6 +28,16 @@ combination of the others can reproduce — 1 for an effect of its own, 0 for on
 Below :data:`INDEPENDENT` the parameter trades with the others whose columns make up that combination (a weight of
 at least :data:`PARTNER` each: ``fit.json``'s ``correlated_with``).
 
+Forward differences of open-loop replays are rough (Coulomb friction's stick and slip; a 1 % step sees it), and the
+roughness can hide a valley: on the emulated bench the four columns of the exactly degenerate set reproduce each
+other only to a few % of the largest, which leaves the small ones (viscous friction, armature) looking independent.
+So the direction the Jacobian sees least (its last right singular vector with unit columns, turned into a relative
+change of each value) is also walked
+for real (:func:`flat_direction`): a move of :data:`PROBE` along it, against the same move of each parameter in it
+(a weight of at least :data:`PARTNER` of the largest) alone; a parameter whose own move raises the cost more than
+``1/INDEPENDENT²`` times the whole direction's does is compensated by the others there — not identifiable, and
+they are its partners. This costs two or three replays per member.
+
 A parameter is **identifiable** when (1) its uncertainty is below :data:`IDENTIFIABLE` of its value (of its typical
 size when the value is smaller), (2) its independent share is at least :data:`INDEPENDENT`, and (3) the solver
 converged, or did not but no probe of that parameter still lowered the cost (:func:`solve`).
@@ -65,6 +75,8 @@ emulated bench's exactly degenerate torque constant, armature and frictions have
 forward differences' noise), the parameters of a well-excited fit several tenths."""
 PARTNER = 0.1
 """Weight (in column-normalised units) from which another parameter counts as a partner of a degenerate one."""
+WALKS = 3
+"""Moves along the least-seen direction, each refined from the last (:func:`flat_direction`)."""
 PROBE = 0.1
 """Probe step after each solver run [share of the parameter's value]."""
 ROUNDS = 4
@@ -274,6 +286,9 @@ def solve(problem: Problem, max_evaluations: int = 30) -> Solution:
     sigma, singular = uncertainty(residual, jacobian, scale)
     share, partners = independence(jacobian, scale)
     reference = np.maximum(np.abs(x), scale * IDENTIFIABLE)
+    for k, (walked, others) in flat_direction(problem, x, jacobian * reference, reference, lower, upper).items():
+        if walked < share[k]:
+            share[k], partners = walked, (*partners[:k], others, *partners[k + 1:])
     identifiable = (np.isfinite(sigma) & (sigma <= IDENTIFIABLE * reference) & (share >= INDEPENDENT)
                     & ~unsettled)
     log.info("fit: %d evaluations, %d replays, cost %.4g → %.4g; independent shares %s", evaluations,
@@ -311,6 +326,60 @@ def independence(jacobian: np.ndarray, scale: np.ndarray) -> tuple[np.ndarray, t
         if share[i] < INDEPENDENT:
             partners[i] = tuple(int(seen[o]) for o, w in zip(others, weights, strict=True) if abs(w) >= PARTNER)
     return np.clip(share, 0.0, 1.0), tuple(partners)
+
+
+def flat_direction(problem: Problem, x: np.ndarray, relative: np.ndarray, reference: np.ndarray, lower: np.ndarray,
+                   upper: np.ndarray) -> dict[int, tuple[float, tuple[int, ...]]]:
+    """The direction ``relative`` (the Jacobian in units of each parameter's value) sees least, walked for real
+    (module docstring): for each member whose own move raises the cost more than ``1/INDEPENDENT²`` times the
+    direction's, its share ``√(rise of the direction / rise of its own move)`` and the other members. Empty when
+    the direction has one member, cannot be walked inside the bounds, or is seen.
+
+    The direction from the rough Jacobian is only near the valley's floor, so it is refined :data:`WALKS` times by
+    a Gauss-Newton step of its members but the largest, on the secants of their own moves."""
+    norms = np.linalg.norm(relative, axis=0)
+    seen = np.flatnonzero(norms > 0)
+    if len(seen) < 2:
+        return {}
+    direction = np.zeros(len(x))  # least seen among unit columns (collinearity, not size), back in value units
+    direction[seen] = np.linalg.svd(relative[:, seen] / norms[seen], full_matrices=False)[2][-1] / norms[seen]
+    direction /= direction[np.argmax(np.abs(direction))]
+    members = [int(k) for k in np.flatnonzero(np.abs(direction) >= PARTNER)]
+    if len(members) < 2:
+        return {}
+    base = problem.residuals(x)
+    cost = float(base @ base)
+    secants, own = {}, {}
+    for k in members:  # each member's own move of PROBE of its value, up (down at the upper bound)
+        step = PROBE * reference[k] * (1.0 if x[k] + PROBE * reference[k] <= upper[k] else -1.0)
+        if not lower[k] <= x[k] + step <= upper[k]:
+            return {}
+        moved = x.copy()
+        moved[k] += step
+        residual = problem.residuals(moved)
+        own[k] = float(residual @ residual) - cost
+        secants[k] = (residual - base) / (step / reference[k])  # per relative change
+    anchor = members[int(np.argmax(norms[members]))]  # the largest effect held, the others follow it
+    others = [k for k in members if k != anchor]
+    walked = np.inf
+    for _ in range(WALKS):
+        moved = x + PROBE * direction * reference
+        if np.any(moved < lower) or np.any(moved > upper):
+            break
+        residual = problem.residuals(moved)
+        walked = min(walked, float(residual @ residual) - cost)
+        correction = np.linalg.lstsq(np.column_stack([secants[k] for k in others]), -residual, rcond=None)[0]
+        direction[others] += correction / PROBE
+    if not np.isfinite(walked):
+        return {}
+    out = {}
+    for k in members:
+        if own[k] > 0 and max(walked, 0.0) < INDEPENDENT**2 * own[k]:
+            out[k] = (float(np.sqrt(max(walked, 0.0) / own[k])), tuple(m for m in members if m != k))
+    log.info("fit: the least-seen direction %s raises Σr² by %.3g; compensated: %s",
+             ", ".join(f"{problem.parameters[k].name} {direction[k]:+.2f}" for k in members), walked,
+             ", ".join(problem.parameters[k].name for k in out) or "none")
+    return out
 
 
 def _probe(problem: Problem, x: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple[np.ndarray | None,
