@@ -332,7 +332,8 @@ def flat_direction(problem: Problem, x: np.ndarray, relative: np.ndarray, refere
                    upper: np.ndarray) -> dict[int, tuple[float, tuple[int, ...]]]:
     """The direction ``relative`` (the Jacobian in units of each parameter's value) sees least, walked for real
     (module docstring): for each member whose own move raises the cost more than ``1/INDEPENDENT²`` times the
-    direction's, its share ``√(rise of the direction / rise of its own move)`` and the other members. Empty when
+    direction's changes it (either way), its share ``√(|change of the direction| / rise of its own move)`` and the
+    other members. Empty when
     the direction has one member, cannot be walked inside the bounds, or is seen.
 
     The direction from the rough Jacobian is only near the valley's floor, so it is refined :data:`WALKS` times by
@@ -374,8 +375,9 @@ def flat_direction(problem: Problem, x: np.ndarray, relative: np.ndarray, refere
         return {}
     out = {}
     for k in members:
-        if own[k] > 0 and max(walked, 0.0) < INDEPENDENT**2 * own[k]:
-            out[k] = (float(np.sqrt(max(walked, 0.0) / own[k])), tuple(m for m in members if m != k))
+        # |rise|: a fit stopped short of the minimum may find the cost falling along the valley
+        if own[k] > 0 and abs(walked) < INDEPENDENT**2 * own[k]:
+            out[k] = (float(np.sqrt(abs(walked) / own[k])), tuple(m for m in members if m != k))
     log.info("fit: the least-seen direction %s raises Σr² by %.3g; compensated: %s",
              ", ".join(f"{problem.parameters[k].name} {direction[k]:+.2f}" for k in members), walked,
              ", ".join(problem.parameters[k].name for k in out) or "none")
