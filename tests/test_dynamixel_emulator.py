@@ -102,3 +102,46 @@ def test_the_emulated_servo_moves_on_its_injected_clock() -> None:
     now[0] += servo.time_constant
     position = int.from_bytes(servo.read(servo.model.present_position, 4), "little", signed=True)
     assert position == round(2048 + 1000 * (1 - math.exp(-1)))
+
+
+def _stalling(base: type) -> type:
+    """``base`` whose first read finds nothing and then is not scheduled for 80 ms (a loaded machine, a VM pause):
+    the reply arrives meanwhile, unread."""
+
+    class Stalling(base):  # type: ignore[misc, valid-type]
+        stalled = False
+
+        def readPort(self, length: int) -> list[int]:
+            if not self.stalled:
+                self.stalled = True
+                time.sleep(0.08)
+                return []
+            return list(super().readPort(length))
+
+    return Stalling
+
+
+def test_a_reply_that_arrived_while_the_process_stalled_is_read_not_a_timeout() -> None:
+    """The SDK's receive loop reads, then checks its clock: a stall between the two made run-hw report "no reply"
+    with the reply in the input buffer (seen on this machine). The bus's port reads it; a servo that is not there
+    still times out."""
+    from dynamixel_sdk import COMM_RX_TIMEOUT, COMM_SUCCESS, PacketHandler, PortHandler
+
+    from shc_cli.hardware.bus import patient_port
+
+    handler = PacketHandler(2.0)
+    with BusEmulator({1: "XM430-W350"}) as bus:
+        results = {}
+        for name, base in (("sdk", PortHandler), ("patient", patient_port(PortHandler))):
+            port = _stalling(base)(bus.port)
+            assert port.openPort() and port.setBaudRate(1_000_000)
+            model, result, _ = handler.ping(port, 1)
+            results[name] = (result, model)
+            port.clearPort()
+            if name == "patient":
+                started = time.monotonic()
+                _, missing, _ = handler.ping(port, 9)
+                assert missing == COMM_RX_TIMEOUT and time.monotonic() - started < 0.2
+            port.closePort()
+    assert results["sdk"][0] == COMM_RX_TIMEOUT  # the SDK's own port: the stall reads as no reply
+    assert results["patient"] == (COMM_SUCCESS, 1020)  # XM430-W350's model number (e-Manual)

@@ -17,6 +17,7 @@ byte-stuff what it sends, so every write payload is checked for ``FF FF FD``.
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 from collections.abc import Callable
@@ -41,6 +42,36 @@ PROFILE_ADDRESS = 112
 
 class HardwareError(ShcError):
     """The bus or a servo is missing, wrong or failing (one line, exit 2)."""
+
+
+STALL_GRACE_MS = 250.0
+"""How long past an SDK packet timeout a reply already waiting in the input buffer is still read [ms]."""
+
+
+@functools.cache
+def patient_port(base: type) -> type:
+    """An SDK ``PortHandler`` class (dynamixel-sdk's or feetech-servo-sdk's) whose packet timeout does not fire while
+    a reply is waiting unread in the input buffer.
+
+    The SDKs' receive loop reads the port and then checks the clock: when this process is not scheduled between the
+    two (a loaded computer; a virtual machine's pause of 40–70 ms was measured here) the whole reply arrives in the
+    meantime and the SDK reports "no reply" without reading it. Here the timeout is declared only when the input is
+    empty too, up to :data:`STALL_GRACE_MS` past it (a babbling bus still times out). A servo that does not answer
+    costs the same timeout as before.
+    """
+
+    class PatientPort(base):  # type: ignore[misc]
+        def isPacketTimeout(self) -> bool:
+            elapsed, timeout = float(self.getTimeSinceStart()), float(getattr(self, "packet_timeout", 0.0))
+            if elapsed <= timeout:
+                return False
+            if elapsed <= timeout + STALL_GRACE_MS and self.ser is not None and self.ser.in_waiting:
+                return False  # the reply came while this process was not running: read it
+            self.packet_timeout = 0
+            return True
+
+    PatientPort.__name__ = PatientPort.__qualname__ = f"Patient{base.__name__}"
+    return PatientPort
 
 
 def open_port(port: Any, name: str, baud: int, close: Callable[[], None]) -> Any:
@@ -159,7 +190,7 @@ class ServoBus:
 
         self._handler = PacketHandler(2.0)
         for line in self.lines:
-            port = open_port(PortHandler(line.name), line.name, self.baud, self.close)
+            port = open_port(patient_port(PortHandler)(line.name), line.name, self.baud, self.close)
             line.port = port
             line.ids = [self.slots[i].servo_id for i in line.slots]
             line.state_reader = GroupSyncRead(port, self._handler, STATE_ADDRESS, STATE_LENGTH)

@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from shc_cli.hardware.bus import BusState, HardwareError, ServoBus, _Line, open_port
+from shc_cli.hardware.bus import BusState, HardwareError, ServoBus, _Line, open_port, patient_port
 from shc_cli.hardware.models import (
     FAMILY_NAMES,
     PROTOCOL1_HARDWARE,
@@ -98,7 +98,7 @@ class Protocol1Bus(ServoBus):
         return self._sdk.PacketHandler(1.0)
 
     def _make_port(self, name: str) -> Any:
-        return self._sdk.PortHandler(name)
+        return patient_port(self._sdk.PortHandler)(name)
 
     def open(self) -> None:
         self._sdk = self._import()
@@ -431,7 +431,7 @@ class _FeetechPort:
     def __new__(cls, name: str) -> Any:
         from scservo_sdk import PortHandler
 
-        class Port(PortHandler):  # type: ignore[misc]
+        class Port(patient_port(PortHandler)):  # type: ignore[misc]
             def clearPort(self) -> None:
                 self.ser.reset_input_buffer()
 
