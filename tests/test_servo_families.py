@@ -170,7 +170,10 @@ def test_feetech_sdk_takes_a_late_reply_for_the_next_read_and_the_bus_port_does_
             handler = sdk.PacketHandler(0)
             bus.faults(1).late_reply_s = 0.06
             assert handler.read2ByteTxRx(port, 1, 56)[1] == sdk.COMM_RX_TIMEOUT  # 34 ms timeout
-            time.sleep(0.08)  # the late reply arrives
+            arrives = time.monotonic() + 2.0  # the late reply arrives (60 ms; later on a loaded machine: wait for it)
+            while not port.ser.in_waiting and time.monotonic() < arrives:
+                time.sleep(0.005)
+            assert port.ser.in_waiting, "the emulator never sent its late reply"
             bus.faults(1).late_reply_s = 0.0
             number, result, _ = _answered(handler.read2ByteTxRx, port, 1, 3)  # the model number
             assert result == sdk.COMM_SUCCESS and (number != 777) is expected_wrong
