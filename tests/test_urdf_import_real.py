@@ -310,6 +310,7 @@ def test_a_knee_limit_that_keeps_the_leg_nearly_straight_stands_far_out(tmp_path
 
 
 @pytest.mark.slow
+@pytest.mark.serial  # a real-time loop on an emulated bus: beside another worker the emulator starved ("no reply")
 def test_run_hw_reads_the_imported_servo_map(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """The PhantomX's [hardware.servos] as imported (ids 11…63, the model guessed from its 2.8 N·m joints) drive a
     dry run on the emulated bus: every servo is found by the id the map gives."""
