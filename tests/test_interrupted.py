@@ -98,14 +98,15 @@ def test_interrupted_simulate_is_a_finished_partial_run(twice: bool, tmp_path: P
 def test_interrupted_run_hw_is_marked_partial(tmp_path: Path) -> None:
     """On the emulated bus: Ctrl-C stops walking and shuts down (exit 0, the normal end of an open-ended run); the
     summary says the run did not play its input to the end, and analyze and export bag say so."""
-    from tests.test_run_hw import _bus, _wait_running
+    from tests.run_waits import wait_running
+    from tests.test_run_hw import _bus
 
     run = tmp_path / "hw"
     with _bus() as bus:
         process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(run), "--velocity",
                                     "1,0,0", "--duration", "60"], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                    text=True)
-        _wait_running(run, extra_s=1.0)  # as test_run_hw's Ctrl-C test: into walking
+        wait_running(run, process, extra_s=1.0)  # as test_run_hw's Ctrl-C test: into walking
         process.send_signal(signal.SIGINT)
         _, stderr = process.communicate(timeout=120)
         assert process.returncode == 0, stderr

@@ -19,6 +19,7 @@ from shc_cli.hardware import protocol2 as p2
 from shc_cli.hardware.emulator_process import EmulatorProcess, promptly
 from shc_cli.loop.runread import read_run
 from shc_cli.spec.loading import load_robot
+from tests.run_waits import wait_running
 
 pytestmark = pytest.mark.slow  # real-time runs of shc run-hw (subprocesses) on the emulated bus
 
@@ -41,19 +42,6 @@ def _run_hw(bus: EmulatorProcess, out: Path, *args: str) -> subprocess.Completed
     """The CLI in its own process."""
     return subprocess.run([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(out), *args],
                           capture_output=True, text=True, timeout=120)
-
-
-def _wait_running(run: Path, extra_s: float = 0.0, timeout_s: float = 60.0) -> None:
-    """Wait until the streamed log of a running ``run-hw`` shows RUNNING (it is flushed every 100 cycles), then
-    ``extra_s`` more: the tests act on a walking robot however slow the machine is."""
-    log = run.with_name(run.name + ".partial") / "log.csv"
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if log.exists() and ",RUNNING," in log.read_text():
-            time.sleep(extra_s)
-            return
-        time.sleep(0.1)
-    raise AssertionError(f"{log}: never RUNNING")
 
 
 def _goal_writes_after(bus: EmulatorProcess, index: int) -> int:
@@ -116,7 +104,7 @@ def test_a_fault_mid_run_stops_commanding_within_two_cycles(fault: str, tmp_path
         process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
                                     "--velocity", "1,0,0", "--duration", "5", "--on-fault", "hold"],
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        _wait_running(tmp_path / "run", extra_s=1.0)  # into walking
+        wait_running(tmp_path / "run", process, extra_s=1.0)  # into walking
         if fault == "vanish":
             marker = bus.vanish(42)
         elif fault == "corrupt_crc":
@@ -146,7 +134,7 @@ def test_ctrl_c_stops_walking_and_keeps_a_complete_log(stop_signal: signal.Signa
         process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
                                     "--velocity", "1,0,0", "--duration", "60"],
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        _wait_running(tmp_path / "run", extra_s=1.0)
+        wait_running(tmp_path / "run", process, extra_s=1.0)
         process.send_signal(stop_signal)
         _, stderr = process.communicate(timeout=60)
         assert process.returncode == 0, stderr
@@ -173,7 +161,7 @@ def test_stdin_commands_and_the_watchdog(tmp_path: Path) -> None:
             process.stdin.flush()
             time.sleep(wait_s)
 
-        _wait_running(tmp_path / "run")  # process start, bus check, the 5 s start-up
+        wait_running(tmp_path / "run", process)  # process start, bus check, the 5 s start-up
         for index in range(30):  # 3 s of walking commands; a gait change on the way
             send('{"velocity": [1.0, 0.0, 0.0], "gait": "wave"}' if index == 5 else '{"velocity": [1.0, 0.0, 0.0]}')
         send("not json")
@@ -211,7 +199,7 @@ def test_keyboard_keys_drive_the_robot_and_the_terminal_is_restored(tmp_path: Pa
             process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
                                         "--input", "keyboard", "--stop-state", "ready"],
                                        stdin=slave, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-            _wait_running(tmp_path / "run")
+            wait_running(tmp_path / "run", process)
             os.write(master, b"www")  # three presses: 0.3 forward
             time.sleep(1.5)
             os.write(master, b" ")

@@ -14,7 +14,6 @@ import json
 import math
 import subprocess
 import sys
-import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -25,6 +24,7 @@ import pytest
 from shc_cli.hardware import protocol1 as p1
 from shc_cli.hardware.emulator_process import EmulatorProcess, Heard, promptly
 from shc_cli.loop.runread import read_run
+from tests.run_waits import wait_running
 
 SHC = [sys.executable, "-m", "shc_cli.cli"]
 JOINTS = [f"{leg}_{joint}" for leg in ("AR", "BR", "CR", "CL", "BL", "AL") for joint in ("coxa", "femur", "tibia")]
@@ -69,20 +69,6 @@ def _goal_writes(bus: EmulatorProcess, model: str, start: int = 0) -> list[Heard
     return [p for p in bus.packets(start) if p.instruction == p1.SYNC_WRITE and p.params[0] == address]
 
 
-def _wait_running(run: Path, process: subprocess.Popen[str], extra_s: float, timeout_s: float = 90.0) -> None:
-    """Wait until the streamed log shows RUNNING (flushed every 100 cycles), then ``extra_s`` more."""
-    log = run.with_name(run.name + ".partial") / "log.csv"
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if process.poll() is not None:
-            raise AssertionError(f"run-hw ended before walking: {process.communicate()[1]}")
-        if log.exists() and ",RUNNING," in log.read_text():
-            time.sleep(extra_s)
-            return
-        time.sleep(0.1)
-    raise AssertionError(f"{log}: never RUNNING")
-
-
 @pytest.mark.parametrize("model", list(FAMILIES))
 def test_walks_and_the_goals_are_the_models_ticks(model: str, tmp_path: Path) -> None:
     """A goal on the bus = zero + direction × (angle + offset) in the model's ticks (AX-12A: 1024 per 300°); the
@@ -124,7 +110,7 @@ def test_a_fault_mid_walk_stops_the_goals_names_the_servo_and_exits_3(model: str
                                     "--velocity", "1,0,0", "--duration", "30"],
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         try:
-            _wait_running(tmp_path / "run", process, extra_s=0.5)
+            wait_running(tmp_path / "run", process, extra_s=0.5)
             if fault == "overload":
                 marker = bus.protect(FAULTED)
             elif fault == "vanish":

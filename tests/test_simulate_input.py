@@ -14,22 +14,12 @@ import numpy as np
 import pytest
 
 from shc_cli.loop.runread import read_run
+from tests.run_waits import wait_running
 
 pytestmark = pytest.mark.slow  # real-time simulations in subprocesses
 
 ROOT = Path(__file__).parents[1]
 SHC = [sys.executable, "-m", "shc_cli.cli"]
-
-
-def _wait_running(run: Path, timeout_s: float = 120.0) -> None:
-    """Wait until the streamed log of the running simulation shows RUNNING (it is flushed every 200 cycles)."""
-    log = run.with_name(run.name + ".partial") / "log.csv"
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if log.exists() and ",RUNNING," in log.read_text():
-            return
-        time.sleep(0.1)
-    raise AssertionError(f"{log}: never RUNNING")
 
 
 def test_keyboard_keys_walk_the_simulated_robot_and_the_terminal_is_restored(tmp_path: Path) -> None:
@@ -43,7 +33,7 @@ def test_keyboard_keys_walk_the_simulated_robot_and_the_terminal_is_restored(tmp
         process = subprocess.Popen([*SHC, "simulate", "--engine", "mujoco", "--input", "keyboard", "--out", str(run),
                                     "--no-plots"], cwd=ROOT, stdin=slave, stdout=subprocess.PIPE,
                                    stderr=subprocess.PIPE, text=True)
-        _wait_running(run)
+        wait_running(run, process, timeout_s=120.0)
         time.sleep(0.5)  # standing: the input is still zero
         os.write(master, b"wwwww")  # five presses: 0.5 of full speed forward
         time.sleep(4.0)
@@ -77,7 +67,7 @@ def test_stdin_lines_drive_the_simulated_robot(tmp_path: Path) -> None:
                                 "--out", str(run), "--no-plots"], cwd=ROOT, stdin=subprocess.PIPE,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     assert process.stdin is not None
-    _wait_running(run)
+    wait_running(run, process, timeout_s=120.0)
     process.stdin.write(json.dumps({"velocity": [0.0, 0.0, 0.5]}) + "\n")  # turn left on the spot
     process.stdin.flush()
     time.sleep(3.0)

@@ -40,6 +40,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable
 
     from shc_cli.backends.base import InputSource
+    from shc_cli.control.controller import Controller
     from shc_cli.hardware.bus import BusState, ServoBus
     from shc_cli.live.foxglove_server import FoxgloveTransport
     from shc_cli.loop.run_loop import LoopResult
@@ -148,12 +149,29 @@ def prepare_bus(bus: ServoBus, robot: Robot, dry_run: bool) -> None:
               robot.time_delta * 1e3)
 
 
+def bus_run_fields(robot: Robot, controller: Controller, bus: ServoBus, result: LoopResult, dry_run: bool,
+                   stop_state: str) -> dict[str, object]:
+    """The summary fields every run on a servo bus gives (run-hw, ``shc ros --backend bus``): what ran, on which
+    bus, how it ended."""
+    from shc_cli.backends.dynamixel import UNMEASURED
+
+    return {
+        "robot": robot.name, "gait": controller.gait.name, "scenario": "hardware", "port": bus.port_name,
+        "baud": bus.baud, "dry_run": dry_run, "cycles": result.cycles, "sim_time_s": result.cycles * robot.time_delta,
+        "wire_time_ms": bus.wire_time() * 1e3, "read_retries": bus.retries, "fault": result.fault,
+        "stopped_by_request": result.stop_reason != "fault", "final_state": controller.state.name,
+        "stop_state": stop_state, "step_frequency_hz": controller.parameters["step_frequency"],
+        "step_period_cycles": controller.cycle.period, "duty_factor": controller.cycle.duty_factor,
+        "unmeasured": UNMEASURED,
+    }
+
+
 def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = None,
                  sleep: Callable[[float], None] | None = None) -> RunResult:
     """Start up, run the input on the servos, stop and shut down safely; returns the run directory and its summary
     (``summary["fault"]`` names a servo fault). ``clock`` [s] and ``sleep`` replace the wall clock of the cycle's
     pacing (tests: an emulated bus on a virtual clock, :class:`~shc_cli.backends.dynamixel.DynamixelBackend`)."""
-    from shc_cli.backends.dynamixel import UNMEASURED, DynamixelBackend
+    from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Controller
     from shc_cli.domain.live import open_live
     from shc_cli.hardware.buses import servo_bus
@@ -211,22 +229,15 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
 
         def summarise(result: LoopResult) -> RunSummary:
             assert backend is not None
-            cycles = result.cycles
             if len(backend.cycle_times) > 20 and sum(t > dt for t in backend.cycle_times) / len(backend.cycle_times) \
                     > 0.05:
                 event(log, logging.WARNING, "overruns", "warning: the loop missed its %.0f ms period in %d of %d "
-                      "cycles", dt * 1e3, backend.overruns, cycles)
+                      "cycles", dt * 1e3, backend.overruns, result.cycles)
             return RunSummary.model_validate({
-                "robot": robot.name, "gait": controller.gait.name, "scenario": "hardware", "port": bus.port_name,
-                "baud": bus.baud, "dry_run": c.dry_run, "cycles": cycles, "sim_time_s": cycles * dt,
-                **backend.statistics(), "wire_time_ms": bus.wire_time() * 1e3, "read_retries": bus.retries,
-                "fault": result.fault, "stopped_by_request": bool(result.stop_reason != "fault"),
-                "final_state": controller.state.name, "stop_state": stop.name,
-                "step_frequency_hz": controller.parameters["step_frequency"],
-                "step_period_cycles": controller.cycle.period, "duty_factor": controller.cycle.duty_factor,
+                **bus_run_fields(robot, controller, bus, result, c.dry_run, stop.name), **backend.statistics(),
                 "input": "path" if c.path is not None else c.input_mode,
                 "watchdog_trips": getattr(source, "watchdog_trips", 0),
-                "unmeasured": UNMEASURED, "odometry_pose": list(controller.odometry.pose), **path_fields(),
+                "odometry_pose": list(controller.odometry.pose), **path_fields(),
             })
 
         path, summary, _ = execute(loop, run, summarise, after_loop=release)

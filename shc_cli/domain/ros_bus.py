@@ -47,9 +47,9 @@ def run_on_bus(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose
     Raises:
         HardwareError: the bus refused to start (one line), before the torque goes on and anything is written.
     """
-    from shc_cli.backends.dynamixel import UNMEASURED, DynamixelBackend
+    from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Controller
-    from shc_cli.domain.hardware import STOP_TIMEOUT_S, prepare_bus
+    from shc_cli.domain.hardware import STOP_TIMEOUT_S, bus_run_fields, prepare_bus
     from shc_cli.domain.live import open_live
     from shc_cli.domain.ros_session import NodeSession
     from shc_cli.hardware.buses import servo_bus
@@ -108,15 +108,8 @@ def run_on_bus(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose
         def summarise(result: LoopResult) -> RunSummary:
             assert backend is not None
             return RunSummary.model_validate({
-                "robot": robot.name, "gait": controller.gait.name, "scenario": "hardware", "port": bus.port_name,
-                "baud": bus.baud, "dry_run": c.dry_run, "cycles": result.cycles,
-                "sim_time_s": result.cycles * robot.time_delta, "wire_time_ms": bus.wire_time() * 1e3,
-                "read_retries": bus.retries, "fault": result.fault,
-                "stopped_by_request": result.stop_reason != "fault", "final_state": controller.state.name,
-                "stop_state": stop.name, "step_frequency_hz": controller.parameters["step_frequency"],
-                "step_period_cycles": controller.cycle.period, "duty_factor": controller.cycle.duty_factor,
-                "unmeasured": UNMEASURED, "backend": "bus", "ros_master": node.master_uri, "node": node.name,
-                **session.clock.statistics(), **path_fields()})
+                **bus_run_fields(robot, controller, bus, result, c.dry_run, stop.name), "backend": "bus",
+                "ros_master": node.master_uri, "node": node.name, **session.clock.statistics(), **path_fields()})
 
         path, summary, _ = execute(loop, run, summarise, after_loop=release)
     finally:
