@@ -52,3 +52,26 @@ def test_a_command_compiling_the_kernels_says_so_once_on_a_terminal(monkeypatch:
         notice.on_start(compiling("shc_cli.model.kernels"))
     assert [r.getMessage() for r in caplog.records] == [
         "compiling shc's kernels into numba's cache (once per install, ≈ 10 s; `shc warmup` does it ahead)"]
+
+
+def test_a_cached_kernel_loads_without_numbas_compiler_registries(tmp_path: Path) -> None:
+    """Loading a cached kernel installs only numba's runtime, not the typing and lowering rules compiling needs
+    (``numba.np.arraymath`` and SciPy's ``linalg``: 0.2 s of every command): the first process compiles (and
+    installs them), the second loads the same kernel, which allocates (numba's runtime) and gives the same frames."""
+    code = """
+import sys
+import numpy as np
+from shc_cli.model.kernels import chain_frames
+n = 3
+args = [np.zeros(3), np.array([0.1, 0.2, 0.3]), np.array([0.0, -0.4, 0.5]), np.array([0.05, 0.1, 0.12]),
+        np.array([1.5707963, 0.0, 0.0]), np.array([0.3, -0.2, 0.7]), np.empty((n + 1, 4, 4))]
+print(repr(chain_frames(*args).round(12).tolist()))
+print("numba.np.arraymath" in sys.modules, "scipy.linalg" in sys.modules)
+"""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
+    compiled, loaded = (subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
+                                       timeout=600) for _ in range(2))
+    assert compiled.returncode == 0 and loaded.returncode == 0, compiled.stderr + loaded.stderr
+    frames, registries = compiled.stdout.splitlines()
+    assert registries == "True True"  # compiling installs them
+    assert loaded.stdout.splitlines() == [frames, "False False"]

@@ -5,16 +5,22 @@ cache in milliseconds). Importing this module registers a numba event listener t
 compilation of one of shc's kernels in a process (a cache miss: a new install that did not run ``shc warmup``,
 edited sources, another numba), a NOTICE saying why the command is slow this once — on a terminal only (a pipe, a
 test's captured stderr, a sweep's workers stay as they were).
+
+Loading a kernel from the cache initialises only numba's runtime (:class:`_CacheLoader`), not the ≈ 40 modules of
+typing and lowering rules numba's own loader installs first (0.2 s of every command's start-up, with SciPy's BLAS
+check): a loaded kernel is machine code that needs no typing; a kernel that has to be compiled installs them then.
 """
 
 from __future__ import annotations
 
 import logging
 import sys
+from collections.abc import Callable
 from typing import Any
 
-from numba import njit
+import numba
 from numba.core import event
+from numba.core.caching import FunctionCache
 
 from shc_cli.events import NOTICE
 
@@ -41,3 +47,34 @@ class _CompileNotice(event.Listener):
 
 
 event.register("numba:compile", _CompileNotice())  # type: ignore[no-untyped-call]
+
+
+class _CacheLoader(FunctionCache):
+    """numba's cache of one kernel, loading without installing the compiler's typing and lowering registries.
+
+    numba's own ``load_overload`` calls ``target_context.refresh()`` first: it imports and installs every typing
+    and lowering rule (``numba.np.arraymath``, whose BLAS check imports ``scipy.linalg``, …) — what compiling needs.
+    Rebuilding a cached kernel needs only numba's runtime (NRT: the kernels allocate arrays) and the C helpers the
+    target context installed when it was made. On a cache miss numba compiles, and its compiler refreshes the
+    context itself (``numba.core.compiler.CompilerBase``).
+    """
+
+    def load_overload(self, sig: Any, target_context: Any) -> Any:
+        from numba.core.runtime import nrt
+
+        nrt.rtsys.initialize(target_context)
+        with self._guard_against_spurious_io_errors():
+            return self._load_overload(sig, target_context)  # type: ignore[no-untyped-call]
+
+
+def njit(**options: Any) -> Callable[[Callable[..., Any]], Any]:
+    """numba's ``njit(**options)``; a ``cache=True`` kernel loads through :class:`_CacheLoader`."""
+    compile_ = numba.njit(**options)
+
+    def decorate(function: Callable[..., Any]) -> Any:
+        kernel = compile_(function)
+        if isinstance(getattr(kernel, "_cache", None), FunctionCache):  # not under NUMBA_DISABLE_JIT (a function)
+            kernel._cache = _CacheLoader(kernel.py_func)  # type: ignore[no-untyped-call]
+        return kernel
+
+    return decorate
