@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -104,6 +105,34 @@ def test_plan_video_renders_the_finished_run(tmp_path: Path, capsys, monkeypatch
                              str(video)], capsys, monkeypatch)
     assert (code, err) == (0, ""), err
     assert video.exists() and f"wrote {video}" in stdout
+
+
+@needs_gl
+def test_simulate_video_renders_though_the_physics_imported_mujoco_without_opengl(tmp_path: Path) -> None:
+    """The physics imports MuJoCo with GL disabled (PyOpenGL is 0.1 s of every simulation); ``simulate --video``
+    renders in that same process: the frames still show the robot."""
+    code = f"""
+import sys
+from pathlib import Path
+from shc_cli.backends.mujoco_.world import import_mujoco
+import_mujoco()
+assert "OpenGL" not in sys.modules, "the physics imported PyOpenGL"
+sys.argv = ["shc", "simulate", "--duration", "0.5", "--no-plots", "--out", r"{tmp_path / 'run'}",
+            "--video", r"{tmp_path / 'run.gif'}"]
+import shc_cli.commands.render as render
+render.DEFAULTS = (5.0, "160x90", "fixed", 1.0)
+from shc_cli.cli import main
+main()
+"""
+    env = {k: v for k, v in os.environ.items() if k not in ("MUJOCO_GL", "PYOPENGL_PLATFORM")}  # a user's shell
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, env=env,
+                          timeout=600)
+    assert done.returncode == 0, done.stderr
+    from PIL import Image
+
+    with Image.open(tmp_path / "run.gif") as gif:
+        gif.seek(gif.n_frames - 1)
+        assert _link_pixels(np.asarray(gif.convert("RGB"))) > 20
 
 
 def test_bad_render_options_are_one_line(plan_run: Path, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]

@@ -152,11 +152,10 @@ class Renderer:
     """Frames of one robot's scene: :meth:`draw` places the model and returns an ``(H, W, 3)`` uint8 image."""
 
     def __init__(self, shape: scene.Shapes, terrain: scene.TerrainShapes, width: int, height: int) -> None:
-        from shc_cli.backends.mujoco_.gl import choose_gl
+        from shc_cli.backends.mujoco_.gl import enable_rendering
 
-        choose_gl(fallback="egl")
         try:
-            import mujoco
+            mujoco = enable_rendering(fallback="egl")
         except ImportError as error:
             raise SpecError([Issue(None, None, "render", f"MuJoCo is not installed ({error})",
                                    install_hint())]) from None

@@ -32,7 +32,7 @@ import numpy as np
 from shc_cli.backends import servo_kernels
 from shc_cli.backends.engine import EngineOptions, Reading, rpy_from_matrix, spawn_height
 from shc_cli.backends.imu import Imu
-from shc_cli.backends.mujoco_.gl import choose_gl
+from shc_cli.backends.mujoco_.gl import import_for_physics
 from shc_cli.backends.mujoco_.mjcf import Options, robot_mjcf, velocity_stiffness
 from shc_cli.backends.servo import ServoModel
 from shc_cli.backends.terrain import Terrain
@@ -227,15 +227,9 @@ class MujocoWorld:
 
 
 def import_mujoco() -> Any:
-    """``mujoco``, imported with the headless OpenGL ``shc render`` chooses (``shc_cli.view.render``).
-
-    MuJoCo fixes its GL backend when it is imported: a simulation that imports it first, in a process that renders
-    later (``simulate --video``, a test session), must not leave it with a windowed backend. OSMesa when libOSMesa
-    is installed; otherwise ``MUJOCO_GL`` is left as it is (the physics needs no GL).
-    """
-    choose_gl(fallback=None)
-    import mujoco
-
+    """``mujoco`` for the physics (:func:`~shc_cli.backends.mujoco_.gl.import_for_physics`: without OpenGL, which
+    ``shc render`` and ``--video`` load when they render), its warnings kept in :data:`WARNINGS`."""
+    mujoco = import_for_physics()
     if mujoco.get_mju_user_warning() is None:  # else MuJoCo appends its warnings to MUJOCO_LOG.TXT in the cwd
         mujoco.set_mju_user_warning(_warned)
     return mujoco
