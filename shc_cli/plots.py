@@ -1,4 +1,5 @@
-"""Figures in the style of the OpenSHC paper. matplotlib is imported here only, with the Agg backend."""
+"""Figures in the style of the OpenSHC paper, drawn with matplotlib's object API on Agg canvases (not pyplot: no
+figure manager, no global state, no backend switch)."""
 
 from __future__ import annotations
 
@@ -24,16 +25,13 @@ def _polygon(centre: tuple[float, float], plane: dict[int, float]) -> tuple[list
 def plot_workspace(report: WorkspaceReport, path: Path) -> None:
     """Top view (paper Fig. 13): body outline, foot tips, each leg's workspace and the walkspace."""
     import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     from matplotlib.patches import Rectangle
 
-    figure, axes = plt.subplots(figsize=(7, 8), dpi=120)
+    figure, axes = _subplots(figsize=(7, 8), dpi=120)
     length, width, _ = report.robot.body.size
     axes.add_patch(Rectangle((-length / 2, -width / 2), length, width, fill=False, color="0.3", lw=1.5,
                                  label="body"))
-    colours = plt.get_cmap("tab10")
+    colours = matplotlib.colormaps["tab10"]
     for index, (leg, plane) in enumerate(report.planes.items()):
         centre = (float(report.identity_tips[index, 0]), float(report.identity_tips[index, 1]))
         colour = colours(index % 10)
@@ -52,7 +50,18 @@ def plot_workspace(report: WorkspaceReport, path: Path) -> None:
     axes.legend(loc="upper center", bbox_to_anchor=(0.5, -0.09), fontsize=7, ncols=4, frameon=False)
     figure.tight_layout()
     figure.savefig(path, format="png")
-    plt.close(figure)
+
+
+def _subplots(*grid: int, figsize: tuple[float, float], dpi: float, **options: Any) -> Any:
+    """``pyplot.subplots`` without pyplot: a :class:`~matplotlib.figure.Figure` on its own Agg canvas and its axes
+    (``options``: :meth:`Figure.subplots`'). No figure manager and no global figure list: nothing to close, the
+    figure goes with its last reference."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=figsize, dpi=dpi)
+    FigureCanvasAgg(figure)
+    return figure, figure.subplots(*grid, **options)
 
 
 SWING_COLOUR = "black"
@@ -69,10 +78,6 @@ def run_title(robot: Robot, gait: str | None) -> str:
 def plot_plan(robot: Robot, outputs: list[CycleOutput], folder: Path, gait: str | None = None) -> None:
     """gait.png (paper Fig. 5), tips.png (Fig. 7: side and top view) and joints.png in ``folder``; ``gait`` names
     the run's gait in the titles (default: the robot's)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import numpy as np
 
     dt = robot.time_delta
@@ -85,7 +90,7 @@ def plot_plan(robot: Robot, outputs: list[CycleOutput], folder: Path, gait: str 
     _leg_bars(legs, t, dt, swing >= 0.0, f"{title}: gait diagram (planned)", folder / "gait.png", startup)
 
     walker = np.array([o.walker_tips for o in outputs])
-    figure, (side, top) = plt.subplots(1, 2, figsize=(11, 4.5), dpi=110)
+    figure, (side, top) = _subplots(1, 2, figsize=(11, 4.5), dpi=110)
     for row, leg in enumerate(legs):
         side.plot(walker[:, row, 0], walker[:, row, 2], lw=0.8, label=leg)
         top.plot(walker[:, row, 0], walker[:, row, 1], lw=0.8, label=leg)
@@ -100,10 +105,9 @@ def plot_plan(robot: Robot, outputs: list[CycleOutput], folder: Path, gait: str 
     figure.suptitle(f"{title}: foot tip trajectories")
     figure.tight_layout()
     figure.savefig(folder / "tips.png")
-    plt.close(figure)
 
     joints = np.array([o.joints for o in outputs])
-    figure, axes_grid = plt.subplots(len(legs), 1, figsize=(10, 1.6 * len(legs) + 0.6), dpi=110, sharex=True,
+    figure, axes_grid = _subplots(len(legs), 1, figsize=(10, 1.6 * len(legs) + 0.6), dpi=110, sharex=True,
                                      squeeze=False)
     for row, (leg, spec) in enumerate(robot.legs.items()):
         axis = axes_grid[row, 0]
@@ -116,16 +120,12 @@ def plot_plan(robot: Robot, outputs: list[CycleOutput], folder: Path, gait: str 
     figure.suptitle(f"{title}: commanded joint positions")
     figure.tight_layout()
     figure.savefig(folder / "joints.png")
-    plt.close(figure)
 
 
 def plot_simulation(robot: Robot, series: dict[str, list[Any]], folder: Path, gait: str | None = None) -> None:
     """trajectory.png (body path, top view), power.png (total electrical power) and contacts.png (feet off the
     ground over time: the measured gait diagram, drawn like the planned one) in ``folder``; ``gait`` names the
     run's gait in the titles (default: the robot's)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
     import numpy as np
 
     t = np.array(series["t"])
@@ -190,13 +190,9 @@ def plot_trajectory(paths: dict[str, Any], path: Path, title: str,
     """``trajectory.png``: a top view of planar paths in one frame — the ground truth, the leg odometry and any
     other (a planned path) — each a ``(N, 2)`` array [m] by name, with the start (circle) and end (square) of
     the first; ``points`` adds named sets of marked points ``(K, 2)`` (waypoints). Returns ``path``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import numpy as np
 
-    figure, axes = plt.subplots(figsize=(6, 5), dpi=110)
+    figure, axes = _subplots(figsize=(6, 5), dpi=110)
     for name, xy in paths.items():
         xy = np.asarray(xy, dtype=float)
         if len(xy):
@@ -223,11 +219,10 @@ def _power_plot(t: Any, power: Any, running: Any, dt: float, title: str, path: P
     """power.png: the total power over time with the start-up shaded, the analysed window (the RUNNING cycles, what
     the summary's mean power and CoT use) marked by its mean, and the axis scaled to that window — a start-up peak
     several times higher is clipped and named instead of flattening the walk."""
-    import matplotlib.pyplot as plt
     import numpy as np
     from matplotlib.patches import Patch
 
-    figure, axes = plt.subplots(figsize=(8, 3.5), dpi=110)
+    figure, axes = _subplots(figsize=(8, 3.5), dpi=110)
     for a, b in _intervals(~running):
         axes.axvspan(t[a], t[a] + (b - a + 1) * dt, color=STARTUP_COLOUR, lw=0, zorder=0)
     axes.plot(t, power, lw=0.8, zorder=2)
@@ -251,7 +246,6 @@ def _power_plot(t: Any, power: Any, running: Any, dt: float, title: str, path: P
         axes.legend(handles=handles, fontsize=7, loc="lower right")
     figure.tight_layout()
     figure.savefig(path)
-    plt.close(figure)
 
 
 def _intervals(flags: Any) -> list[tuple[int, int]]:
@@ -270,10 +264,9 @@ def _leg_bars(legs: list[str], t: Any, dt: float, swing: Any, title: str, path: 
     start-up (``startup``, cycles before RUNNING) shaded grey; cycles at times ``t`` [s], ``dt`` apart. ``off_label``
     names the black bars: a planned swing, or a measured foot off the ground (which need not be a swing: a foot
     hanging over a ramp's edge is off the ground for seconds)."""
-    import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
 
-    figure, axes = plt.subplots(figsize=(9, 0.45 * len(legs) + 1.4), dpi=110)
+    figure, axes = _subplots(figsize=(9, 0.45 * len(legs) + 1.4), dpi=110)
     if startup is not None:
         for a, b in _intervals(startup):
             axes.axvspan(t[a], t[a] + (b - a + 1) * dt, color=STARTUP_COLOUR, lw=0, zorder=0)
@@ -293,18 +286,14 @@ def _leg_bars(legs: list[str], t: Any, dt: float, swing: Any, title: str, path: 
                 frameon=False)
     figure.tight_layout()
     figure.savefig(path)
-    plt.close(figure)
 
 
 def _save(figure: Any, path: Path) -> None:
-    """Save a figure atomically (complete or absent) and close it."""
-    import matplotlib.pyplot as plt
-
+    """Save a figure atomically (complete or absent)."""
     from shc_cli.outputs import atomic_path
 
     with atomic_path(path) as temporary:
         figure.savefig(temporary, format=path.suffix.lstrip("."))
-    plt.close(figure)
 
 
 def _finish_time_plot(figure: Any, axes: Any, ylabel: str, path: Path, title: str) -> Path:
@@ -342,22 +331,18 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
     * ``cot.png`` — cost of transport and speed vs step frequency, one line per robot / gait / velocity input
       (OpenSHC paper Fig. 14–16 style), when the runs differ in step frequency.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import numpy as np
 
     written: list[Path] = []
     powered = [(r, run) for r, run in zip(results, runs, strict=True) if run.power is not None]
     if powered:
-        figure, axes = plt.subplots(figsize=(8, 3.5), dpi=110)
+        figure, axes = _subplots(figsize=(8, 3.5), dpi=110)
         for result, run in powered:
             axes.plot(run.t, run.power, lw=0.7, label=_label(result))
         written.append(_finish_time_plot(figure, axes, "electrical power [W]", folder / "power.png",
                                          f"{_robots_and_gaits([r for r, _ in powered])}: total servo power"))
 
-    figure, axes = plt.subplots(1, 3, figsize=(10, 3.6), dpi=110)
+    figure, axes = _subplots(1, 3, figsize=(10, 3.6), dpi=110)
     names = [_label(r) for r in results]
     for ax, (key, unit) in zip(axes, (("height", "m"), ("roll_rate", "rad/s"), ("pitch_rate", "rad/s")),
                                strict=True):
@@ -379,7 +364,7 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
         feet, contact, com, zmp = series["feet"], series["contact"], series["com"], series["zmp"]
         from shc_cli.analysis.metrics import support_polygon
 
-        figure, axes = plt.subplots(figsize=(7, 5), dpi=110)
+        figure, axes = _subplots(figsize=(7, 5), dpi=110)
         step = max(1, len(feet) // 60)  # about 60 polygons
         for i in range(0, len(feet), step):
             polygon = support_polygon(feet[i, contact[i], :2])
@@ -403,7 +388,7 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
     margined = [(r, run) for r, run in zip(results, runs, strict=True)
                 if "_series" in r and np.isfinite(r["_series"]["margin"]).any()]
     if margined:
-        figure, axes = plt.subplots(figsize=(8, 3.5), dpi=110)
+        figure, axes = _subplots(figsize=(8, 3.5), dpi=110)
         for result, run in margined:
             series = result["_series"]
             t = run.t[series["rows"]]
@@ -456,15 +441,10 @@ def plot_cot(results: list[dict[str, Any]], path: Path) -> Path:
 
     A result's group is its ``group`` entry (a sweep's stride share, say) if present, else its velocity input.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
     import textwrap
 
-    import matplotlib.pyplot as plt
-
     lines = cot_lines(results)
-    figure, (top, bottom) = plt.subplots(2, 1, figsize=(7, 6.5), dpi=110, sharex=True)
+    figure, (top, bottom) = _subplots(2, 1, figsize=(7, 6.5), dpi=110, sharex=True)
     for label, points in sorted(lines.items()):
         points.sort()
         style = "o-" if len({p[0] for p in points}) > 1 else "o"  # a single frequency is a point, not a line
