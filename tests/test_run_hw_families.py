@@ -1,7 +1,8 @@
 """``shc run-hw`` end to end on a Dynamixel Protocol 1.0 bus (AX-12A: a READ per servo; MX-64 with 1.0 firmware:
 BULK READ) and a Feetech STS3215 bus: 18 emulated servos (shc_cli/hardware/emulator_protocol1.py, keeping the 1 Mbaud
 wire's time line), a 3-DOF hexapod that extends openshc_default. Goals on the bus in the model's ticks, faults
-mid-walk, the rate check; the 60 s runs are slow-marked.
+mid-walk, the rate check; the long walks and six of the nine family × fault runs are slow-marked. Refusals before
+the walk run the command in-process (nothing real-time happens in them).
 
 The emulator is served by a process of its own (shc_cli/hardware/emulator_process.py) while run-hw runs in another:
 as a thread of pytest's process, on a loaded 2-core machine or beside CI's other test worker, it was kept off the CPU
@@ -24,7 +25,9 @@ import pytest
 from shc_cli.hardware import protocol1 as p1
 from shc_cli.hardware.emulator_process import EmulatorProcess, Heard, promptly
 from shc_cli.loop.runread import read_run
-from tests.run_waits import wait_running
+from tests.run_waits import StderrLines, wait_running_on_stderr
+
+from .test_cli import run
 
 SHC = [sys.executable, "-m", "shc_cli.cli"]
 JOINTS = [f"{leg}_{joint}" for leg in ("AR", "BR", "CR", "CL", "BL", "AL") for joint in ("coxa", "femur", "tibia")]
@@ -39,14 +42,20 @@ RATES = {"AX-12A": 0.04, "MX-64(1.0)": 0.01, "STS3215": 0.01}
 """The 60 s runs' periods [s]: 100 Hz, and 25 Hz for 18 AX-12A read one by one on one bus."""
 FAULTED = 5
 """The servo the fault tests break: BR_femur."""
+QUICK_START_S = 1.5
+"""The start-up [s] of the robot of the short walks and the fault tests: run-hw keeps the wall clock, and
+openshc_default's 6 s start-up was half of each such test's time (the long walks and the benchmark keep the 6 s)."""
 
 
-def _robot(folder: Path, model: str, period: float | None = None, extra: str = "") -> Path:
+def _robot(folder: Path, model: str, period: float | None = None, extra: str = "",
+           start_up_s: float | None = None) -> Path:
     """The hexapod on one bus of ``model`` servos: AL_coxa turned against its joint with its zero off the middle
-    and a joint offset, so the goal ticks test direction, zero and offset."""
+    and a joint offset, so the goal ticks test direction, zero and offset; ``start_up_s`` replaces its start-up
+    duration (``start_up.time_to_start``, 6 s)."""
     dt, ticks, _, _ = FAMILIES[model]
     zero = ticks // 2 - 12
     lines = ['extends = "openshc_default"', f'name = "hexapod_{model[:2].lower()}"', f"time_delta = {period or dt}",
+             *([] if start_up_s is None else ["[start_up]", f"time_to_start = {start_up_s}"]),
              "[legs.AL.joints.coxa]", "offset = 0.05", "[hardware]", f'model = "{model}"', "return_delay_us = 0",
              extra, "[hardware.servos]"]
     lines += [f"{key} = {{ id = {k + 1} }}" if key != "AL_coxa" else
@@ -73,7 +82,7 @@ def _goal_writes(bus: EmulatorProcess, model: str, start: int = 0) -> list[Heard
 def test_walks_and_the_goals_are_the_models_ticks(model: str, tmp_path: Path) -> None:
     """A goal on the bus = zero + direction × (angle + offset) in the model's ticks (AX-12A: 1024 per 300°); the
     robot walks, packs and the torque goes off."""
-    robot = _robot(tmp_path, model)
+    robot = _robot(tmp_path, model, start_up_s=QUICK_START_S)
     with _bus(model) as bus:
         result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run"),
                                  "--velocity", "1,0,0", "--duration", "1", "--stop-state", "running"],
@@ -100,27 +109,35 @@ def test_walks_and_the_goals_are_the_models_ticks(model: str, tmp_path: Path) ->
     assert on_bus[16] != ticks // 2 - 12  # the offset moved it
 
 
-@pytest.mark.parametrize("fault", ["overload", "vanish", "corrupt"])
-@pytest.mark.parametrize("model", list(FAMILIES))
+FAULTS = ["overload", "vanish", "corrupt"]
+
+
+@pytest.mark.parametrize(("model", "fault"), [
+    pytest.param(model, fault, marks=[] if k == m else [pytest.mark.slow])
+    for m, model in enumerate(FAMILIES) for k, fault in enumerate(FAULTS)])
 def test_a_fault_mid_walk_stops_the_goals_names_the_servo_and_exits_3(model: str, fault: str,
                                                                        tmp_path: Path) -> None:
-    robot = _robot(tmp_path, model)
+    """Each fault on each family's bus (the fast suite: each family once and each fault once, the AX-12A
+    overloaded, the MX-64 vanished, the STS3215 corrupt; the other six are slow-marked)."""
+    robot = _robot(tmp_path, model, start_up_s=QUICK_START_S)
     with _bus(model) as bus:
-        process = subprocess.Popen([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run"),
-                                    "--velocity", "1,0,0", "--duration", "30"],
-                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        process = subprocess.Popen([*SHC, "-v", "run-hw", str(robot), "--port", bus.port, "--out",
+                                    str(tmp_path / "run"), "--velocity", "1,0,0", "--duration", "30"],
+                                   stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        lines = StderrLines(process)
         try:
-            wait_running(tmp_path / "run", process, extra_s=0.5)
+            wait_running_on_stderr(process, lines, extra_s=0.5)
             if fault == "overload":
                 marker = bus.protect(FAULTED)
             elif fault == "vanish":
                 marker = bus.vanish(FAULTED)
             else:
                 marker = bus.fault(FAULTED, "corrupt_checksum", True)
-            _, stderr = process.communicate(timeout=120)
+            process.wait(timeout=120)
         finally:
             if process.poll() is None:
                 process.kill()
+        stderr = lines.text()
         assert process.returncode == 3, stderr
         reason = {"overload": "BR_femur: overload", "vanish": "no reply from BR_femur",
                   "corrupt": "corrupt reply (checksum or length) from BR_femur"}[fault]
@@ -132,19 +149,19 @@ def test_a_fault_mid_walk_stops_the_goals_names_the_servo_and_exits_3(model: str
     assert "BR_femur" in summary["fault"]
 
 
-def test_refuses_a_rate_the_bus_cannot_keep_and_says_which_it_can(tmp_path: Path) -> None:
+def test_refuses_a_rate_the_bus_cannot_keep_and_says_which_it_can(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """18 AX-12A read one by one behind an adapter with 1.5 ms of turnaround: ≥ 27 ms a cycle, so 100 Hz is
     refused before the torque goes on, naming the rate it keeps and the time_delta that works."""
     robot = _robot(tmp_path, "AX-12A", period=0.01)
     with _bus("AX-12A", latency_s=0.0015) as bus:
-        result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run")],
-                                capture_output=True, text=True, timeout=120)
+        code, _, stderr = run(["run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run")], capsys,
+                              monkeypatch)
         assert not any(p.instruction == p1.SYNC_WRITE and p.params[0] == 24 and p.params[3] == 1
                        for p in bus.packets())  # the torque never went on
-    assert result.returncode == 2, result.stderr
-    assert "refusing to start: one cycle's reads and goal write take" in result.stderr
-    assert "one read per servo, 18 servos on the busiest bus" in result.stderr and "set time_delta = " in result.stderr
-    assert len(result.stderr.strip().splitlines()) == 2  # the return delay written, then the one-line error
+    assert code == 2, stderr
+    assert "refusing to start: one cycle's reads and goal write take" in stderr
+    assert "one read per servo, 18 servos on the busiest bus" in stderr and "set time_delta = " in stderr
+    assert len(stderr.strip().splitlines()) == 2  # the return delay written, then the one-line error
     assert not (tmp_path / "run").exists()
 
 
@@ -152,35 +169,36 @@ def test_refuses_a_rate_the_bus_cannot_keep_and_says_which_it_can(tmp_path: Path
     ("AX-12A", "AX-18A", "AR_coxa: servo 1 is model number 12, not a AX-18A (18)"),
     ("STS3215", "MX-64(1.0)", "AR_coxa: servo 1 is model number 2563, not a MX-64(1.0) (310)"),  # STS firmware
 ])
-def test_refuses_the_wrong_model_or_protocol(model: str, file_model: str, message: str, tmp_path: Path) -> None:
+def test_refuses_the_wrong_model_or_protocol(model: str, file_model: str, message: str, tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                             monkeypatch) -> None:
     robot = _robot(tmp_path, model)
     robot.write_text(robot.read_text().replace(f'model = "{model}"', f'model = "{file_model}"'))
     with _bus(model) as bus:
-        result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run")],
-                                capture_output=True, text=True, timeout=120)
-    assert result.returncode == 2 and message in result.stderr, result.stderr
+        code, _, stderr = run(["run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run")], capsys,
+                              monkeypatch)
+    assert code == 2 and message in stderr, stderr
 
 
-def test_refuses_wheel_mode_and_angle_limits_narrower_than_the_joints(tmp_path: Path) -> None:
+def test_refuses_wheel_mode_and_angle_limits_narrower_than_the_joints(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     robot = _robot(tmp_path, "AX-12A")
     with _bus("AX-12A") as bus:
         bus.set(4, 6, 0)
         bus.set(4, 8, 0)  # both angle limits 0: wheel mode
         bus.set(9, 6, 400)  # CW limit inside CR_tibia's range
-        result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run")],
-                                capture_output=True, text=True, timeout=120)
-    assert result.returncode == 2, result.stderr
-    assert "BR_coxa: servo 4 is in wheel mode" in result.stderr
-    assert "CR_tibia: the joint limits" in result.stderr and "servo 9's angle limits 400..1023" in result.stderr
+        code, _, stderr = run(["run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run")], capsys,
+                              monkeypatch)
+    assert code == 2, stderr
+    assert "BR_coxa: servo 4 is in wheel mode" in stderr
+    assert "CR_tibia: the joint limits" in stderr and "servo 9's angle limits 400..1023" in stderr
 
 
-def test_validate_refuses_two_protocols_on_one_bus(tmp_path: Path) -> None:
+def test_validate_refuses_two_protocols_on_one_bus(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     robot = _robot(tmp_path, "AX-12A")
     robot.write_text(robot.read_text().replace("AR_coxa = { id = 1 }", 'AR_coxa = { id = 1, model = "STS3215" }'))
-    result = subprocess.run([*SHC, "validate", str(robot)], capture_output=True, text=True, timeout=120)
-    assert result.returncode == 2
-    assert "AX-12A speaks Dynamixel Protocol 1.0, but AR_coxa on bus 0 speaks Feetech STS/SCS" in result.stderr
-    assert "put each protocol on a bus of its own" in result.stderr
+    code, _, stderr = run(["validate", str(robot)], capsys, monkeypatch)
+    assert code == 2
+    assert "AX-12A speaks Dynamixel Protocol 1.0, but AR_coxa on bus 0 speaks Feetech STS/SCS" in stderr
+    assert "put each protocol on a bus of its own" in stderr
 
 
 @pytest.mark.slow
@@ -207,15 +225,15 @@ def test_a_long_walk_holds_the_rate(model: str, tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("model", ["AX-12A", "STS3215", "XM430-W350"])
-def test_a_port_that_is_not_there_is_one_line_naming_it(model: str, tmp_path: Path) -> None:
+def test_a_port_that_is_not_there_is_one_line_naming_it(model: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """Every family opens its ports the same way (hardware.bus.open_port): a missing adapter is one line that names
     the port and how to give it, exit 2, nothing written."""
     robot = _robot(tmp_path, "AX-12A")
     robot.write_text(robot.read_text().replace('model = "AX-12A"', f'model = "{model}"'))
-    result = subprocess.run([*SHC, "run-hw", str(robot), "--port", "/dev/ttyNOTHERE0", "--out", str(tmp_path / "run")],
-                            capture_output=True, text=True, timeout=120)
-    assert result.returncode == 2, result.stderr
-    assert result.stderr.strip().splitlines() == [
+    code, _, stderr = run(["run-hw", str(robot), "--port", "/dev/ttyNOTHERE0", "--out", str(tmp_path / "run")],
+                          capsys, monkeypatch)
+    assert code == 2, stderr
+    assert stderr.strip().splitlines() == [
         "error: /dev/ttyNOTHERE0: cannot open the serial port: no such device (give the servo bus adapter with "
-        "--port, e.g. /dev/ttyUSB0)"], result.stderr
+        "--port, e.g. /dev/ttyUSB0)"], stderr
     assert not (tmp_path / "run").exists()
