@@ -8,6 +8,7 @@ from __future__ import annotations
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -17,12 +18,29 @@ from shc_cli.errors import SpecError
 from shc_cli.hardware import protocol1 as p1
 from shc_cli.hardware.emulator_process import EmulatorProcess
 
+from .test_cli import run
+
 SHC = [sys.executable, "-m", "shc_cli.cli"]
 JOINTS = [f"{leg}_{joint}" for leg in ("AR", "BR", "CR", "CL", "BL", "AL") for joint in ("coxa", "femur", "tibia")]
 
 
 def _shc(*args: str, timeout: float = 180) -> subprocess.CompletedProcess[str]:
+    """``shc`` in a process of its own (where the interpreter's start-up is part of what is measured, or beside a
+    process the test drives)."""
     return subprocess.run([*SHC, *args], capture_output=True, text=True, timeout=timeout)
+
+
+Shc = Callable[..., subprocess.CompletedProcess[str]]
+
+
+@pytest.fixture
+def shc(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> Shc:
+    """``shc`` in the test's process (tests/test_cli.py's ``run``): the same exit code, stdout and stderr, without an
+    interpreter's start-up and imports per call; the buses are emulated by processes of their own."""
+    def call(*args: str) -> subprocess.CompletedProcess[str]:
+        code, out, err = run(list(args), capsys, monkeypatch)
+        return subprocess.CompletedProcess(["shc", *args], code, out, err)
+    return call
 
 
 def _robot(folder: Path, model: str = "AX-12A") -> Path:
@@ -45,12 +63,12 @@ def _bus(model: str = "AX-12A", skip: int | None = None) -> EmulatorProcess:
                            positions={k + 1: TIBIA_TICKS for k in range(2, 18, 3)})
 
 
-def test_scan_finds_each_family_at_its_baud_and_only_there() -> None:
+def test_scan_finds_each_family_at_its_baud_and_only_there(shc: Shc) -> None:
     with EmulatorProcess({1: "AX-12A", 7: "AX-12A"}, baud=1_000_000, check_baud=True) as ax, \
             EmulatorProcess({3: "STS3215"}, baud=57_600, check_baud=True) as sts, \
             EmulatorProcess({5: "XM430-W350"}, baud=57_600) as xm:
-        result = _shc("hw", "scan", "--port", ax.port, "--port", sts.port, "--port", xm.port, "--ids", "0-20",
-                      "--timeout-ms", "30")
+        result = shc("hw", "scan", "--port", ax.port, "--port", sts.port, "--port", xm.port, "--ids", "0-20",
+                     "--timeout-ms", "30")
     assert result.returncode == 0, result.stderr
     rows = [line.split() for line in result.stdout.splitlines()[1:-1]]
     assert rows == [[ax.port, "1000000", "1.0", "1", "AX-12A", "24"], [ax.port, "1000000", "1.0", "7", "AX-12A", "24"],
@@ -79,21 +97,21 @@ def test_scan_of_an_empty_bus_is_quick() -> None:
     (["--protocol", "3.0"], "--protocol: '3.0' is not a protocol (give 2.0, 1.0, feetech)"),
     (["--port", "/dev/ttyNOTHERE0"], "/dev/ttyNOTHERE0: cannot open the serial port: no such device"),
 ])
-def test_scan_bad_input_is_one_line_exit_2(args: list[str], message: str) -> None:
-    result = _shc("hw", "scan", *(["--port", "/dev/ttyNOTHERE0"] if "--port" not in args else []), *args)
+def test_scan_bad_input_is_one_line_exit_2(args: list[str], message: str, shc: Shc) -> None:
+    result = shc("hw", "scan", *(["--port", "/dev/ttyNOTHERE0"] if "--port" not in args else []), *args)
     assert result.returncode == 2, result.stderr
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0], result.stderr
 
 
-def test_check_reads_without_moving_and_names_a_joint_outside_its_limits(tmp_path: Path) -> None:
+def test_check_reads_without_moving_and_names_a_joint_outside_its_limits(tmp_path: Path, shc: Shc) -> None:
     robot = _robot(tmp_path)
     with _bus() as bus:
-        result = _shc("hw", "check", str(robot), "--port", bus.port)
+        result = shc("hw", "check", str(robot), "--port", bus.port)
         assert result.returncode == 0, result.stderr
         assert "every joint within its limits" in result.stdout
         bus.set(3, 36, 800)  # AR_tibia's servo turned far off (present position 800: +1.47 rad, its max −0.1)
-        outside = _shc("hw", "check", str(robot), "--port", bus.port)
+        outside = shc("hw", "check", str(robot), "--port", bus.port)
         writes = [p for p in bus.packets() if p[1] in (p1.WRITE, p1.SYNC_WRITE, p1.REG_WRITE)]
     assert outside.returncode == 1, outside.stderr
     row = next(line for line in outside.stdout.splitlines() if line.startswith("AR_tibia"))
@@ -102,24 +120,24 @@ def test_check_reads_without_moving_and_names_a_joint_outside_its_limits(tmp_pat
     assert writes == []  # no goal, no torque, no setting written
 
 
-def test_check_refuses_a_missing_servo_and_faults_on_a_hot_one(tmp_path: Path) -> None:
+def test_check_refuses_a_missing_servo_and_faults_on_a_hot_one(tmp_path: Path, shc: Shc) -> None:
     robot = _robot(tmp_path)
     with _bus(skip=8) as bus:
-        missing = _shc("hw", "check", str(robot), "--port", bus.port)
+        missing = shc("hw", "check", str(robot), "--port", bus.port)
     assert missing.returncode == 2 and "CR_femur: servo 8 does not answer" in missing.stderr, missing.stderr
     assert len(missing.stderr.strip().splitlines()) == 1
     with _bus() as bus:
         bus.fault(8, "error_bits", 4)  # overheating
-        hot = _shc("hw", "check", str(robot), "--port", bus.port)
+        hot = shc("hw", "check", str(robot), "--port", bus.port)
     assert hot.returncode == 3 and "CR_femur: hardware error (overheating)" in hot.stderr, hot.stderr
 
 
-def test_jog_moves_one_joint_torque_limited_and_back_and_writes_the_answers(tmp_path: Path) -> None:
+def test_jog_moves_one_joint_torque_limited_and_back_and_writes_the_answers(tmp_path: Path, shc: Shc) -> None:
     robot = _robot(tmp_path)
     before = robot.read_text()
     with _bus() as bus:
-        result = _shc("hw", "jog", str(robot), "--port", bus.port, "--joint", "AR_coxa", "--joint", "AL_coxa",
-                      "--answers", "n,k,y,h", "--angle", "0.1", "--torque", "0.25")
+        result = shc("hw", "jog", str(robot), "--port", bus.port, "--joint", "AR_coxa", "--joint", "AL_coxa",
+                     "--answers", "n,k,y,h", "--angle", "0.1", "--torque", "0.25")
         packets = bus.packets()
         torque_on = [bus.torque_on(k + 1) for k in range(18)]
     assert result.returncode == 0, result.stderr
@@ -142,15 +160,15 @@ def test_jog_moves_one_joint_torque_limited_and_back_and_writes_the_answers(tmp_
     assert "AR_coxa: direction = -1" in result.stdout
 
 
-def test_jog_writes_nothing_after_a_bad_answer_or_a_fault(tmp_path: Path) -> None:
+def test_jog_writes_nothing_after_a_bad_answer_or_a_fault(tmp_path: Path, shc: Shc) -> None:
     robot = _robot(tmp_path)
     before = robot.read_text()
     with _bus() as bus:
-        bad = _shc("hw", "jog", str(robot), "--port", bus.port, "--joint", "AR_coxa", "--joint", "AR_femur",
-                   "--answers", "n,k,x")
+        bad = shc("hw", "jog", str(robot), "--port", bus.port, "--joint", "AR_coxa", "--joint", "AR_femur",
+                  "--answers", "n,k,x")
         bus.fault(2, "overload_at_goal", True)
-        fault = _shc("hw", "jog", str(robot), "--port", bus.port, "--joint", "AR_coxa", "--joint", "AR_femur",
-                     "--answers", "n,k,y,k")
+        fault = shc("hw", "jog", str(robot), "--port", bus.port, "--joint", "AR_coxa", "--joint", "AR_femur",
+                    "--answers", "n,k,y,k")
         torque_on = [bus.torque_on(k + 1) for k in range(18)]
     assert bad.returncode == 2 and "'x' answers none of AR_femur's choices (y/n/s); nothing written" in bad.stderr
     assert [line for line in bad.stderr.splitlines() if not line.endswith("and back")] == [
@@ -158,7 +176,7 @@ def test_jog_writes_nothing_after_a_bad_answer_or_a_fault(tmp_path: Path) -> Non
     assert fault.returncode == 3 and "fault: AR_femur (servo 2): overload" in fault.stderr, fault.stderr
     assert not any(torque_on)
     assert robot.read_text() == before
-    unasked = _shc("hw", "jog", "openshc_default", "--port", "/dev/null")
+    unasked = shc("hw", "jog", "openshc_default", "--port", "/dev/null")
     assert unasked.returncode == 2 and "not a robot file (jog writes the servo map back)" in unasked.stderr
 
 
@@ -173,7 +191,7 @@ def test_servo_file_edits_sub_tables_and_refuses_inherited_entries(tmp_path: Pat
         edit_servos(path, {"BR_coxa": {"direction": -1}})
 
 
-def test_emulate_serves_the_robot_until_stopped(tmp_path: Path) -> None:
+def test_emulate_serves_the_robot_until_stopped(tmp_path: Path, shc: Shc) -> None:
     robot = _robot(tmp_path, "STS3215")
     link = tmp_path / "bus0"
     process = subprocess.Popen([*SHC, "hw", "emulate", str(robot), "--link", str(link)], stdout=subprocess.PIPE,
@@ -181,8 +199,8 @@ def test_emulate_serves_the_robot_until_stopped(tmp_path: Path) -> None:
     try:
         assert process.stdout is not None
         assert process.stdout.readline().strip() == f"bus 0: {link}"
-        result = _shc("hw", "scan", "--port", str(link), "--ids", "1-18", "--baud", "1000000", "--protocol",
-                      "feetech", "--timeout-ms", "30")
+        result = shc("hw", "scan", "--port", str(link), "--ids", "1-18", "--baud", "1000000", "--protocol",
+                     "feetech", "--timeout-ms", "30")
     finally:
         process.terminate()
         process.wait(timeout=30)
@@ -195,13 +213,13 @@ def test_emulate_serves_the_robot_until_stopped(tmp_path: Path) -> None:
     ("STS3215", [(48, 300), (42, 2048), (40, 1), (42, 2048 + 65), (42, 2048), (40, 0), (48, 1000)]),
 ])
 def test_jog_on_protocol_2_and_feetech_limits_the_torque_and_returns(model: str, expected: list[tuple[int, int]],
-                                                                    tmp_path: Path) -> None:
+                                                                    tmp_path: Path, shc: Shc) -> None:
     """The other families: Protocol 2.0 limits Goal PWM (address 100: 30 % of 885; 885 is the emulator's power-up
     value), Feetech Torque Limit (48: 30 % of 1000); the goal goes 0.1 rad out (4096 ticks a turn: 65 ticks) and
     back, the torque off, the limit restored."""
     robot = _robot(tmp_path, model)
     with EmulatorProcess({k + 1: model for k in range(18)}) as bus:
-        result = _shc("hw", "jog", str(robot), "--port", bus.port, "--joint", "AR_coxa", "--answers", "y,k")
+        result = shc("hw", "jog", str(robot), "--port", bus.port, "--joint", "AR_coxa", "--answers", "y,k")
         packets = bus.packets()
     assert result.returncode == 0, result.stderr
     wide = model.startswith("XM")  # Protocol 2.0: 2-byte addresses
