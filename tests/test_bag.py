@@ -230,13 +230,11 @@ def test_every_field_of_every_topic_is_the_runs(walked: Path, tmp_path: Path, fm
             assert raw[topic][row] == direct, (topic, row)
 
 
-def test_a_robot_with_a_servo_map_is_exported_with_its_own_joint_names(tmp_path: Path) -> None:
+def test_a_robot_with_a_servo_map_is_exported_with_its_own_joint_names(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """The imported PhantomX's [hardware.servos] names each joint as its URDF does (j_c1_rf, …): the bag's
     /joint_states, /desired_joint_states and /robot_description use those names (as the robot's own driver would
     publish them), and /shc/servo_map ties each to its servo id."""
     import json
-    import subprocess
-    import sys
     import xml.etree.ElementTree as ET
 
     from rosbags.rosbag2 import Reader
@@ -245,13 +243,12 @@ def test_a_robot_with_a_servo_map_is_exported_with_its_own_joint_names(tmp_path:
 
     urdf = ROOT / "tests/data/robots/phantomx_description/urdf/phantomx.urdf"
     revolute = {j.get("name") for j in ET.parse(urdf).getroot().iter("joint") if j.get("type") == "revolute"}
-    shc = [sys.executable, "-m", "shc_cli.cli"]
     for args in (["import", "urdf", str(urdf), "--out", str(tmp_path / "px")],
                  ["plan", str(tmp_path / "px/robots/PhantomX.toml"), "--duration", "1", "--out", str(tmp_path / "run"),
                   "--no-plots"],
                  ["export", "bag", str(tmp_path / "run"), "--out", str(tmp_path / "bag")]):
-        done = subprocess.run([*shc, *args], capture_output=True, text=True, timeout=600)
-        assert done.returncode == 0, done.stderr
+        code, _, stderr = run(args, capsys, monkeypatch)
+        assert code == 0, stderr
     store = typestore_for("mcap")
     found: dict[str, object] = {}
     with Reader(tmp_path / "bag") as reader:
