@@ -262,12 +262,13 @@ def test_the_compiled_cycle_equals_the_reference_forms() -> None:
     imu_yaw = None
     levelled = None
     contact_before = None
+    last, held = (0.0, 0.0), 0
     for _ in range(400):
         feet = rng.normal(size=(6, 3)) * 0.2
         q = np.array([*rng.normal(size=3) * 0.05, 1.0])
         q /= np.linalg.norm(q)
         stance = rng.random(6) < 0.7
-        contact = rng.random(6) < 0.9
+        contact = rng.random(6) < (0.9 if rng.random() < 0.8 else 0.0)  # some cycles touch nowhere: dropouts
         forces = rng.normal(20.0, 15.0, size=6)  # some negative: they count as 0
         got = odometry.cycle(feet, 0.3, -0.2, stance, None, forces, q, contact)  # roll, pitch: the IMU's instead
         roll, pitch = quaternion_roll_pitch(q)
@@ -283,6 +284,9 @@ def test_the_compiled_cycle_equals_the_reference_forms() -> None:
         dx = dy = legs_turn = 0.0
         if levelled is not None and use.any():
             dx, dy, legs_turn = rigid_increment(levelled[use, :2], now[use, :2], np.maximum(forces[use], 0.0))
+            last, held = (dx, dy), 0
+        elif levelled is not None and stance.any() and held < odometry.hold:  # a contact dropout: keep moving
+            (dx, dy), held = last, held + 1  # with the IMU: its turn, none of the legs'
         levelled = now
         leg_yaw += legs_turn
         start = yaw
@@ -294,3 +298,55 @@ def test_the_compiled_cycle_equals_the_reference_forms() -> None:
         y += math.sin(start) * dx + math.cos(start) * dy
         assert np.allclose(got, (x, y, yaw), rtol=0.0, atol=1e-12), (got, (x, y, yaw))
     assert odometry.feet_used == int(use.sum())
+
+
+def steady_walk(odometry: LegOdometry, cycles: int, step: tuple[float, float, float], dropouts: set[int],
+                imu: bool = False) -> tuple[float, float, float]:
+    """Four world-fixed feet under a body moving ``step`` (dx, dy [m], dyaw [rad], in its own frame) each cycle,
+    contact measured, none touching in the ``dropouts`` cycles; the IMU's orientation when ``imu``. Returns the true
+    pose at the end."""
+    world = np.array([[0.2, 0.15], [0.2, -0.15], [-0.2, 0.15], [-0.2, -0.15]])
+    x = y = yaw = 0.0
+    stance = np.ones(4, dtype=bool)
+    for k in range(cycles + 1):
+        if k > 0:
+            c, s = math.cos(yaw), math.sin(yaw)
+            x, y, yaw = x + c * step[0] - s * step[1], y + s * step[0] + c * step[1], yaw + step[2]
+        feet = np.column_stack([body_frame(world, x, y, yaw), np.full(4, -0.1)])
+        contact = np.full(4, k not in dropouts)
+        orientation = np.array([0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2)]) if imu else None
+        odometry.cycle(feet, 0.0, 0.0, stance, None, None, orientation, contact)
+    return x, y, yaw
+
+
+@settings(max_examples=60, deadline=None)
+@given(finite, finite, turns, st.integers(5, 60), st.integers(1, 10), st.booleans())
+def test_a_contact_dropout_in_a_steady_walk_continues_the_walk(dx: float, dy: float, dyaw: float, start: int,
+                                                                length: int, imu: bool) -> None:
+    """Feet standing by the gait but touching nowhere for up to HOLD_TIME (a light robot bouncing): the last
+    measured motion is repeated — exact in a steady walk, with or without an IMU (which then gives the turn)."""
+    odometry = LegOdometry(0.01)
+    step = (dx * 0.01, dy * 0.01, dyaw * 0.01)
+    assert odometry.hold == 10  # HOLD_TIME 0.1 s at 100 Hz
+    # the cycle after a dropout has no contact at the earlier reading either: it is held too
+    truth = steady_walk(odometry, 80, step, set(range(start, start + length - 1)), imu)
+    # with the IMU the legs' heading (the filter's slow reference) misses the dropout's turn and pulls the heading
+    # by dt/τ of it a cycle: ≤ 80 × 0.01/60 × 0.03 rad
+    assert np.allclose(odometry.pose, truth, atol=1e-3 if imu else 1e-9)
+    if imu:
+        assert abs(odometry.leg_yaw - truth[2]) <= abs(step[2]) * length + 1e-12
+
+
+def test_a_long_dropout_or_no_standing_foot_holds_the_pose() -> None:
+    """Beyond HOLD_TIME the pose stops (a robot lifted off the ground must not walk on in the estimate), and a
+    dropout with no foot standing by the gait is not bridged."""
+    odometry = LegOdometry(0.01)
+    step = (0.001, 0.0, 0.0)
+    steady_walk(odometry, 100, step, set(range(20, 60)))
+    # 41 cycles without a foot (the 40, and the one after: no contact at its earlier reading), the first 10 held
+    assert odometry.x == pytest.approx(0.001 * (100 - 41 + 10), abs=1e-9)
+    airborne = LegOdometry(0.01)
+    feet = np.array([[0.2, 0.1, -0.1], [-0.2, 0.1, -0.1], [0.0, -0.2, -0.1]])
+    for k in range(20):
+        airborne.cycle(feet - [0.001 * k, 0.0, 0.0], 0.0, 0.0, np.full(3, k < 10), contact=np.full(3, k < 10))
+    assert airborne.x == pytest.approx(0.009, abs=1e-12)  # 9 measured increments, then nothing held

@@ -19,7 +19,9 @@ Method (an shc addition; OpenSHC has no odometry):
    Kabsch/Umeyama solution: ``dψ = atan2(Σ w q̃×p̃, Σ w q̃·p̃)`` over the centred points, ``d = p̄ − R(dψ)·q̄``, each
    foot weighted by its measured normal force where the backend measures it (a lightly loaded foot — touching
    down, lifting off — slips more), else equally. With one foot only ``d`` is found (``dψ`` = 0, or the IMU's);
-   with none the pose holds (or turns with the IMU).
+   with none the pose holds (or turns with the IMU) — except through a contact dropout (feet standing by the gait,
+   none touching at both readings) of at most :data:`HOLD_TIME`, where the last measured translation is repeated
+   (and its turn, without an IMU: with one, the IMU measures the turn).
 3. **Yaw fusion (complementary filter).** With an IMU, the heading is ``ψ ← ψ + dψ_imu + k·(ψ_legs − ψ −
    dψ_imu)`` with ``k = dt/τ``: the IMU's heading change over the cycle — the yaw change of its orientation (an
    IMU integrates its gyro at its own, faster rate), or without an orientation its body rates turned into the
@@ -49,6 +51,15 @@ YAW_TIME_CONSTANT = 60.0
 because the legs under-read turns (feet scuff while the body turns: bullet's tripod at 0.3 turning throttle ended
 2.5 % / 4.2° off with τ = 2 s, 1.1 % / 0.9° with τ = 60 s, both with the gyro-rate heading); a constant IMU heading
 drift b leaves a heading error of about b·τ."""
+
+
+HOLD_TIME = 0.1
+"""Longest contact dropout the odometry bridges with the body's last measured motion [s]. When feet stand by the
+gait but the contact sensors report none of them touching at both ends of a cycle (a light robot bouncing, a foot
+lifting as the body rocks), there is no foot to fit; holding the pose still would lose the body's motion over the
+dropout (the quadruped's quad_wave lost 393 cycles of a 104 s square so, 8 cm of its first 2 m). The body's
+velocity changes little in a few cycles, so the last measured increment is repeated instead, for at most this long
+(the quadruped's dropouts last 1–7 cycles); after it, or with no foot standing by the gait, the pose holds."""
 
 
 def euler_yaw_rate(roll: float, pitch: float, rate: np.ndarray) -> float:
@@ -144,14 +155,19 @@ class LegOdometry:
     Args:
         time_delta: control period [s].
         yaw_time_constant: τ of the complementary yaw filter [s] (used only with an IMU).
+        hold_time: longest contact dropout bridged by the last measured motion [s] (:data:`HOLD_TIME`).
     """
 
-    def __init__(self, time_delta: float, yaw_time_constant: float = YAW_TIME_CONSTANT) -> None:
+    def __init__(self, time_delta: float, yaw_time_constant: float = YAW_TIME_CONSTANT,
+                 hold_time: float = HOLD_TIME) -> None:
         self.dt = time_delta
         self.gain = min(time_delta / yaw_time_constant, 1.0) if yaw_time_constant > 0.0 else 1.0
-        self._state = np.array([0.0, 0.0, 0.0, 0.0, math.nan, 0.0])
-        """x [m], y [m], yaw [rad], the legs' heading [rad], the IMU's last heading [rad] and whether foot contact
-        was measured last cycle (:mod:`shc_cli.control.odometry_kernels`)."""
+        self.hold = max(round(hold_time / time_delta), 0) if time_delta > 0.0 else 0
+        """Cycles a contact dropout repeats the last measured increment (:data:`HOLD_TIME`)."""
+        self._state = np.array([0.0, 0.0, 0.0, 0.0, math.nan, 0.0, 0.0, 0.0, 0.0, 0.0])
+        """x [m], y [m], yaw [rad], the legs' heading [rad], the IMU's last heading [rad], whether foot contact
+        was measured last cycle, the last measured increment (dx, dy [m], turn [rad]) and the cycles it was held
+        (:mod:`shc_cli.control.odometry_kernels`)."""
         self._feet: np.ndarray | None = None
         self._spare: np.ndarray | None = None
         self._zeros: np.ndarray | None = None
@@ -233,7 +249,7 @@ class LegOdometry:
             np.ascontiguousarray(contact, dtype=bool) if contact is not None else self._contact_before,
             self._contact_before, contact is not None,
             np.ascontiguousarray(forces, dtype=float) if forces is not None else zeros, forces is not None,
-            before is not None, math.nan if turn is None else turn, self.gain, self._state)
+            before is not None, math.nan if turn is None else turn, self.gain, self.hold, self._state)
         self._feet, self._spare = after, before
         x, y, yaw = self._state.tolist()[:3]
         return (x, y, yaw)

@@ -17,16 +17,19 @@ import numpy as np
 
 from shc_cli.model.jit import njit
 
-X, Y, YAW, LEG_YAW, IMU_YAW, CONTACT_BEFORE = range(6)
+X, Y, YAW, LEG_YAW, IMU_YAW, CONTACT_BEFORE, LAST_DX, LAST_DY, LAST_TURN, HELD = range(10)
 """Indices of the odometry's state vector: pose x, y [m], yaw [rad], the legs' own heading [rad], the IMU's last
-heading [rad] (NaN before the first orientation) and whether the last cycle measured foot contact (1.0) or not."""
+heading [rad] (NaN before the first orientation), whether the last cycle measured foot contact (1.0) or not, the
+last increment measured by standing feet (dx, dy [m] in the level frame, the legs' turn [rad]) and the cycles it
+has been held since."""
 
 
 @njit(cache=True)
 def odometry_cycle(feet: np.ndarray, orientation: np.ndarray, has_orientation: bool, roll: float, pitch: float,
                    before: np.ndarray, after: np.ndarray, use: np.ndarray, contact: np.ndarray,
                    contact_before: np.ndarray, has_contact: bool, forces: np.ndarray, weighted: bool,
-                   has_before: bool, turn: float, gain: float, state: np.ndarray) -> int:  # pragma: no cover
+                   has_before: bool, turn: float, gain: float, hold: int,
+                   state: np.ndarray) -> int:  # pragma: no cover
     """Advance the odometry ``state`` one cycle; returns the stance feet used.
 
     Args:
@@ -43,7 +46,9 @@ def odometry_cycle(feet: np.ndarray, orientation: np.ndarray, has_orientation: b
         forces: measured normal foot forces ``(L,)`` [N] (negative ones count as 0), read when ``weighted``.
         turn: the heading change over the cycle from the IMU's rates [rad] without an orientation, else NaN.
         gain: the complementary filter's ``dt/τ``.
-        state: ``(6,)`` (:data:`X` … :data:`CONTACT_BEFORE`); updated in place.
+        hold: cycles the last measured increment is repeated while feet stand by the gait (``use``) but none
+            touches at both readings (a contact dropout), before the pose holds still.
+        state: ``(10,)`` (:data:`X` … :data:`HELD`); updated in place.
     """
     if has_orientation:
         x, y, z, w = orientation[0], orientation[1], orientation[2], orientation[3]
@@ -104,6 +109,17 @@ def odometry_cycle(feet: np.ndarray, orientation: np.ndarray, has_orientation: b
                 legs_turn = math.atan2(cross, dot)
             c, s = math.cos(legs_turn), math.sin(legs_turn)
             dx, dy = px - (c * qx - s * qy), py - (s * qx + c * qy)
+            state[LAST_DX], state[LAST_DY], state[LAST_TURN], state[HELD] = dx, dy, legs_turn, 0.0
+        elif state[HELD] < hold:  # a contact dropout: the body keeps its last measured motion
+            standing = False
+            for i in range(legs):
+                standing = standing or use[i]
+            if standing:
+                # the turn only without an IMU: with one, the IMU measures the turn through the dropout, and the
+                # legs' heading (the slow reference that bounds the IMU's drift) takes no turn it did not measure
+                dx, dy = state[LAST_DX], state[LAST_DY]
+                legs_turn = state[LAST_TURN] if math.isnan(turn) else 0.0
+                state[HELD] += 1.0
     state[LEG_YAW] += legs_turn
     heading = state[YAW]
     if math.isnan(turn):
