@@ -268,7 +268,8 @@ def test_the_compiled_cycle_equals_the_reference_forms() -> None:
         q = np.array([*rng.normal(size=3) * 0.05, 1.0])
         q /= np.linalg.norm(q)
         stance = rng.random(6) < 0.7
-        contact = rng.random(6) < (0.9 if rng.random() < 0.8 else 0.0)  # some cycles touch nowhere: dropouts
+        draw = rng.random()  # some cycles touch nowhere, some only with swinging feet: dropouts and not
+        contact = rng.random(6) < 0.9 if draw < 0.7 else (~stance if draw < 0.85 else np.zeros(6, dtype=bool))
         forces = rng.normal(20.0, 15.0, size=6)  # some negative: they count as 0
         got = odometry.cycle(feet, 0.3, -0.2, stance, None, forces, q, contact)  # roll, pitch: the IMU's instead
         roll, pitch = quaternion_roll_pitch(q)
@@ -285,7 +286,8 @@ def test_the_compiled_cycle_equals_the_reference_forms() -> None:
         if levelled is not None and use.any():
             dx, dy, legs_turn = rigid_increment(levelled[use, :2], now[use, :2], np.maximum(forces[use], 0.0))
             last, held = (dx, dy), 0
-        elif levelled is not None and stance.any() and held < odometry.hold:  # a contact dropout: keep moving
+        elif levelled is not None and stance.any() and not (contact & ~stance).any() and held < odometry.hold:
+            # a contact dropout (no foot touching but the standing ones, and none of them at both readings)
             (dx, dy), held = last, held + 1  # with the IMU: its turn, none of the legs'
         levelled = now
         leg_yaw += legs_turn
@@ -350,3 +352,16 @@ def test_a_long_dropout_or_no_standing_foot_holds_the_pose() -> None:
     for k in range(20):
         airborne.cycle(feet - [0.001 * k, 0.0, 0.0], 0.0, 0.0, np.full(3, k < 10), contact=np.full(3, k < 10))
     assert airborne.x == pytest.approx(0.009, abs=1e-12)  # 9 measured increments, then nothing held
+
+
+def test_a_dropout_with_a_swinging_foot_on_the_ground_holds_the_pose() -> None:
+    """The standing feet lose contact while a foot the gait has lifted touches: the body may be resting or
+    dragging on that moving foot (bullet_mammalian's bipod sinks onto its swinging feet), so its last motion is
+    no guide and the pose holds."""
+    feet = np.array([[0.2, 0.1, -0.1], [-0.2, 0.1, -0.1], [0.0, -0.2, -0.1], [0.1, -0.2, -0.1]])
+    stance = np.array([True, True, True, False])
+    odometry = LegOdometry(0.01)
+    for k in range(20):
+        contact = np.array([k < 10] * 3 + [k >= 10])  # from cycle 10 only the swinging fourth foot touches
+        odometry.cycle(feet - [0.001 * k, 0.0, 0.0], 0.0, 0.0, stance, contact=contact)
+    assert odometry.x == pytest.approx(0.009, abs=1e-12)

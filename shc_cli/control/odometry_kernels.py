@@ -47,7 +47,8 @@ def odometry_cycle(feet: np.ndarray, orientation: np.ndarray, has_orientation: b
         turn: the heading change over the cycle from the IMU's rates [rad] without an orientation, else NaN.
         gain: the complementary filter's ``dt/τ``.
         hold: cycles the last measured increment is repeated while feet stand by the gait (``use``) but none
-            touches at both readings (a contact dropout), before the pose holds still.
+            touches at both readings and no other foot touches now (a contact dropout), before the pose holds
+            still.
         state: ``(10,)`` (:data:`X` … :data:`HELD`); updated in place.
     """
     if has_orientation:
@@ -111,10 +112,11 @@ def odometry_cycle(feet: np.ndarray, orientation: np.ndarray, has_orientation: b
             dx, dy = px - (c * qx - s * qy), py - (s * qx + c * qy)
             state[LAST_DX], state[LAST_DY], state[LAST_TURN], state[HELD] = dx, dy, legs_turn, 0.0
         elif state[HELD] < hold:  # a contact dropout: the body keeps its last measured motion
-            standing = False
+            standing = dragging = False
             for i in range(legs):
                 standing = standing or use[i]
-            if standing:
+                dragging = dragging or (has_contact and contact[i] and not use[i])
+            if standing and not dragging:  # not when a swinging foot touches: the body may rest or drag on it
                 # the turn only without an IMU: with one, the IMU measures the turn through the dropout, and the
                 # legs' heading (the slow reference that bounds the IMU's drift) takes no turn it did not measure
                 dx, dy = state[LAST_DX], state[LAST_DY]
