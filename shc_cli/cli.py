@@ -188,20 +188,23 @@ def simulate(
     = 0.5,
 ) -> None:
     """Run the controller on the robot in physics (MuJoCo; PyBullet with --engine): terrains, servos, power, CoT."""
-    from shc_cli.commands.run_outputs import check_outputs, finish_outputs
-    from shc_cli.commands.simulate import run_simulate
-    from shc_cli.domain.config import SimulationConfig
+    from shc_cli.loop.gc_pause import paused
 
-    check_outputs(bag, video, overwrite)
-    options = SimulationConfig(robot=robot, gait=gait, velocity=velocity, duration=duration, commands=commands,
-                               path=path, out=out, plots=plots, terrain=terrain, scenario=scenario,
-                               physics_rate=physics_rate,
-                               friction=friction, restitution=restitution, seed=seed, imu_noise=imu_noise,
-                               start=start, gui=gui, stand=stand, posture=posture, imu_posing=imu_posing,
-                               inclination=inclination, admittance=admittance, fail_on_fall=fail_on_fall,
-                               overwrite=overwrite, engine=engine, live=live, live_port=live_port,
-                               realtime=realtime, input_mode=input_mode, watchdog=watchdog)
-    run_simulate(options, after=lambda run: finish_outputs(run, bag, video))
+    with paused():  # no garbage collection in the set-up's imports and the figures (the run loop collects)
+        from shc_cli.commands.run_outputs import check_outputs, finish_outputs
+        from shc_cli.commands.simulate import run_simulate
+        from shc_cli.domain.config import SimulationConfig
+
+        check_outputs(bag, video, overwrite)
+        options = SimulationConfig(robot=robot, gait=gait, velocity=velocity, duration=duration, commands=commands,
+                                   path=path, out=out, plots=plots, terrain=terrain, scenario=scenario,
+                                   physics_rate=physics_rate,
+                                   friction=friction, restitution=restitution, seed=seed, imu_noise=imu_noise,
+                                   start=start, gui=gui, stand=stand, posture=posture, imu_posing=imu_posing,
+                                   inclination=inclination, admittance=admittance, fail_on_fall=fail_on_fall,
+                                   overwrite=overwrite, engine=engine, live=live, live_port=live_port,
+                                   realtime=realtime, input_mode=input_mode, watchdog=watchdog)
+        run_simulate(options, after=lambda run: finish_outputs(run, bag, video))
 
 
 @app.command("run-hw")

@@ -15,6 +15,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from shc_cli.events import recording
+from shc_cli.loop.gc_pause import collecting
 from shc_cli.loop.run_loop import LoopResult, ReadingT, RunLoop
 from shc_cli.loop.runlog import RunDirectory
 from shc_cli.loop.summary import RunSummary
@@ -43,7 +44,8 @@ def execute(loop: RunLoop[ReadingT], run: RunDirectory, summarise: Callable[[Loo
     try:
         with recording(run.partial, lambda: loop.cycle):  # warnings, faults and state changes: events.log
             try:
-                result = loop.run()
+                with collecting():  # also when the command paused the garbage collector (shc_cli.loop.gc_pause)
+                    result = loop.run()
             finally:
                 run.close()  # every row on disk before anything else (also when the loop raised)
             if after_loop is not None:

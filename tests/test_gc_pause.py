@@ -1,0 +1,63 @@
+"""``shc simulate`` pauses Python's cyclic garbage collector in its set-up and finishing (0.1–0.2 s of the 60 s
+walk's command were collections going over numba's, MuJoCo's and matplotlib's objects) and collects in the run loop
+(an open-ended run's memory stays bounded)."""
+
+from __future__ import annotations
+
+import gc
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from shc_cli.loop.gc_pause import collecting, paused
+
+from .test_cli import run
+
+
+def test_paused_turns_the_collector_off_except_in_collecting_and_restores_it() -> None:
+    assert gc.isenabled()
+    with paused():
+        assert not gc.isenabled()
+        with paused():  # nested: nothing changes
+            assert not gc.isenabled()
+        assert not gc.isenabled()
+        with collecting():
+            assert gc.isenabled()
+            assert gc.get_freeze_count() > 0  # the set-up's objects are not scanned again by the loop's passes
+        assert not gc.isenabled()
+    assert gc.isenabled() and gc.get_freeze_count() == 0
+    with collecting():  # outside a paused block: as it was
+        assert gc.isenabled()
+    assert gc.get_freeze_count() == 0
+
+
+def test_paused_restores_the_collector_when_the_block_raises() -> None:
+    with pytest.raises(RuntimeError), paused():
+        raise RuntimeError("stop")
+    assert gc.isenabled() and gc.get_freeze_count() == 0
+
+
+def test_simulate_collects_in_its_loop_only(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                            monkeypatch: pytest.MonkeyPatch) -> None:
+    from shc_cli import plots
+    from shc_cli.loop.run_loop import RunLoop
+
+    seen: dict[str, bool] = {}
+    loop_run, plot_simulation = RunLoop.run, plots.plot_simulation
+
+    def watched_run(self: Any) -> Any:
+        seen["loop"] = gc.isenabled()
+        return loop_run(self)
+
+    def watched_plots(*args: Any, **kwargs: Any) -> None:
+        seen["plots"] = gc.isenabled()
+        plot_simulation(*args, **kwargs)
+
+    monkeypatch.setattr(RunLoop, "run", watched_run)
+    monkeypatch.setattr(plots, "plot_simulation", watched_plots)
+    code, _, err = run(["simulate", "--duration", "0.2", "--out", str(tmp_path / "run")], capsys, monkeypatch)
+    assert code == 0, err
+    assert seen == {"loop": True, "plots": False}
+    assert gc.isenabled() and gc.get_freeze_count() == 0  # the process's collector as it was
+    assert (tmp_path / "run" / "power.png").is_file()
