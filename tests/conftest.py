@@ -29,6 +29,20 @@ def unless_missing(missing: bool, reason: str) -> pytest.MarkDecorator:
     return pytest.mark.skipif(missing, reason=reason)
 
 
+STARTED_FIRST = (
+    "tests/test_docs_examples.py::test_readme_first_five_minutes_run_after_the_readme_set_up_in_a_fresh_clone",
+)
+"""Tests run before the others, in this order: the fast suite's longest (about a minute: the README's set-up in a fresh
+clone, which builds its own environment and numba cache). Started first, the other worker runs the rest beside it —
+and compiles the clone-independent kernels into numba's cache meanwhile, which this worker then only loads — instead
+of a worker starting it late and the suite waiting for it at the end."""
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    first = {nodeid: k for k, nodeid in enumerate(STARTED_FIRST)}
+    items.sort(key=lambda item: first.get(item.nodeid, len(first)))  # stable: the rest keep their order
+
+
 def pytest_runtest_setup(item: pytest.Item) -> None:
     missing = item.get_closest_marker("missing_in_ci")
     if missing is not None:
