@@ -34,8 +34,34 @@ STARTED_FIRST = (
 )
 """Tests run before the others, in this order: the fast suite's longest (about a minute: the README's set-up in a fresh
 clone, which builds its own environment and numba cache). Started first, the other worker runs the rest beside it —
-and compiles the clone-independent kernels into numba's cache meanwhile, which this worker then only loads — instead
-of a worker starting it late and the suite waiting for it at the end."""
+and fills numba's cache meanwhile (:func:`_kernels_compiled_once`), which this worker then only loads — instead of a
+worker starting it late and the suite waiting for it at the end."""
+
+
+def _kernels_compiled_once(config: pytest.Config) -> None:
+    """In a pytest-xdist worker, before its first test that may use shc's numba kernels: the first worker to get here
+    runs ``shc warmup`` (a process of its own: nothing imported into the tests' process) holding a lock; the other
+    waits for it and goes on. On a cold cache (a fresh clone, CI) both workers, and run-hw subprocesses started
+    meanwhile, compiled the same kernels at once (≈ 12 s of CPU each) — and a real-time run that compiles in its
+    loop can miss its servos' replies."""
+    import fcntl
+    import hashlib
+    import subprocess
+    import tempfile
+
+    run = getattr(config, "workerinput", {}).get("testrunuid")
+    if run is None or getattr(config, "_shc_kernels_warm", False):
+        return
+    config._shc_kernels_warm = True  # type: ignore[attr-defined]
+    key = hashlib.sha1(str(ROOT).encode()).hexdigest()[:12]
+    with open(Path(tempfile.gettempdir()) / f"shc-tests-{key}.warmup", "a+", encoding="utf-8") as stamp:
+        fcntl.flock(stamp, fcntl.LOCK_EX)  # released when closed
+        stamp.seek(0)
+        if stamp.read() != run:  # not yet warmed up in this test run
+            subprocess.run([sys.executable, "-m", "shc_cli.cli", "warmup"], cwd=ROOT, capture_output=True,
+                           timeout=900)
+            stamp.truncate(0)
+            stamp.write(run)
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
@@ -47,6 +73,8 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
     missing = item.get_closest_marker("missing_in_ci")
     if missing is not None:
         pytest.fail(f"CI=true and {missing.args[0]}", pytrace=False)
+    if item.nodeid not in STARTED_FIRST:
+        _kernels_compiled_once(item.config)
 
 
 @pytest.fixture(scope="session")
