@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from tests.ros_master import ros, ros_env
+from tests.test_cli import run
 
 __all__ = ["ros_env"]
 
@@ -95,11 +96,15 @@ def test_an_openshc_parameter_file_loaded_with_rosparam_is_the_nodes_robot(ros_e
     assert "coxat" in robot and "tarsus" in robot  # Bullet's 5-DOF legs, from the parameter server
 
 
-def test_server_without_openshc_parameters_is_one_line(ros_env: dict[str, str], tmp_path: Path) -> None:
-    result = subprocess.run([*SHC, "ros", "server", "--namespace", "/nothere", "--out", str(tmp_path / "run")],
-                            cwd=ROOT, env=ros_env, capture_output=True, text=True, timeout=120)
-    assert result.returncode == 2
-    assert result.stderr.count("\n") == 1 and "/nothere/parameters" in result.stderr, result.stderr
+def test_server_without_openshc_parameters_is_one_line(ros_env: dict[str, str], tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                       monkeypatch) -> None:
+    for key in ("ROS_MASTER_URI", "ROS_HOME", "ROS_IP", "ROS_LOG_DIR"):  # in-process: the master's environment
+        monkeypatch.setenv(key, ros_env[key])
+    monkeypatch.chdir(ROOT)
+    code, _, stderr = run(["ros", "server", "--namespace", "/nothere", "--out", str(tmp_path / "run")], capsys,
+                          monkeypatch)
+    assert code == 2
+    assert stderr.count("\n") == 1 and "/nothere/parameters" in stderr, stderr
     assert not (tmp_path / "run").exists()
 
 
