@@ -122,12 +122,16 @@ def plan(
     realtime: Annotated[bool, typer.Option(help="Pace the run to the wall clock.")] = False,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
-    from shc_cli.commands.plan import run_plan
-    from shc_cli.commands.run_outputs import check_outputs, finish_outputs
+    from shc_cli.loop.gc_pause import paused
 
-    check_outputs(bag, video, overwrite)
-    run_plan(robot, gait, velocity, duration, commands, out, plots, after=lambda run: finish_outputs(run, bag, video),
-             overwrite=overwrite, live=live, live_port=live_port, realtime=realtime, path=path)
+    with paused():  # no garbage collection in the set-up's imports and the figures (the run loop collects)
+        from shc_cli.commands.plan import run_plan
+        from shc_cli.commands.run_outputs import check_outputs, finish_outputs
+
+        check_outputs(bag, video, overwrite)
+        run_plan(robot, gait, velocity, duration, commands, out, plots,
+                 after=lambda run: finish_outputs(run, bag, video), overwrite=overwrite, live=live,
+                 live_port=live_port, realtime=realtime, path=path)
 
 
 @app.command()
