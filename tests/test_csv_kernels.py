@@ -85,19 +85,47 @@ def test_g6_declines_exact_ties_and_formats_the_rest_of_the_specials() -> None:
         ["1e-05", "0.0001", "123456", "1e+06", "1e+06", "1.5e-39", "9.9e+48"]
 
 
-@given(st.floats(allow_nan=True, allow_infinity=True, allow_subnormal=True))
-@settings(max_examples=3000, deadline=None)
+FAST_EXAMPLES = 300
+"""Hypothesis examples of each property in the fast suite; the ``_thoroughly`` twins (slow) draw 2000–3000."""
+
+
+def _g6_agrees(x: float) -> None:
+    got = kernel_g6(x)
+    assert got is None or got == python_g6(x)
+
+
+def _g6_agrees_on_bits(bits: int) -> None:
+    _g6_agrees(struct.unpack("<d", struct.pack("<Q", bits))[0])
+
+
+FLOATS = st.floats(allow_nan=True, allow_infinity=True, allow_subnormal=True)
+BIT_PATTERNS = st.integers(min_value=0, max_value=2**64 - 1)
+
+
+@given(FLOATS)
+@settings(max_examples=FAST_EXAMPLES, deadline=None)
 def test_g6_property(x: float) -> None:
-    got = kernel_g6(x)
-    assert got is None or got == python_g6(x)
+    _g6_agrees(x)
 
 
-@given(st.integers(min_value=0, max_value=2**64 - 1))
+@pytest.mark.slow
+@given(FLOATS)
 @settings(max_examples=3000, deadline=None)
+def test_g6_property_thoroughly(x: float) -> None:
+    _g6_agrees(x)
+
+
+@given(BIT_PATTERNS)
+@settings(max_examples=FAST_EXAMPLES, deadline=None)
 def test_g6_property_on_bit_patterns(bits: int) -> None:
-    x = struct.unpack("<d", struct.pack("<Q", bits))[0]
-    got = kernel_g6(x)
-    assert got is None or got == python_g6(x)
+    _g6_agrees_on_bits(bits)
+
+
+@pytest.mark.slow
+@given(BIT_PATTERNS)
+@settings(max_examples=3000, deadline=None)
+def test_g6_property_on_bit_patterns_thoroughly(bits: int) -> None:
+    _g6_agrees_on_bits(bits)
 
 
 def test_f4_matches_python() -> None:
@@ -117,11 +145,22 @@ def test_f4_matches_python() -> None:
     assert kernel_f4(0.03125) is None and kernel_f4(1e6) is None and kernel_f4(math.nan) is None
 
 
-@given(st.floats(min_value=-2e6, max_value=2e6))
-@settings(max_examples=2000, deadline=None)
-def test_f4_property(x: float) -> None:
+def _f4_agrees(x: float) -> None:
     got = kernel_f4(x)
     assert got is None or got == python_f4(x)
+
+
+@given(st.floats(min_value=-2e6, max_value=2e6))
+@settings(max_examples=FAST_EXAMPLES, deadline=None)
+def test_f4_property(x: float) -> None:
+    _f4_agrees(x)
+
+
+@pytest.mark.slow
+@given(st.floats(min_value=-2e6, max_value=2e6))
+@settings(max_examples=2000, deadline=None)
+def test_f4_property_thoroughly(x: float) -> None:
+    _f4_agrees(x)
 
 
 class Robot(IntEnum):
