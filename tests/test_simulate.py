@@ -93,7 +93,7 @@ def test_export_urdf_writes_the_generated_model(tmp_path: Path, capsys, monkeypa
     assert sum(1 for link in root.iter("link") if link.get("name", "").endswith("_foot")) == 6
 
 
-@pytest.mark.parametrize("engine", ENGINES)
+@pytest.mark.parametrize("engine", [pytest.param("pybullet", marks=pytest.mark.slow), "mujoco"])  # PyBullet: 3.7 s
 def test_mammalian_starts_on_the_stand_and_walks_its_bipod(engine: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """bullet_mammalian.toml sets ``start_up.simulation = "stand"``: no flag needed."""
     code, _, out = _simulate(tmp_path, "mammal", ["bullet_mammalian", "--duration", "3", "--no-plots", "--engine",
