@@ -42,20 +42,19 @@ RATES = {"AX-12A": 0.04, "MX-64(1.0)": 0.01, "STS3215": 0.01}
 """The 60 s runs' periods [s]: 100 Hz, and 25 Hz for 18 AX-12A read one by one on one bus."""
 FAULTED = 5
 """The servo the fault tests break: BR_femur."""
-QUICK_START_S = 1.5
-"""The start-up [s] of the robot of the short walks and the fault tests: run-hw keeps the wall clock, and
-openshc_default's 6 s start-up was half of each such test's time (the long walks and the benchmark keep the 6 s)."""
+QUICK = ["[start_up]", "time_to_start = 1.5", "[walker.step_frequency]", "default = 2.0"]
+"""The robot of the short walks and the fault tests starts up in 1.5 s and steps at 2 Hz: run-hw keeps the wall clock,
+and openshc_default's 6 s start-up and 1 Hz steps (2.5 s to start walking, 2 s to stop) were most of each such test's
+time (the long walks and the benchmark keep them)."""
 
 
-def _robot(folder: Path, model: str, period: float | None = None, extra: str = "",
-           start_up_s: float | None = None) -> Path:
+def _robot(folder: Path, model: str, period: float | None = None, extra: str = "", quick: bool = False) -> Path:
     """The hexapod on one bus of ``model`` servos: AL_coxa turned against its joint with its zero off the middle
-    and a joint offset, so the goal ticks test direction, zero and offset; ``start_up_s`` replaces its start-up
-    duration (``start_up.time_to_start``, 6 s)."""
+    and a joint offset, so the goal ticks test direction, zero and offset; ``quick``: :data:`QUICK`."""
     dt, ticks, _, _ = FAMILIES[model]
     zero = ticks // 2 - 12
     lines = ['extends = "openshc_default"', f'name = "hexapod_{model[:2].lower()}"', f"time_delta = {period or dt}",
-             *([] if start_up_s is None else ["[start_up]", f"time_to_start = {start_up_s}"]),
+             *(QUICK if quick else []),
              "[legs.AL.joints.coxa]", "offset = 0.05", "[hardware]", f'model = "{model}"', "return_delay_us = 0",
              extra, "[hardware.servos]"]
     lines += [f"{key} = {{ id = {k + 1} }}" if key != "AL_coxa" else
@@ -82,7 +81,7 @@ def _goal_writes(bus: EmulatorProcess, model: str, start: int = 0) -> list[Heard
 def test_walks_and_the_goals_are_the_models_ticks(model: str, tmp_path: Path) -> None:
     """A goal on the bus = zero + direction × (angle + offset) in the model's ticks (AX-12A: 1024 per 300°); the
     robot walks, packs and the torque goes off."""
-    robot = _robot(tmp_path, model, start_up_s=QUICK_START_S)
+    robot = _robot(tmp_path, model, quick=True)
     with _bus(model) as bus:
         result = subprocess.run([*SHC, "run-hw", str(robot), "--port", bus.port, "--out", str(tmp_path / "run"),
                                  "--velocity", "1,0,0", "--duration", "1", "--stop-state", "running"],
@@ -119,7 +118,7 @@ def test_a_fault_mid_walk_stops_the_goals_names_the_servo_and_exits_3(model: str
                                                                        tmp_path: Path) -> None:
     """Each fault on each family's bus (the fast suite: each family once and each fault once, the AX-12A
     overloaded, the MX-64 vanished, the STS3215 corrupt; the other six are slow-marked)."""
-    robot = _robot(tmp_path, model, start_up_s=QUICK_START_S)
+    robot = _robot(tmp_path, model, quick=True)
     with _bus(model) as bus:
         process = subprocess.Popen([*SHC, "-v", "run-hw", str(robot), "--port", bus.port, "--out",
                                     str(tmp_path / "run"), "--velocity", "1,0,0", "--duration", "30"],
