@@ -5,6 +5,7 @@ other in one direction."""
 from __future__ import annotations
 
 import ast
+import functools
 from pathlib import Path
 
 PACKAGE = Path(__file__).parents[1] / "shc_cli"
@@ -24,8 +25,9 @@ def _type_checking_lines(tree: ast.AST) -> set[int]:
     return lines
 
 
+@functools.cache  # parsed once per test process (≈ 0.7 s), not once per test that reads it
 def import_graph() -> dict[str, set[str]]:
-    """Module → the ``shc_cli`` modules it imports (a package's ``__init__`` counts as the package)."""
+    """Module → the ``shc_cli`` modules it imports (a package's ``__init__`` counts as the package); read-only."""
     files = {_module(path): path for path in PACKAGE.rglob("*.py")}
     graph: dict[str, set[str]] = {}
     for name, path in files.items():
