@@ -38,7 +38,7 @@ def test_paused_restores_the_collector_when_the_block_raises() -> None:
     assert gc.isenabled() and gc.get_freeze_count() == 0
 
 
-def test_simulate_collects_in_its_loop_only(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+def test_simulate_collects_in_its_loop_and_video_only(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                             monkeypatch: pytest.MonkeyPatch) -> None:
     from shc_cli import plots
     from shc_cli.loop.run_loop import RunLoop
@@ -54,11 +54,16 @@ def test_simulate_collects_in_its_loop_only(tmp_path: Path, capsys: pytest.Captu
         seen["plots"] = gc.isenabled()
         plot_simulation(*args, **kwargs)
 
+    def watched_video(run_dir: Path, video: Path) -> None:  # --video's work grows with the run: collected
+        seen["video"] = gc.isenabled()
+
     monkeypatch.setattr(RunLoop, "run", watched_run)
     monkeypatch.setattr(plots, "plot_simulation", watched_plots)
-    code, _, err = run(["simulate", "--duration", "0.2", "--out", str(tmp_path / "run")], capsys, monkeypatch)
+    monkeypatch.setattr("shc_cli.commands.render.render_video", watched_video)
+    code, _, err = run(["simulate", "--duration", "0.2", "--out", str(tmp_path / "run"), "--video",
+                        str(tmp_path / "run.gif")], capsys, monkeypatch)
     assert code == 0, err
-    assert seen == {"loop": True, "plots": False}
+    assert seen == {"loop": True, "plots": False, "video": True}
     assert gc.isenabled() and gc.get_freeze_count() == 0  # the process's collector as it was
     assert (tmp_path / "run" / "power.png").is_file()
 

@@ -26,14 +26,18 @@ def check_outputs(bag: str | None, video: Path | None, overwrite: bool = False) 
 
 def finish_outputs(run: Path, bag: str | None, video: Path | None) -> None:
     """``--bag`` and ``--video`` of a finished run (also an interrupted one, before its exit code): the bag inside
-    its directory (``bag/``, or ``run.bag`` for ros1), the video as ``shc render RUN --out FILE`` would."""
-    if bag is not None:
-        from shc_cli.api import open_run
-        from shc_cli.interop.bag import export_bag
+    its directory (``bag/``, or ``run.bag`` for ros1), the video as ``shc render RUN --out FILE`` would — with the
+    garbage collector on, also inside the command's pause of it (their work grows with the run's length)."""
+    from shc_cli.loop.gc_pause import collecting
 
-        path = export_bag(open_run(run), run / ("run.bag" if bag == "ros1" else "bag"), bag)
-        typer.echo(f"wrote {path}")
-    if video is not None:
-        from shc_cli.commands.render import render_video
+    with collecting():
+        if bag is not None:
+            from shc_cli.api import open_run
+            from shc_cli.interop.bag import export_bag
 
-        render_video(run, video)
+            path = export_bag(open_run(run), run / ("run.bag" if bag == "ros1" else "bag"), bag)
+            typer.echo(f"wrote {path}")
+        if video is not None:
+            from shc_cli.commands.render import render_video
+
+            render_video(run, video)
