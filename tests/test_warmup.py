@@ -75,3 +75,32 @@ print("numba.np.arraymath" in sys.modules, "scipy.linalg" in sys.modules)
     frames, registries = compiled.stdout.splitlines()
     assert registries == "True True"  # compiling installs them
     assert loaded.stdout.splitlines() == [frames, "False False"]
+
+
+def test_a_failing_load_shortcut_falls_back_to_numbas_own_loader(tmp_path: Path) -> None:
+    """Should a numba release change the internals the shortcut uses, the kernel still loads from the cache (numba's
+    own loader, registries first) and gives the same frames — here the shortcut's runtime set-up is made to fail."""
+    code = """
+import sys
+import numpy as np
+from numba.core.runtime import nrt
+if sys.argv[1] == "break":  # the shortcut's first step fails once; numba's own path may call it again
+    original, calls = nrt.rtsys.initialize, []
+    def broken(context):
+        calls.append(context)
+        if len(calls) == 1:
+            raise AttributeError("changed in this numba")
+        return original(context)
+    nrt.rtsys.initialize = broken
+from shc_cli.model.kernels import chain_frames
+n = 3
+args = [np.zeros(3), np.array([0.1, 0.2, 0.3]), np.array([0.0, -0.4, 0.5]), np.array([0.05, 0.1, 0.12]),
+        np.array([1.5707963, 0.0, 0.0]), np.array([0.3, -0.2, 0.7]), np.empty((n + 1, 4, 4))]
+print(repr(chain_frames(*args).round(12).tolist()))
+print(len(chain_frames.stats.cache_hits))
+"""
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba-cache")}
+    compiled, loaded = (subprocess.run([sys.executable, "-c", code, mode], capture_output=True, text=True, env=env,
+                                       timeout=600) for mode in ("compile", "break"))
+    assert compiled.returncode == 0 and loaded.returncode == 0, compiled.stderr + loaded.stderr
+    assert loaded.stdout.splitlines() == [compiled.stdout.splitlines()[0], "1"]  # the same frames, from the cache

@@ -60,11 +60,18 @@ class _CacheLoader(FunctionCache):
     """
 
     def load_overload(self, sig: Any, target_context: Any) -> Any:
-        from numba.core.runtime import nrt
+        """The cached overload of ``sig``, or None (a miss). These are numba's internals (checked on numba 0.68):
+        should a numba release change them, or a kernel need more than the runtime to load, numba's own loader
+        (registries first) takes over, slower and correct."""
+        try:
+            from numba.core.runtime import nrt
 
-        nrt.rtsys.initialize(target_context)
-        with self._guard_against_spurious_io_errors():
-            return self._load_overload(sig, target_context)  # type: ignore[no-untyped-call]
+            nrt.rtsys.initialize(target_context)
+            with self._guard_against_spurious_io_errors():
+                return self._load_overload(sig, target_context)  # type: ignore[no-untyped-call]
+        except Exception as error:  # noqa: BLE001 — any failure of the shortcut: numba's full path
+            log.debug("kernel %s: loading with numba's own cache loader (%s)", getattr(self, "_name", "?"), error)
+            return super().load_overload(sig, target_context)
 
 
 def njit(**options: Any) -> Callable[[Callable[..., Any]], Any]:
