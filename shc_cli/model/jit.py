@@ -69,9 +69,9 @@ class _CacheLoader(FunctionCache):
             nrt.rtsys.initialize(target_context)
             with self._guard_against_spurious_io_errors():
                 return self._load_overload(sig, target_context)  # type: ignore[no-untyped-call]
-        except Exception as error:  # noqa: BLE001 — any failure of the shortcut: numba's full path
+        except Exception as error:  # any failure of the shortcut: numba's full path
             log.debug("kernel %s: loading with numba's own cache loader (%s)", getattr(self, "_name", "?"), error)
-            return super().load_overload(sig, target_context)
+            return super().load_overload(sig, target_context)  # type: ignore[no-untyped-call]
 
 
 def njit(**options: Any) -> Callable[[Callable[..., Any]], Any]:
