@@ -39,11 +39,12 @@ worker starting it late and the suite waiting for it at the end."""
 
 
 def _kernels_compiled_once(config: pytest.Config) -> None:
-    """In a pytest-xdist worker, before its first test that may use shc's numba kernels: the first worker to get here
-    runs ``shc warmup`` (a process of its own: nothing imported into the tests' process) holding a lock; the other
-    waits for it and goes on. On a cold cache (a fresh clone, CI) both workers, and run-hw subprocesses started
-    meanwhile, compiled the same kernels at once (≈ 12 s of CPU each) — and a real-time run that compiles in its
-    loop can miss its servos' replies."""
+    """In a pytest-xdist worker, before its first test that may use shc's numba kernels, on a cold cache (a fresh
+    clone, CI): the first worker to get here runs ``shc warmup`` (a process of its own: nothing imported into the
+    tests' process) holding a lock; the other waits for it. Without it each worker, and each run-hw subprocess started
+    before a kernel was cached, compiled what it first called — a real-time run compiling in its loop can miss its
+    servos' replies. A cache filled before is left as it is (a kernel edited since compiles where it is first
+    called, as without this)."""
     import fcntl
     import hashlib
     import subprocess
@@ -57,11 +58,13 @@ def _kernels_compiled_once(config: pytest.Config) -> None:
     with open(Path(tempfile.gettempdir()) / f"shc-tests-{key}.warmup", "a+", encoding="utf-8") as stamp:
         fcntl.flock(stamp, fcntl.LOCK_EX)  # released when closed
         stamp.seek(0)
-        if stamp.read() != run:  # not yet warmed up in this test run
+        cold = not any((ROOT / "shc_cli" / "model" / "__pycache__").glob("*.nbi"))
+        if stamp.read() != run and cold:  # not done yet in this test run, and nothing cached
             subprocess.run([sys.executable, "-m", "shc_cli.cli", "warmup"], cwd=ROOT, capture_output=True,
                            timeout=900)
-            stamp.truncate(0)
-            stamp.write(run)
+        stamp.seek(0)
+        stamp.truncate()
+        stamp.write(run)
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
