@@ -151,6 +151,8 @@ def simulate(
     restitution: Annotated[float, typer.Option(help="Restitution of feet and terrain.")] = 0.0,
     seed: Annotated[int, typer.Option(help="Seed of every random thing (terrain, sensor noise).")] = 0,
     imu_noise: Annotated[float, typer.Option(help="IMU noise standard deviation (rad/s, m/s²).")] = 0.0,
+    imu_yaw_bias: Annotated[float, typer.Option(help="IMU gyro yaw-rate bias (deg/s): the rate reads it, the "
+                                                     "orientation's yaw drifts by it.")] = 0.0,
     start: Annotated[str, typer.Option(help="Spawn pose: unpacked or packed.")] = "unpacked",
     stand: Annotated[
         bool | None,
@@ -204,6 +206,7 @@ def simulate(
                                    path=path, out=out, plots=plots, terrain=terrain, scenario=scenario,
                                    physics_rate=physics_rate,
                                    friction=friction, restitution=restitution, seed=seed, imu_noise=imu_noise,
+                                   imu_yaw_bias=imu_yaw_bias,
                                    start=start, gui=gui, stand=stand, posture=posture, imu_posing=imu_posing,
                                    inclination=inclination, admittance=admittance, fail_on_fall=fail_on_fall,
                                    overwrite=overwrite, engine=engine, live=live, live_port=live_port,

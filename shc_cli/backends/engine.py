@@ -46,6 +46,7 @@ class EngineOptions:
         restitution: restitution of feet and terrain, as PyBullet's ``restitution`` of both (docs/physics-model.md).
         seed: seed of every random thing (terrain blocks, IMU noise).
         imu_noise: standard deviation of IMU noise (rad/s, m/s² alike); 0 = none.
+        imu_yaw_bias: the IMU gyro's yaw-rate bias [rad/s]; 0 = none (:class:`shc_cli.backends.imu.Imu`).
         start_pose: spawn pose, ``"unpacked"`` or ``"packed"`` (:func:`shc_cli.backends.simulated.open_world`).
         gui: open the engine's viewer (PyBullet only).
         stand: spawn the body at its standing height held by a removable support (:meth:`Engine.release_stand`)
@@ -64,6 +65,7 @@ class EngineOptions:
     gui: bool = False
     stand: bool = False
     engine: EngineName = "mujoco"  # the default engine (engine_registry.DEFAULT_ENGINE)
+    imu_yaw_bias: float = 0.0
 
 
 @dataclass(frozen=True)

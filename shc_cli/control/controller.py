@@ -384,8 +384,9 @@ class Controller(LegManipulation):
             roll, pitch, _ = self.poser.current.euler()
             if sensors.angular_rate is not None:
                 turn = euler_yaw_rate(roll, pitch, np.asarray(sensors.angular_rate, dtype=float)) * self.dt
+        commanded = float(self.walker.desired_angular) if self.walker is not None else 0.0
         return self.odometry.cycle(feet, roll, pitch, use, turn, sensors.foot_forces, orientation,
-                                   sensors.foot_contact)
+                                   sensors.foot_contact, commanded)
 
     def _update_pose(self) -> None:
         """The body pose of this cycle, from the previous cycle's leg states (OpenSHC ``updateCurrentPose``)."""

@@ -22,12 +22,16 @@ Method (an shc addition; OpenSHC has no odometry):
    with none the pose holds (or turns with the IMU) — except through a contact dropout (feet standing by the gait,
    none touching at both readings, no other foot touching) of at most :data:`HOLD_TIME`, where the last measured
    translation is repeated (and its turn, without an IMU: with one, the IMU measures the turn).
-3. **Yaw fusion (complementary filter).** With an IMU, the heading is ``ψ ← ψ + dψ_imu + k·(ψ_legs − ψ −
-   dψ_imu)`` with ``k = dt/τ``: the IMU's heading change over the cycle — the yaw change of its orientation (an
-   IMU integrates its gyro at its own, faster rate), or without an orientation its body rates turned into the
-   Euler yaw rate ``(ω_y sin φ + ω_z cos φ)/cos θ`` × dt — carries the fast part, the legs' integrated heading
-   ``ψ_legs`` the slow part (time constant ``τ`` = :data:`YAW_TIME_CONSTANT`), so neither a drifting IMU heading nor
-   slipping feet drift freely.
+3. **Yaw fusion (complementary filter with a gyro-bias state).** With an IMU, its heading change over the cycle
+   ``dψ_imu`` — the yaw change of its orientation (an IMU integrates its gyro at its own, faster rate), or without
+   an orientation its body rates turned into the Euler yaw rate ``(ω_y sin φ + ω_z cos φ)/cos θ`` × dt — minus the
+   estimated gyro bias ``b`` carries the heading: ``ψ ← ψ + (dψ_imu − b·dt) + k·(ψ_ref − ψ − (dψ_imu − b·dt))``,
+   ``k = dt/τ`` (:data:`YAW_TIME_CONSTANT`). The reference heading ``ψ_ref`` and the bias come from the legs only
+   while the body is steady — the gait's commanded yaw rate and the smoothed bias-corrected gyro rate both within
+   :data:`STEADY_YAW_RATE`: then ``ψ_ref`` takes the legs' turn and ``b`` is the IMU's minus the legs' yaw rate,
+   low-passed over ``τ_b`` (:data:`BIAS_TIME_CONSTANT`, with two or more feet fitted); while the body turns,
+   ``ψ_ref`` follows the bias-corrected gyro. Feet misread turns by a few % (the quadruped's over-read by 4 %), a
+   gyro's bias is a rate: so a turn is the gyro's and the legs bound its drift where their turn is zero.
 4. **Composition.** ``x, y ← x, y + R(ψ)·d``: each increment is rotated by the heading it was walked at.
 
 Compared with CHAMP (``champ/odometry``): CHAMP averages each stance foot's displacement in the body frame and the
@@ -46,11 +50,23 @@ import math
 
 import numpy as np
 
-YAW_TIME_CONSTANT = 60.0
-"""Time constant τ of the complementary yaw filter [s]: the legs' heading corrects the IMU's heading over τ. Long,
-because the legs under-read turns (feet scuff while the body turns: bullet's tripod at 0.3 turning throttle ended
-2.5 % / 4.2° off with τ = 2 s, 1.1 % / 0.9° with τ = 60 s, both with the gyro-rate heading); a constant IMU heading
-drift b leaves a heading error of about b·τ."""
+YAW_TIME_CONSTANT = 10.0
+"""Time constant τ of the yaw filter's heading correction [s]: the heading is pulled towards the filter's reference
+heading (the legs' while the body does not turn, the bias-corrected IMU's while it turns) over τ."""
+
+BIAS_TIME_CONSTANT = 10.0
+"""Time constant τ_b of the yaw filter's gyro-bias estimate [s]: the IMU's yaw rate minus the legs', low-passed
+over τ_b of the cycles in which the legs are trusted (the body standing or walking straight)."""
+
+STEADY_YAW_RATE = 0.05
+"""The body counts as not turning — its legs' turn is trusted, and the gyro's bias learned from it — while the
+smoothed, bias-corrected IMU yaw rate stays within this [rad/s] (2.9°/s). Feet over- or under-read a turn by a few
+% (the quadruped's quad_wave over-reads its turns on the spot by 4 %, bullet's tripod under-reads an arc), a
+gyro's bias is a rate: so the legs are believed where their turn is zero, and the gyro carries every turn."""
+
+RATE_TIME_CONSTANT = 0.5
+"""Time constant of the smoothing of the bias-corrected IMU yaw rate compared with :data:`STEADY_YAW_RATE` [s]
+(about a gait cycle: the body's yaw wobble within a step does not count as a turn)."""
 
 
 HOLD_TIME = 0.1
@@ -157,19 +173,31 @@ class LegOdometry:
 
     Args:
         time_delta: control period [s].
-        yaw_time_constant: τ of the complementary yaw filter [s] (used only with an IMU).
+        yaw_time_constant: τ of the yaw filter's heading correction [s] (used only with an IMU; 0 or less: none,
+            the bias-corrected IMU heading alone).
         hold_time: longest contact dropout bridged by the last measured motion [s] (:data:`HOLD_TIME`).
+        bias_time_constant: τ_b of the yaw filter's gyro-bias estimate [s] (0 or less: no bias estimated).
+        steady_yaw_rate: the smoothed yaw rate [rad/s] up to which the legs' turn is trusted
+            (:data:`STEADY_YAW_RATE`).
     """
 
     def __init__(self, time_delta: float, yaw_time_constant: float = YAW_TIME_CONSTANT,
-                 hold_time: float = HOLD_TIME) -> None:
+                 hold_time: float = HOLD_TIME, bias_time_constant: float = BIAS_TIME_CONSTANT,
+                 steady_yaw_rate: float = STEADY_YAW_RATE) -> None:
         self.dt = time_delta
-        self.gain = min(time_delta / yaw_time_constant, 1.0) if yaw_time_constant > 0.0 else 1.0
+        self.gain = min(time_delta / yaw_time_constant, 1.0) if yaw_time_constant > 0.0 else 0.0
+        """The heading gain dt/τ."""
+        self.bias_gain = min(time_delta / bias_time_constant, 1.0) if bias_time_constant > 0.0 else 0.0
+        """The bias gain dt/τ_b."""
+        self.rate_gain = min(time_delta / RATE_TIME_CONSTANT, 1.0)
+        """The smoothing gain of the yaw rate that tells turning from steady."""
+        self.steady_yaw_rate = steady_yaw_rate
         self.hold = max(round(hold_time / time_delta), 0) if time_delta > 0.0 else 0
         """Cycles a contact dropout repeats the last measured increment (:data:`HOLD_TIME`)."""
-        self._state = np.array([0.0, 0.0, 0.0, 0.0, math.nan, 0.0, 0.0, 0.0, 0.0, 0.0])
+        self._state = np.array([0.0, 0.0, 0.0, 0.0, math.nan, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
         """x [m], y [m], yaw [rad], the legs' heading [rad], the IMU's last heading [rad], whether foot contact
-        was measured last cycle, the last measured increment (dx, dy [m], turn [rad]) and the cycles it was held
+        was measured last cycle, the last measured increment (dx, dy [m], turn [rad]) and the cycles it was held,
+        the yaw filter's reference heading [rad], gyro-bias estimate [rad/s] and smoothed yaw rate [rad/s]
         (:mod:`shc_cli.control.odometry_kernels`)."""
         self._feet: np.ndarray | None = None
         self._spare: np.ndarray | None = None
@@ -196,8 +224,19 @@ class LegOdometry:
 
     @property
     def leg_yaw(self) -> float:
-        """Heading from the legs alone [rad] (the slow input of the complementary filter)."""
+        """Heading from the legs alone [rad] (their turns integrated, whether trusted or not)."""
         return float(self._state[3])
+
+    @property
+    def reference_yaw(self) -> float:
+        """The yaw filter's reference heading [rad]: the legs' turns while the body does not turn, the
+        bias-corrected IMU's while it does (the legs' heading without an IMU)."""
+        return float(self._state[10])
+
+    @property
+    def gyro_bias(self) -> float:
+        """The yaw filter's estimate of the IMU's yaw-rate bias [rad/s] (0 without an IMU)."""
+        return float(self._state[11])
 
     @property
     def pose(self) -> tuple[float, float, float]:
@@ -212,7 +251,7 @@ class LegOdometry:
 
     def cycle(self, feet: np.ndarray, roll: float, pitch: float, stance: np.ndarray, turn: float | None = None,
               forces: np.ndarray | None = None, orientation: np.ndarray | None = None,
-              contact: np.ndarray | None = None) -> tuple[float, float, float]:
+              contact: np.ndarray | None = None, commanded_turn_rate: float = 0.0) -> tuple[float, float, float]:
         """Advance one cycle.
 
         Args:
@@ -227,6 +266,8 @@ class LegOdometry:
             orientation: the IMU's orientation (x, y, z, w), or None: it gives roll, pitch and the heading change
                 (the yaw change of the orientation since the last one: the IMU integrates its gyro at its own rate).
             contact: measured foot contact ``(L,)``, or None: a foot counts only when touching at both readings.
+            commanded_turn_rate: the yaw rate the gait walks at [rad/s] (the walker's desired angular velocity):
+                beyond :attr:`steady_yaw_rate` the body is turning and its legs' turn is not trusted.
 
         Returns:
             the new pose (x, y, yaw).
@@ -252,7 +293,8 @@ class LegOdometry:
             np.ascontiguousarray(contact, dtype=bool) if contact is not None else self._contact_before,
             self._contact_before, contact is not None,
             np.ascontiguousarray(forces, dtype=float) if forces is not None else zeros, forces is not None,
-            before is not None, math.nan if turn is None else turn, self.gain, self.hold, self._state)
+            before is not None, math.nan if turn is None else turn, self.gain, self.hold, self.bias_gain,
+            self.rate_gain, self.steady_yaw_rate, self.dt, commanded_turn_rate, self._state)
         self._feet, self._spare = after, before
         x, y, yaw = self._state.tolist()[:3]
         return (x, y, yaw)

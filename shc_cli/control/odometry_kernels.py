@@ -1,7 +1,8 @@
 """The leg odometry's per-cycle arithmetic compiled with numba (:mod:`shc_cli.control.odometry`).
 
 One call a control cycle does what :class:`~shc_cli.control.odometry.LegOdometry` describes: the feet levelled by
-roll and pitch, the (weighted) 2-D Kabsch fit of the stance feet, the complementary yaw filter and the composition
+roll and pitch, the (weighted) 2-D Kabsch fit of the stance feet, the yaw filter (with its gyro-bias state) and the
+composition
 of the pose — the same formulas as :func:`~shc_cli.control.odometry.level` and
 :func:`~shc_cli.control.odometry.rigid_increment`, summed element by element from the first foot (the order of
 :func:`~shc_cli.control.odometry._increment_of_lists`). The levelling is written out instead of NumPy's matrix
@@ -17,18 +18,20 @@ import numpy as np
 
 from shc_cli.model.jit import njit
 
-X, Y, YAW, LEG_YAW, IMU_YAW, CONTACT_BEFORE, LAST_DX, LAST_DY, LAST_TURN, HELD = range(10)
+X, Y, YAW, LEG_YAW, IMU_YAW, CONTACT_BEFORE, LAST_DX, LAST_DY, LAST_TURN, HELD, REFERENCE, BIAS, RATE = range(13)
 """Indices of the odometry's state vector: pose x, y [m], yaw [rad], the legs' own heading [rad], the IMU's last
 heading [rad] (NaN before the first orientation), whether the last cycle measured foot contact (1.0) or not, the
 last increment measured by standing feet (dx, dy [m] in the level frame, the legs' turn [rad]) and the cycles it
-has been held since."""
+has been held since; the yaw filter's reference heading [rad], its estimate of the IMU's yaw-rate bias [rad/s] and
+the smoothed bias-corrected IMU yaw rate [rad/s] that tells turning from steady."""
 
 
 @njit(cache=True)
 def odometry_cycle(feet: np.ndarray, orientation: np.ndarray, has_orientation: bool, roll: float, pitch: float,
                    before: np.ndarray, after: np.ndarray, use: np.ndarray, contact: np.ndarray,
                    contact_before: np.ndarray, has_contact: bool, forces: np.ndarray, weighted: bool,
-                   has_before: bool, turn: float, gain: float, hold: int,
+                   has_before: bool, turn: float, gain: float, hold: int, bias_gain: float, rate_gain: float,
+                   steady_rate: float, dt: float, commanded_rate: float,
                    state: np.ndarray) -> int:  # pragma: no cover
     """Advance the odometry ``state`` one cycle; returns the stance feet used.
 
@@ -45,11 +48,17 @@ def odometry_cycle(feet: np.ndarray, orientation: np.ndarray, has_orientation: b
             touching now (``contact``) and at the last reading (``contact_before``, then set to ``contact``).
         forces: measured normal foot forces ``(L,)`` [N] (negative ones count as 0), read when ``weighted``.
         turn: the heading change over the cycle from the IMU's rates [rad] without an orientation, else NaN.
-        gain: the complementary filter's ``dt/τ``.
+        gain: the yaw filter's heading gain ``dt/τ``.
         hold: cycles the last measured increment is repeated while feet stand by the gait (``use``) but none
             touches at both readings and no other foot touches now (a contact dropout), before the pose holds
             still.
-        state: ``(10,)`` (:data:`X` … :data:`HELD`); updated in place.
+        bias_gain: the yaw filter's bias gain ``dt/τ_b``.
+        rate_gain: the smoothing gain ``dt/τ_r`` of the IMU's yaw rate that tells turning from steady.
+        steady_rate: the smoothed yaw rate [rad/s] up to which the legs' turn is trusted (steady, not turning).
+        dt: the control period [s].
+        commanded_rate: the yaw rate the gait is walking at (the walker's desired one) [rad/s]; above
+            ``steady_rate`` the body is turning.
+        state: ``(13,)`` (:data:`X` … :data:`RATE`); updated in place.
     """
     if has_orientation:
         x, y, z, w = orientation[0], orientation[1], orientation[2], orientation[3]
@@ -126,9 +135,19 @@ def odometry_cycle(feet: np.ndarray, orientation: np.ndarray, has_orientation: b
     heading = state[YAW]
     if math.isnan(turn):
         state[YAW] += legs_turn
-    else:
-        predicted = state[YAW] + turn
-        state[YAW] = predicted + gain * (state[LEG_YAW] - predicted) if used > 1 else predicted
+        state[REFERENCE] += legs_turn
+    else:  # the yaw filter with a bias state: the legs' turn is trusted only while the body does not turn
+        corrected = turn - state[BIAS] * dt
+        state[RATE] += rate_gain * (corrected / dt - state[RATE])
+        if abs(state[RATE]) <= steady_rate and abs(commanded_rate) <= steady_rate:
+            # steady (neither the gait nor the gyro turns): the legs' turn (none when no foot is fitted)
+            state[REFERENCE] += legs_turn
+            if used > 1:
+                state[BIAS] += bias_gain * ((turn - legs_turn) / dt - state[BIAS])
+        else:  # turning: the gyro's
+            state[REFERENCE] += corrected
+        predicted = state[YAW] + corrected
+        state[YAW] = predicted + gain * (state[REFERENCE] - predicted)
     c, s = math.cos(heading), math.sin(heading)  # the increment is in the level frame at the cycle's start
     state[X] += c * dx - s * dy
     state[Y] += s * dx + c * dy

@@ -32,6 +32,11 @@ Velocity = str | tuple[float, float, float]
 """A velocity input ``"VX,VY,WZ"`` or ``(vx, vy, wz)`` in the robot's input mode (throttle −1..1 or m/s, rad/s)."""
 
 
+MAX_IMU_YAW_BIAS = 90.0
+"""Largest simulated gyro yaw-rate bias ``--imu-yaw-bias`` accepts [deg/s] (a MEMS gyro's uncalibrated bias is a few
+deg/s; beyond this it would be no gyro)."""
+
+
 def _bad(option: str, problem: str, fix: str) -> SpecError:
     return SpecError([Issue(None, None, option, problem, fix)])
 
@@ -56,6 +61,8 @@ class SimulationConfig(BaseModel):
         restitution: restitution of feet and terrain.
         seed: seed of every random thing.
         imu_noise: IMU noise standard deviation [rad/s, m/s²].
+        imu_yaw_bias: the simulated IMU gyro's yaw-rate bias [deg/s] (finite, at most
+            :data:`MAX_IMU_YAW_BIAS` in size): its rate reads it and its orientation's yaw drifts by it; 0 = none.
         start: spawn pose, ``unpacked`` or ``packed``.
         gui: open the physics GUI (needs a display).
         stand: start up on a stand (True), on the ground (False), or as ``start_up.simulation`` says (None).
@@ -92,6 +99,7 @@ class SimulationConfig(BaseModel):
     restitution: float = 0.0
     seed: int = 0
     imu_noise: float = 0.0
+    imu_yaw_bias: float = 0.0
     start: StartPose = "unpacked"
     gui: bool = False
     stand: bool | None = None
@@ -133,6 +141,14 @@ class SimulationConfig(BaseModel):
     def replace(self, **changes: Any) -> SimulationConfig:
         """This config with some options changed (validated again)."""
         return type(self)(**{**self.model_dump(exclude_unset=True), **changes})
+
+    @field_validator("imu_yaw_bias")
+    @classmethod
+    def _imu_yaw_bias(cls, value: float) -> float:
+        if not abs(value) <= MAX_IMU_YAW_BIAS:
+            raise _bad("--imu-yaw-bias", f"{value!r} is not a yaw-rate bias within ±{MAX_IMU_YAW_BIAS:g} deg/s",
+                       "give degrees per second, e.g. --imu-yaw-bias 0.5")
+        return value
 
     @field_validator("input_mode")
     @classmethod
@@ -255,7 +271,8 @@ class SimulationConfig(BaseModel):
         from shc_cli.backends.engine import EngineOptions
 
         return EngineOptions(self.terrain_spec, self.substeps(robot), self.airborne, self.friction, self.restitution,
-                             self.seed, self.imu_noise, self.start, self.gui, self.stand_start(robot), self.engine)
+                             self.seed, self.imu_noise, self.start, self.gui, self.stand_start(robot), self.engine,
+                             math.radians(self.imu_yaw_bias))
 
 
 def parse_posture(text: str) -> dict[str, Any]:
@@ -297,6 +314,7 @@ class SimulationOptions(TypedDict, total=False):
     restitution: float
     seed: int
     imu_noise: float
+    imu_yaw_bias: float
     start: StartPose
     gui: bool
     stand: bool | None

@@ -114,7 +114,7 @@ class MujocoWorld:
         self._positions = flat.copy()
         self._mean_torque = np.zeros(len(joints))
         self._mean_power = np.full(len(joints), servo.idle_power)
-        self.imu = Imu(control_period, imu_noise, seed)
+        self.imu = Imu(control_period, imu_noise, seed, o.imu_yaw_bias)
         self._q = _view(data.qpos, self.qpos_index)
         """The servos' joint positions: a view into ``qpos`` (the hinges follow the free joint, legs in order)."""
         self._v = _view(data.qvel, self.qvel_index)
@@ -208,7 +208,7 @@ class MujocoWorld:
         return Reading(
             joints=padded(self._positions), joint_velocities=padded(np.array(self._v)),
             joint_efforts=padded(self._mean_torque), servo_power=padded(self._mean_power),
-            orientation=np.array([quat[1], quat[2], quat[3], quat[0]]), angular_rate=rate,
+            orientation=self.imu.orientation(np.array([quat[1], quat[2], quat[3], quat[0]])), angular_rate=rate,
             linear_acceleration=specific_force, foot_forces=forces, foot_contact=forces > 0.0,
             body_height=self._ray_height(position), position=position, rpy=rpy_from_matrix(rotation),
             linear_velocity=velocity, angular_velocity=angular,

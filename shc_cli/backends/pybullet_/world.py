@@ -95,7 +95,7 @@ class World:
         """Physics step [s]."""
         self.physics_time = 0.0
         """Wall time spent inside ``stepSimulation`` [s]."""
-        self.imu = Imu(control_period, imu_noise, seed)
+        self.imu = Imu(control_period, imu_noise, seed, o.imu_yaw_bias)
         with quiet_stdout():
             self.client = pybullet.connect(pybullet.GUI if gui else pybullet.DIRECT)
         if self.client < 0:
@@ -307,7 +307,8 @@ class World:
         return Reading(
             joints=padded(self._positions), joint_velocities=padded(velocities),
             joint_efforts=padded(self._mean_torque), servo_power=padded(self._mean_power),
-            orientation=np.array(orientation), angular_rate=rate, linear_acceleration=specific_force,
+            orientation=self.imu.orientation(np.array(orientation)), angular_rate=rate,
+            linear_acceleration=specific_force,
             foot_forces=forces, foot_contact=forces > 0.0, body_height=self._ray_height(position),
             position=position, rpy=np.array(p.getEulerFromQuaternion(orientation)),
             linear_velocity=linear_v, angular_velocity=angular_v,
