@@ -1,8 +1,10 @@
 """``shc run-hw`` end to end on a Dynamixel Protocol 1.0 bus (AX-12A: a READ per servo; MX-64 with 1.0 firmware:
 BULK READ) and a Feetech STS3215 bus: 18 emulated servos (shc_cli/hardware/emulator_protocol1.py, keeping the 1 Mbaud
 wire's time line), a 3-DOF hexapod that extends openshc_default. Goals on the bus in the model's ticks, faults
-mid-walk, the rate check; the long walks and six of the nine family × fault runs are slow-marked. Refusals before
-the walk run the command in-process (nothing real-time happens in them).
+mid-walk, the rate check. Every real-time walk is marked slow and serial: .ci/run runs them alone after the other
+slow tests, since beside another test worker on 2 cores an emulated bus starved past the packet timeout reads as a
+silent servo (a fresh clone's fast suite on a loaded machine failed two walks so). Refusals before the walk run the
+command in-process (nothing real-time happens in them) and stay in the fast suite.
 
 The emulator is served by a process of its own (shc_cli/hardware/emulator_process.py) while run-hw runs in another:
 as a thread of pytest's process, on a loaded 2-core machine or beside CI's other test worker, it was kept off the CPU
@@ -77,6 +79,8 @@ def _goal_writes(bus: EmulatorProcess, model: str, start: int = 0) -> list[Heard
     return [p for p in bus.packets(start) if p.instruction == p1.SYNC_WRITE and p.params[0] == address]
 
 
+@pytest.mark.slow
+@pytest.mark.serial  # a real-time walk on an emulated bus (module docstring)
 @pytest.mark.parametrize("model", list(FAMILIES))
 def test_walks_and_the_goals_are_the_models_ticks(model: str, tmp_path: Path) -> None:
     """A goal on the bus = zero + direction × (angle + offset) in the model's ticks (AX-12A: 1024 per 300°); the
@@ -111,13 +115,12 @@ def test_walks_and_the_goals_are_the_models_ticks(model: str, tmp_path: Path) ->
 FAULTS = ["overload", "vanish", "corrupt"]
 
 
-@pytest.mark.parametrize(("model", "fault"), [
-    pytest.param(model, fault, marks=[] if k == m else [pytest.mark.slow])
-    for m, model in enumerate(FAMILIES) for k, fault in enumerate(FAULTS)])
+@pytest.mark.slow
+@pytest.mark.serial  # real-time walks on an emulated bus (module docstring)
+@pytest.mark.parametrize(("model", "fault"), [(model, fault) for model in FAMILIES for fault in FAULTS])
 def test_a_fault_mid_walk_stops_the_goals_names_the_servo_and_exits_3(model: str, fault: str,
                                                                        tmp_path: Path) -> None:
-    """Each fault on each family's bus (the fast suite: each family once and each fault once, the AX-12A
-    overloaded, the MX-64 vanished, the STS3215 corrupt; the other six are slow-marked)."""
+    """Each fault on each family's bus."""
     robot = _robot(tmp_path, model, quick=True)
     with _bus(model) as bus:
         process = subprocess.Popen([*SHC, "-v", "run-hw", str(robot), "--port", bus.port, "--out",

@@ -162,18 +162,21 @@ def test_feetech_sdk_takes_a_late_reply_for_the_next_read_and_the_bus_port_does_
 
     from shc_cli.hardware.bus_protocol1 import _FeetechPort
 
-    with Protocol1Emulator({1: "STS3215"}) as bus:
-        for make, expected_wrong in ((sdk.PortHandler, True), (_FeetechPort, False)):
+    for make, expected_wrong in ((sdk.PortHandler, True), (_FeetechPort, False)):
+        # a bus each: the SDK's case leaves the real model reply in the pty, which would answer the next case's read
+        with Protocol1Emulator({1: "STS3215"}) as bus:
             port = make(bus.port)
             assert port.openPort() and port.setBaudRate(1_000_000)
             port.ser.timeout = 0.001
             handler = sdk.PacketHandler(0)
             bus.faults(1).late_reply_s = 0.06
             assert handler.read2ByteTxRx(port, 1, 56)[1] == sdk.COMM_RX_TIMEOUT  # 34 ms timeout
-            arrives = time.monotonic() + 2.0  # the late reply arrives (60 ms; later on a loaded machine: wait for it)
-            while not port.ser.in_waiting and time.monotonic() < arrives:
+            # the whole late reply arrives (60 ms; later on a loaded machine, and maybe in pieces: wait for its 8 bytes
+            # — FF FF id length error 2 data checksum — or the bus's port clears a head and reads the tail later)
+            arrives = time.monotonic() + 2.0
+            while port.ser.in_waiting < 8 and time.monotonic() < arrives:
                 time.sleep(0.005)
-            assert port.ser.in_waiting, "the emulator never sent its late reply"
+            assert port.ser.in_waiting == 8, f"the late reply: {port.ser.in_waiting} of its 8 bytes"
             bus.faults(1).late_reply_s = 0.0
             number, result, _ = _answered(handler.read2ByteTxRx, port, 1, 3)  # the model number
             assert result == sdk.COMM_SUCCESS and (number != 777) is expected_wrong
