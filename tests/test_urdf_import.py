@@ -516,3 +516,18 @@ def test_nearly_parallel_axes_are_snapped_within_a_milliradian(tmp_path: Path, c
     assert code == 2
     assert err.count("\n") == 1 and "from parallel" in err and "--snap 0.006" in err, err
     assert not (tmp_path / "out2").exists()
+
+
+@given(mass=st.floats(0.011, 50.0), size=st.floats(1e-4, 2.0), legs=st.integers(1, 8))
+def test_a_placeholder_effort_becomes_a_positive_stall_torque_for_any_robot(mass: float, size: float,
+                                                                            legs: int) -> None:
+    """One effort limit far above what the robot's weight needs is a placeholder; the torque put in its place is the
+    weight on a third of the legs (module docstring of urdf_import_clean) and a valid servo.stall_torque (> 0) for a
+    robot however small — a fuzzed chain of 1e-4 m legs once rounded it to 0.00 N·m, which the robot file refuses.
+    (Masses above the 0.01 kg below which they are placeholders themselves.)"""
+    from shc_cli.interop.urdf_import_clean import placeholders
+
+    weight = mass * 9.81 * size
+    found = placeholders([mass / 3] * 3, [0.0] * 3, [size] * legs, [], [1e9] * 3)
+    assert found.torque is not None and found.torque > 0.0
+    assert found.torque == pytest.approx(1.5 * weight / legs, rel=5e-3)

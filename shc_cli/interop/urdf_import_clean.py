@@ -160,7 +160,7 @@ def placeholders(masses: list[float], inertias: list[float], sizes: list[float],
     weight = total * 9.81 * size
     if efforts and len(set(efforts)) == 1 and efforts[0] > STRONG * weight > 0.0:
         # The weight on a third of the legs, half a leg's length out from each.
-        torque = round(1.5 * weight / max(len(sizes), 1), 2)
+        torque = float(f"{1.5 * weight / max(len(sizes), 1):.3g}")  # 3 figures: a small robot's is not 0.00
         notes.append(f"every joint's effort limit is {efforts[0]:g} N·m, which looks like a placeholder (the "
                      f"robot's {total:.3g} kg at a leg's {size:.2g} m is {weight:.2g} N·m): servo.stall_torque is "
                      f"{torque:g} N·m instead (its weight on a third of the legs, half a leg out); write your "
