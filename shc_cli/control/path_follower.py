@@ -78,7 +78,7 @@ class FollowerOptions:
 
     tolerance_m: float = 0.05
     heading_tolerance_rad: float = math.radians(3.0)
-    arrive_m: float = 0.02
+    arrive_m: float = 0.01
     arrive_rad: float = math.radians(1.0)
     speed_share: float = 1.0
     brake_share: float = 0.5
