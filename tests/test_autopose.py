@@ -278,7 +278,8 @@ def _yaml_sets(name: str) -> dict:  # type: ignore[type-arg]
                                                    ("openshc_auto_pose.yaml", "openshc_")])
 def test_shipped_sets_equal_the_yaml_sources(yaml_name: str, prefix: str) -> None:
     for key, expected in _yaml_sets(yaml_name).items():
-        pose_set = load_pose_set(prefix + key.removesuffix("_gait_pose")).pose_set
+        name = key.removesuffix("_gait_pose")
+        pose_set = load_pose_set(("bullet_" if name == "quad_wave" else prefix) + name).pose_set
         assert pose_set.pose_frequency == expected["pose_frequency"]
         assert pose_set.pose_phase_length == expected["pose_phase_length"]
         assert [p.start for p in pose_set.poser] == expected["pose_phase_starts"]
@@ -294,10 +295,11 @@ def test_shipped_sets_equal_the_yaml_sources(yaml_name: str, prefix: str) -> Non
 def test_every_shipped_set_loads_and_fits_its_gait(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(tmp_path)
     names = bundled("poses")
-    assert {"wave", "tripod", "ripple", "amble", "bipod", "quad_wave", "openshc_tripod"} <= set(names)
+    assert {"wave", "tripod", "ripple", "amble", "bipod", "quad_wave", "bullet_quad_wave", "openshc_tripod"} \
+        <= set(names)
     for name in names:
         loaded = load_pose_set(name)
-        if name == "quad_wave":
+        if name == "bullet_quad_wave":
             continue
         gait = load_gait(name.removeprefix("openshc_")).gait
         assert compatibility_issues(loaded, gait, LEGS) == []
@@ -312,7 +314,7 @@ def test_auto_pose_type_auto_names_the_set_after_the_gait(gait: Gait) -> None:
 
 def test_bullet_quad_wave_set_does_not_fit_this_repositorys_quad_wave_gait() -> None:
     gait = load_gait("quad_wave").gait
-    issues = compatibility_issues(load_pose_set("quad_wave"), gait, ["AR", "BR", "BL", "AL"])
+    issues = compatibility_issues(load_pose_set("bullet_quad_wave"), gait, ["AR", "BR", "BL", "AL"])
     fields = [issue.field for issue in issues]
     assert fields == ["pose_phase_length", "negation.CR", "negation.CL"]
     assert "16-unit cycle" in issues[0].problem and "has 8" in issues[0].problem

@@ -82,9 +82,11 @@ def test_gaits_and_auto_pose_sets_equal_the_shipped_ones(tmp_path: Path) -> None
         assert mine.model_dump(exclude={"description"}) == ours.model_dump(exclude={"description"})
     assert {f.stem for f in poses} >= {"wave", "tripod", "ripple", "amble", "bipod", "quad_wave"}
     for path in poses:
-        mine_set, ours_set = load_pose_set(path).pose_set, load_pose_set(path.stem).pose_set
+        shipped = "bullet_quad_wave" if path.stem == "quad_wave" else path.stem  # shc's own quad_wave is the sway
+        mine_set, ours_set = load_pose_set(path).pose_set, load_pose_set(shipped).pose_set
         assert mine_set is not None and ours_set is not None
-        assert mine_set.model_dump(exclude={"description"}) == ours_set.model_dump(exclude={"description"})
+        assert mine_set.model_dump(exclude={"description", "name"}) == ours_set.model_dump(exclude={"description",
+                                                                                               "name"})
 
 
 @pytest.mark.parametrize(("text", "message"), [

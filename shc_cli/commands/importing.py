@@ -41,4 +41,6 @@ def import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tip: 
     typer.echo(f"forward kinematics: largest tip difference to the URDF {result.fk_error:.2g} m at 200 random joint "
                "vectors per leg" + (f" ({result.fk_error_unsnapped:.2g} m to the URDF before snapping rpy values, "
                                     f"largest snap {result.snap:.2g} rad)" if result.snap > 0 else ""))
+    if result.pose_path is not None:
+        typer.echo(f"wrote {result.pose_path}")
     typer.echo(f"wrote {result.robot_path}")

@@ -956,6 +956,8 @@ class Result:
     fk_error: float
     fk_error_unsnapped: float
     snap: float
+    pose_path: Path | None = None
+    """The auto-pose set written for the robot (a quadruped walking quad_wave), if any."""
 
 
 def import_urdf(file: Path, out: Path | None = None, name: str | None = None, legs: str = "auto",
@@ -980,7 +982,7 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
                  clearance: float | None, reach: float | None, snap: float, args: dict[str, str] | None,
                  forward: float | None) -> Result:
     from shc_cli.outputs import write_text
-    from shc_cli.spec.loading import load_robot
+    from shc_cli.spec.loading import load_gait, load_robot
     from shc_cli.validation import check_robot
 
     source = read_source(file, args or {}, snap)
@@ -1012,8 +1014,9 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
         {c.leg_id: c.names for c in imported.legs}, imported.tree["servo"].get("stall_torque"),
         {f"{c.leg_id}_{name}": joint.name for c in imported.legs for name, joint in zip(c.names, c.joints,
                                                                                       strict=True)})
-    tree = {key: imported.tree[key] for key in ("name", "description", "time_delta", "body", "walker", "servo",
-                                                "templates", "legs", "hardware")}
+    sway = _sway(imported, robot_name)
+    keys = ("name", "description", "time_delta", "body", "walker", "pose", "servo", "templates", "legs", "hardware")
+    tree: dict[str, Any] = {key: imported.tree[key] for key in keys if key in imported.tree}
     header = [f"# Imported by `shc import urdf` from {file.name}. Units: m, rad, s, kg.",
               f"# base_link is the URDF link '{imported.base_frame}'"
               + (f" turned {math.degrees(imported.yaw):g} deg about z (forward)" if imported.yaw else "")
@@ -1027,11 +1030,21 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
                   "gazebo tags, dynamics (damping, friction).")
     robot_path = out / "robots" / f"{robot_name}.toml"
     text = "\n".join(header) + "\n" + with_check_note(dump_toml(tree))
+    pose_path = out / "poses" / sway[0] if sway is not None else None
     with tempfile.TemporaryDirectory() as folder:  # checked before anything is written
-        draft = Path(folder) / robot_path.name
+        draft = Path(folder) / "robots" / robot_path.name
+        draft.parent.mkdir()
         draft.write_text(text, encoding="utf-8")
         loaded = load_robot(draft)
         problems = check_robot(loaded)
+        if sway is not None:
+            from shc_cli.spec.autopose import compatibility_issues, load_pose_set
+
+            (Path(folder) / "poses").mkdir()
+            (Path(folder) / "poses" / sway[0]).write_text(sway[1], encoding="utf-8")
+            gait = load_gait(loaded.robot.walker.gait).gait
+            problems += compatibility_issues(load_pose_set(POSES_FROM_ROBOT + sway[0], draft.parent), gait,
+                                             list(loaded.robot.legs))
         if problems:
             raise SpecError(problems)
     error = fk_error(model, imported.legs, imported.base_frame, loaded.robot, yaw=imported.yaw)
@@ -1039,5 +1052,26 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
     if source.snap > 0.0:
         unsnapped = fk_error(parse_urdf(file, source.text), imported.legs, imported.base_frame, loaded.robot,
                              yaw=imported.yaw)
+    if pose_path is not None and sway is not None:
+        write_text(pose_path, sway[1])
     write_text(robot_path, text)
-    return Result(robot_path, imported.notes, error, unsnapped, source.snap)
+    return Result(robot_path, imported.notes, error, unsnapped, source.snap, pose_path)
+
+
+POSES_FROM_ROBOT = "../poses/"
+"""Where the robot file finds the pose set the import writes (``OUT/poses/``, relative to ``OUT/robots/``)."""
+
+
+def _sway(imported: Imported, robot_name: str) -> tuple[str, str] | None:
+    """A quadruped walking ``quad_wave``: auto posing on, with a body-sway set sized for its stance (file name
+    and text; :mod:`shc_cli.spec.sway`); ``None`` for any other robot."""
+    from shc_cli.spec.sway import quad_wave_sway_toml, sway_amplitude
+
+    if imported.tree["walker"]["gait"] != "quad_wave":
+        return None
+    amplitude = sway_amplitude(leg["stance"]["y"] for leg in imported.tree["legs"].values())
+    file_name = f"{robot_name}_quad_wave.toml"
+    imported.tree["pose"] = {"auto": True, "auto_pose_type": POSES_FROM_ROBOT + file_name}
+    imported.notes.append(f"auto posing on: the body sways {amplitude:g} m sideways towards the three standing "
+                          f"feet (poses/{file_name}, a third of the feet's lateral half-spread)")
+    return file_name, quad_wave_sway_toml(f"{robot_name}_quad_wave", amplitude, robot_name)
