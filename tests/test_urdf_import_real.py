@@ -449,6 +449,11 @@ def test_an_imported_quad_wave_quadruped_gets_a_sway_sized_for_its_stance(tmp_pa
     code, _, err = run(["plan", str(robot_file), "--duration", "2", "--no-plots", "--out",
                         str(tmp_path / "run")], capsys, monkeypatch)
     assert code == 0, err
+    # another gait has no set sized for it: one line that says how to go on
+    code, _, err = run(["plan", str(robot_file), "--gait", "trot", "--duration", "2", "--no-plots", "--out",
+                        str(tmp_path / "trot")], capsys, monkeypatch)
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert f"{pose_file.name}:" in err and "gait 'trot'" in err and "pose.auto = false" in err
     code, _, err, hexapod = _import(DESCRIPTIONS["hexapod_olli_io"][0], tmp_path / "hex", capsys, monkeypatch)
     assert code == 0 and hexapod is not None, err
     assert "pose" not in tomllib.loads(hexapod.read_text()) and not (tmp_path / "hex" / "poses").exists()

@@ -172,7 +172,8 @@ def compatibility_issues(loaded: LoadedPoseSet, gait: Gait, leg_ids: Sequence[st
             ("pose_phase_length",),
             f"set '{pose_set.name}' is written for a {pose_set.pose_phase_length}-unit cycle, but gait "
             f"'{gait.name}' has {gait.base_length} (stance_phase + swing_phase)",
-            "use the pose set written for this gait, or rewrite the windows in the gait's units"))
+            "use the pose set written for this gait, rewrite the windows in the gait's units, or turn auto "
+            "posing off (pose.auto = false)"))
     for leg in pose_set.negation:
         if leg not in leg_ids:
             issues.append(loaded.issue(("negation", leg), f"no leg '{leg}' on this robot",
