@@ -36,6 +36,7 @@ def _wait_for(predicate: object, timeout: float, what: str) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.serial  # holds 100 Hz within 1 % against the wall clock: beside another worker a loaded CI read 94 Hz
 def test_shc_ros_drives_like_openshc_and_its_bag_replays_exactly(ros_env: dict[str, str], tmp_path: Path) -> None:
     env = {**ros_env, "PYTHONUNBUFFERED": "1"}
     node = subprocess.Popen([*SHC, "ros", "bullet", "--out", str(tmp_path / "session")], cwd=ROOT, env=env,
