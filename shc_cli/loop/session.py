@@ -48,6 +48,7 @@ def execute(loop: RunLoop[ReadingT], run: RunDirectory, summarise: Callable[[Loo
                     result = loop.run()
             finally:
                 run.close()  # every row on disk before anything else (also when the loop raised)
+                signals.loop_over = True  # a signal from now on is kept (signals.late), not lost on the ended loop
             if after_loop is not None:
                 after_loop(result)  # not interruptible: a repeated signal only repeats the stop request
             try:  # a repeated signal now only repeats the stop request: the summary (from the log) is always made
@@ -56,11 +57,17 @@ def execute(loop: RunLoop[ReadingT], run: RunDirectory, summarise: Callable[[Loo
                 summary = RunSummary(cycles=result.cycles, summary_skipped=True)
             signals.finishing = True  # from here a repeated signal skips what is left (the plots)
             summary = summary.updated(complete=result.complete, stop_reason=result.stop_reason)
-            if plot is not None and result.cycles > 0:  # a run stopped before its first cycle has nothing to draw
+            late = signals.late is not None
+            if late:
+                summary.plots_skipped = True
+            elif plot is not None and result.cycles > 0:  # a run stopped before its first cycle has nothing to draw
                 try:
                     plot(run.partial)
                 except KeyboardInterrupt:
                     summary.plots_skipped = True
-        return run.finish(summary), summary, result
+        finished = run.finish(summary)
+        if late:  # the run is kept as it ended; the signal still stops what runs it (a sweep, a study)
+            raise KeyboardInterrupt
+        return finished, summary, result
     finally:
         signals.restore()

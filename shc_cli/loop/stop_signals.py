@@ -22,12 +22,17 @@ class StopSignals:
     Attributes:
         received: the first signal's name (``"SIGINT"``, ``"SIGTERM"``) before the loop took over, else None.
         on_stop: while the loop runs, told each signal's name (the loop's ``request_stop``).
+        late: the first signal's name after the loop ended and before the run finished (while the robot is released
+            and the summary made, which a signal must not cut short), else None: the run is kept as it finished, its
+            plots skipped, and then the signal is raised as :class:`KeyboardInterrupt` (a sweep or study stops).
         finishing: the loop is over: a signal now raises :class:`KeyboardInterrupt` (skip the rest).
     """
 
     def __init__(self) -> None:
         self.received: str | None = None
         self.on_stop: Callable[[str], None] | None = None
+        self.late: str | None = None
+        self.loop_over = False
         self.finishing = False
         self._previous: dict[signal.Signals, Any] = {}
 
@@ -40,6 +45,9 @@ class StopSignals:
         name = signal.Signals(signum).name
         if self.finishing:
             raise KeyboardInterrupt  # a second Ctrl-C while finishing: skip what is left (the plots)
+        if self.loop_over:
+            self.late = self.late or name  # the loop ended on its own: no stop request left to make
+            return
         if self.on_stop is not None:
             self.on_stop(name)  # on hardware a repeat while stopping changes nothing
             return
