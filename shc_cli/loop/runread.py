@@ -199,30 +199,37 @@ def _table(file: Path) -> dict[str, np.ndarray]:
     Reads the run directories shc writes itself (mixed text/number columns; a bad file means "re-run").
     :func:`shc_cli.replay.recording.read_table` is the other reader, kept apart on purpose: it takes other
     programs' gzipped, numbers-only recordings row by row to name the exact line and column of a bad value, and
-    is ≈ 1.7× slower (0.33 s against 0.19 s for an 8,000 × 120 numeric CSV here) and numbers-only."""
+    is ≈ 1.7× slower (0.33 s against 0.19 s for an 8,000 × 120 numeric CSV here) and numbers-only.
+
+    One pass of the parser over the file: the text columns (those not numbers in the first row; a run's robot and
+    walk states) are read as codes of their distinct values, then turned back into strings (0.05 s instead of
+    0.09 s for a 60 s walk's 6,500 × 169 log, whose summary is made from it)."""
     try:
-        lines = file.read_text(encoding="utf-8").splitlines()
+        with file.open(encoding="utf-8") as stream:
+            header = stream.readline().rstrip("\r\n").split(",")
+            first = stream.readline().rstrip("\r\n")
+        if not first:
+            raise bad_run(file, "no rows", "re-run to regenerate it")
+        text = [index for index, cell in enumerate(first.split(",")) if not _is_number(cell)]
+        values: dict[str, int] = {}
+
+        def code(cell: str) -> int:
+            return values.setdefault(cell, len(values))
+
+        table = np.loadtxt(file, delimiter=",", skiprows=1, ndmin=2, encoding="utf-8",
+                           converters=dict.fromkeys(text, code))
     except OSError as error:
         raise OutputError(f"{file}: cannot read the table ({error})") from None
     except UnicodeDecodeError as error:
         raise bad_run(file, f"not UTF-8 text at byte {error.start}", "re-run to regenerate it") from None
-    if len(lines) < 2:
-        raise bad_run(file, "no rows", "re-run to regenerate it")
-    header = lines[0].split(",")
-    first = lines[1].split(",")
-    text = [index for index, cell in enumerate(first) if not _is_number(cell)]
-    numeric = [index for index in range(len(header)) if index not in text]
-    out: dict[str, np.ndarray] = {}
-    try:
-        numbers = np.loadtxt(lines[1:], delimiter=",", usecols=numeric, ndmin=2)
-        strings = np.loadtxt(lines[1:], delimiter=",", usecols=text, dtype=str, ndmin=2) if text else None
     except ValueError as error:
         raise bad_run(file, f"malformed row ({error})", "re-run to regenerate it") from None
-    for column, index in enumerate(numeric):
-        out[header[index]] = numbers[:, column]
-    for column, index in enumerate(text):
-        assert strings is not None
-        out[header[index]] = strings[:, column]
+    if table.shape[1] != len(header):
+        raise bad_run(file, f"{table.shape[1]} columns where the header has {len(header)}", "re-run to regenerate it")
+    out = {name: table[:, index] for index, name in enumerate(header) if index not in text}
+    names = np.array(list(values), dtype=str)
+    for index in text:
+        out[header[index]] = names[table[:, index].astype(np.intp)]
     return out
 
 
