@@ -41,7 +41,7 @@ ReadingT = TypeVar("ReadingT")
 ReadingT_co = TypeVar("ReadingT_co", covariant=True)
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Measured:
     """What a measuring backend measured at the end of a cycle; ``None``: not measured (logged as 0).
 

@@ -13,7 +13,8 @@ import numpy as np
 
 from shc_cli.backends.base import Measured
 from shc_cli.control.sensing import Sensors
-from shc_cli.model.chains import joint_slots
+from shc_cli.control.states import RobotState
+from shc_cli.model.chains import JointSlots
 
 if TYPE_CHECKING:
     from shc_cli.backends.engine import Engine, EngineOptions, Reading
@@ -34,6 +35,9 @@ def open_world(robot: Robot, options: EngineOptions) -> Engine:
     return open_engine(robot, options, initial)
 
 
+_RUNNING = RobotState.RUNNING
+
+
 class SimulatedBackend:
     """A physics world as a backend: targets to the servos, the physics sub-steps, the sensors.
 
@@ -44,7 +48,8 @@ class SimulatedBackend:
 
     def __init__(self, robot: Robot, world: Engine) -> None:
         self.robot, self.world = robot, world
-        self.rows, self.cols = joint_slots(robot)
+        self.slots = JointSlots.of(robot)
+        self.rows, self.cols = self.slots.rows, self.slots.cols
         self.reading: Reading | None = None
         self._running = False
         self._first = True  # the spawn reading is not fed to the controller (it starts from its joints)
@@ -66,7 +71,7 @@ class SimulatedBackend:
 
     def apply(self, out: CycleOutput) -> np.ndarray:
         self.world.command(out.joints)
-        self._running = out.robot_state.name == "RUNNING"
+        self._running = out.robot_state is _RUNNING
         return out.joints
 
     def advance(self) -> None:
@@ -81,8 +86,10 @@ class SimulatedBackend:
         return reading
 
     def measured(self, reading: Reading) -> Measured:
-        rows, cols = self.rows, self.cols
-        return Measured(reading.joints[rows, cols], reading.joint_efforts[rows, cols], reading.servo_power[rows, cols],
+        """What ``reading`` measured; its joint arrays in servo order are views of the reading's where the robot's
+        legs have no padding (read at once by the recorder, every cycle)."""
+        order = self.slots.servo_order
+        return Measured(order(reading.joints), order(reading.joint_efforts), order(reading.servo_power),
                         reading.foot_forces, reading.foot_contact, reading)
 
     def fault(self) -> str | None:

@@ -30,9 +30,11 @@ IMU_STABILITY_THRESHOLD = 100.0
 """OpenSHC stops when an IMU posing correction exceeds this [rad]; here the correction is only clamped."""
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class Sensors:
     """Measurements of the last control period (legs in id order); ``None`` where the backend has none.
+
+    Made once a control cycle, so not a frozen dataclass (slower to make); the controller never changes it.
 
     Attributes:
         orientation: IMU orientation quaternion (x, y, z, w), body → world.

@@ -40,7 +40,7 @@ import numpy as np
 from shc_cli.backends.base import MEASURED_BODY_COLUMNS, Measured
 from shc_cli.errors import OutputError
 from shc_cli.loop.stop_signals import StopSignals
-from shc_cli.model.chains import joint_slots
+from shc_cli.model.chains import JointSlots, joint_slots
 from shc_cli.spec.robot import Robot
 
 if TYPE_CHECKING:  # the controller (and numba) only for the annotation: readers of runs stay light
@@ -233,31 +233,37 @@ class LogRecorder(Generic[ReadingT]):
         """Rows not yet written: formatted a block at a time by the compiled formatter (the same bytes as
         ``self.row % …``), at every :meth:`flush` and when the run directory closes."""
         run.before_close(self.write_rows)
-        self.rows, self.cols = joint_slots(robot)
+        self.slots = JointSlots.of(robot)
+        self.rows, self.cols = self.slots.rows, self.slots.cols
         self.dt = robot.time_delta
         self.measured = backend.measured
         self.zero_joints = np.zeros(len(self.rows))
         self.zero_legs = np.zeros(len(robot.legs))
         self.zero_body = np.zeros(len(MEASURED_BODY_COLUMNS) - 1)
+        self._states: tuple[object, object] = (None, None)
+        self._codes = (0, 0)
 
     def measured_values(self, measured: Measured) -> list[np.ndarray | tuple[float, ...]]:
         """The measured columns of ``log.csv`` (measured joints to ``power_w``); what is not measured is 0."""
-        def given(values: np.ndarray | None, zeros: np.ndarray) -> np.ndarray:
-            return zeros if values is None else values
-
-        parts = [measured.joints, measured.torques, given(measured.power, self.zero_joints),
-                 given(measured.foot_forces, self.zero_legs), given(measured.foot_contact, self.zero_legs)]
+        power, forces, contact = measured.power, measured.foot_forces, measured.foot_contact
+        parts = [measured.joints, measured.torques, self.zero_joints if power is None else power,
+                 self.zero_legs if forces is None else forces, self.zero_legs if contact is None else contact]
         if measured.body is None:
             return [*parts, self.zero_body, (measured.total_power(),)]
         return [*parts, *measured.body_values()]
 
     def record(self, cycle: int, command: Command, out: CycleOutput, applied: np.ndarray,
                reading: ReadingT) -> None:
+        """One row of ``log.csv``: the cycle's values gathered into the block's next row by one concatenation
+        (the input, desired velocity and odometry as one list of floats)."""
         block = self.block
-        row = block.add(self.handle, cycle, cycle * self.dt,
-                        (block.code(0, out.robot_state), block.code(1, out.walk_state)))
-        np.concatenate((applied[self.rows, self.cols], *self.measured_values(self.measured(reading)),
-                        command.velocity, out.velocity, out.odometry), out=row)
+        states = out.robot_state, out.walk_state
+        if states[0] is not self._states[0] or states[1] is not self._states[1]:  # they change a few times a run
+            self._states = states
+            self._codes = (block.code(0, states[0]), block.code(1, states[1]))
+        row = block.add(self.handle, cycle, cycle * self.dt, self._codes)
+        np.concatenate((self.slots.servo_order(applied), *self.measured_values(self.measured(reading)),
+                        [*command.velocity, *out.velocity, *out.odometry]), out=row)
 
     def write_rows(self) -> None:
         """Write the rows recorded so far into the table (not flushed)."""

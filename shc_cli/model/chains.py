@@ -87,6 +87,19 @@ class JointSlots:
         out[self.rows, self.cols] = values
         return out
 
+    @property
+    def dense(self) -> bool:
+        """Every leg has ``n`` joints: the padded arrays hold no padding, servo order is their C order."""
+        return len(self.rows) == self.legs * self.width
+
+    def servo_order(self, values: NDArray[np.float64]) -> FloatArray:
+        """The real joints of a padded ``(L, n)`` array in servo order ``(J,)``, as ``values[rows, cols]``: without
+        padding (:attr:`dense`) a view of ``values`` (or a copy if it is not contiguous), else a new array."""
+        if len(self.rows) == self.legs * self.width:
+            return values.reshape(-1)
+        flat: FloatArray = values[self.rows, self.cols]
+        return flat
+
 
 def _kernels() -> Any:
     """The numba kernels, imported on first use: numpy-only users of chains (run readers, exporters) stay light."""

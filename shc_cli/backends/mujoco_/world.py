@@ -188,28 +188,32 @@ class MujocoWorld:
         self._mean_power = self.servo_model.power(self._mean_torque, mean_speed)
 
     def read(self) -> Reading:
-        """Sensor readings now."""
+        """Sensor readings now.
+
+        Once a control cycle, so written for few allocations: the products with the rotation stay NumPy's (their
+        rounding is BLAS's), every elementwise sum and difference is taken on Python floats (the same IEEE
+        operations, the same bits)."""
         padded, base = self.layout.padded, self.base
         rotation = self._xmat[base].reshape(3, 3).copy()
-        quat = self._xquat[base]
         position = self._xpos[base].copy()
         if self.fixed_base:
-            linear_origin, angular = np.zeros(3), np.zeros(3)
+            linear_origin, angular = [0.0, 0.0, 0.0], np.zeros(3)
         else:
             qvel = self._qvel
-            linear_origin = qvel[0:3].copy()
+            linear_origin = qvel[0:3].tolist()
             angular = rotation @ qvel[3:6]  # a free joint's angular velocity is in the body frame
         r = (rotation @ self.com_offset).tolist()
-        w = angular.tolist()  # Python floats: the same products and differences as on NumPy scalars, cheaper
-        velocity = linear_origin + np.array([w[1] * r[2] - w[2] * r[1], w[2] * r[0] - w[0] * r[2],
-                                             w[0] * r[1] - w[1] * r[0]])  # of the centre of mass, as PyBullet
+        w = angular.tolist()
+        velocity = np.array([linear_origin[0] + (w[1] * r[2] - w[2] * r[1]),  # of the centre of mass, as PyBullet
+                             linear_origin[1] + (w[2] * r[0] - w[0] * r[2]),
+                             linear_origin[2] + (w[0] * r[1] - w[1] * r[0])])
         specific_force, rate = self.imu.sense(rotation, velocity, angular)
         forces = self._sensordata[self.touch_index]  # (a copy: fancy indexing)
+        qw, qx, qy, qz = self._xquat[base].tolist()
         return Reading(
-            joints=padded(self._positions), joint_velocities=padded(np.array(self._v)),
-            joint_efforts=padded(self._mean_torque), servo_power=padded(self._mean_power),
-            orientation=self.imu.orientation(np.array([quat[1], quat[2], quat[3], quat[0]])), angular_rate=rate,
-            linear_acceleration=specific_force, foot_forces=forces, foot_contact=forces > 0.0,
+            joints=padded(self._positions), joint_velocities=padded(self._v), joint_efforts=padded(self._mean_torque),
+            servo_power=padded(self._mean_power), orientation=self.imu.orientation(np.array([qx, qy, qz, qw])),
+            angular_rate=rate, linear_acceleration=specific_force, foot_forces=forces, foot_contact=forces > 0.0,
             body_height=self._ray_height(position), position=position, rpy=rpy_from_matrix(rotation),
             linear_velocity=velocity, angular_velocity=angular,
         )
