@@ -81,6 +81,11 @@ class Command:
 
 
 
+_OFF_TARGET = tuple(int(not flags & 1) for flags in range(8))
+"""Per IK flags value (bit 0 on target, bits 1–2 a position or a velocity clamped): 1 if the leg missed its target."""
+_CLAMPED = tuple(int(flags & 6 != 0) for flags in range(8))
+"""Per IK flags value: 1 if a joint of the leg was clamped."""
+
 # Enum members bound once: attribute access on an Enum class is slow, and these are read every cycle.
 _UNKNOWN, _RUNNING = RobotState.UNKNOWN, RobotState.RUNNING
 _STOPPED = WalkState.STOPPED
@@ -173,11 +178,7 @@ class Model:
             joints[keep], velocities[keep], tips[keep] = self.joints[keep], self.joint_velocities[keep], self.tips[keep]
             flags = [1 if kept else f for kept, f in zip(keep.tolist(), flags, strict=True)]
         self.joints, self.joint_velocities, self.tips = joints, velocities, tips
-        off = clamped = 0
-        for f in flags:
-            off += not f & 1
-            clamped += f & 6 != 0
-        return off, clamped
+        return sum(map(_OFF_TARGET.__getitem__, flags)), sum(map(_CLAMPED.__getitem__, flags))
 
     @property
     def proximity(self) -> FloatArray:
@@ -289,6 +290,8 @@ class Controller(LegManipulation):
         self.odometry = LegOdometry(self.dt)
         """Leg odometry (an shc addition): read by :attr:`CycleOutput.odometry`."""
         self._stance_before = np.zeros(len(robot.legs), dtype=bool)
+        self._walker_tips: FloatArray | None = None
+        """This cycle's walker tips (a copy) once the running cycle has posed them: the output shows the same."""
         self._measured_feet = np.empty((len(robot.legs), 3))
         """The feet of the measured joints [m] (the odometry reads them; it keeps only its levelled copy)."""
 
@@ -384,7 +387,7 @@ class Controller(LegManipulation):
             roll, pitch, _ = self.poser.current.euler()
             if sensors.angular_rate is not None:
                 turn = euler_yaw_rate(roll, pitch, np.asarray(sensors.angular_rate, dtype=float)) * self.dt
-        commanded = float(self.walker.desired_angular) if self.walker is not None else 0.0
+        commanded = self.walker.desired_angular if self.walker is not None else 0.0
         return self.odometry.cycle(feet, roll, pitch, use, turn, sensors.foot_forces, orientation,
                                    sensors.foot_contact, commanded)
 
@@ -604,10 +607,11 @@ class Controller(LegManipulation):
                            contacts=self.contacts if sensing else None, step_depth=self.parameters["step_depth"])
         if not walking:
             self._update_manual_legs()
+        walker_tips = self._walker_tips = self.walker.legs.tips()  # as the cycle's output will show them
         if auto is None:
-            self.poser_tips = self.poser.posed_tips(self.walker.legs.tips())
+            self.poser_tips = self.poser.posed_tips(walker_tips)
         else:
-            self.poser_tips = self.poser.posed_tips(self.walker.legs.tips(), auto.body_pose, auto.leg_poses)
+            self.poser_tips = self.poser.posed_tips(walker_tips, auto.body_pose, auto.leg_poses)
         if not walking:  # manipulated legs take their walker tip as it is (already in base_link)
             manual = (self.leg_modes == LegMode.MANUAL) | (self.leg_modes == LegMode.WALKING_TO_MANUAL)
             self.poser_tips[manual] = self.walker.legs.vectors[manual, stepping.CURRENT]
@@ -717,18 +721,19 @@ class Controller(LegManipulation):
     def _output(self, deviations: int, clamped: int) -> CycleOutput:
         if self.walker is not None:
             legs = self.walker.legs
-            walker_tips = legs.tips()
+            walker_tips = legs.tips() if self._walker_tips is None else self._walker_tips
             stance = legs.floats[:, stepping.STANCE_PROGRESS].copy()
             swing = legs.floats[:, stepping.SWING_PROGRESS].copy()
-            velocity = (float(self.walker.desired_linear[0]), float(self.walker.desired_linear[1]),
-                        float(self.walker.desired_angular))
+            velocity = self.walker.desired_velocity()
             walk_state = self.walker.state
         else:
             walker_tips = self.identity_walker_tips.copy()
             stance = swing = np.full(len(self.stance), -1.0)
             velocity, walk_state = (0.0, 0.0, 0.0), WalkState.STOPPED
+        self._walker_tips = None
         pose = self.poser.current
         roll, pitch, yaw = pose.euler()
+        x, y, z = pose.position.tolist()
         # The model's arrays and the poser tips are replaced, never modified in place, each cycle: the output
         # can share them without copies.
         return CycleOutput(
@@ -740,7 +745,7 @@ class Controller(LegManipulation):
             stance_progress=stance,
             swing_progress=swing,
             velocity=velocity,
-            pose=(float(pose.position[0]), float(pose.position[1]), float(pose.position[2]), roll, pitch, yaw),
+            pose=(x, y, z, roll, pitch, yaw),
             robot_state=self.state,
             walk_state=walk_state,
             ik_deviations=deviations,

@@ -191,10 +191,12 @@ class PoseController:
         """Align the body with the walk plane during swings (study §7.6); flat ground keeps it at rest."""
         scaler = max(1.0, swing_phase / phase_offset) if phase_offset else 1.0
         last, share = -1, 0.0
-        for leg, progress in enumerate(np.asarray(swing_progress).tolist()):
-            scaled = progress * scaler
-            if 0.0 <= scaled <= 1.0:  # the last swinging leg in id order wins, as in OpenSHC
+        progresses = np.asarray(swing_progress).tolist()
+        for leg in range(len(progresses) - 1, -1, -1):  # the last swinging leg in id order wins, as in OpenSHC
+            scaled = progresses[leg] * scaler
+            if 0.0 <= scaled <= 1.0:
                 last, share = leg, smooth_step(scaled)
+                break
         if last < 0:  # no leg swinging: share 0 keeps the origin exactly
             self.walk_plane_pose = self.walk_plane_origin.interpolate(0.0, self.walk_plane_origin)
             return
@@ -228,7 +230,7 @@ class PoseController:
         """
         self.update_walk_plane_pose(swing_progress, swing_phase, phase_offset, planes, normals)
         pose = self.walk_plane_pose  # = Identity ∘ walk-plane pose, exactly
-        if self.manual_enabled and self.manual.any():  # adding a zero manual pose changes nothing
+        if self.manual_enabled and any(self.manual.tolist()):  # adding a zero manual pose changes nothing
             pose = pose.add(self.manual_pose())
         for term in feedback:
             if term is not None:

@@ -121,6 +121,11 @@ class WalkController:
         """Desired body velocity (x, y) after limits and ramp [m/s]."""
         return np.array([self._walk[stepping.DESIRED_X], self._walk[stepping.DESIRED_Y]])
 
+    def desired_velocity(self) -> tuple[float, float, float]:
+        """Desired body velocity after limits and ramp: (x [m/s], y [m/s], yaw rate [rad/s])."""
+        walk = self._walk
+        return float(walk[stepping.DESIRED_X]), float(walk[stepping.DESIRED_Y]), float(walk[stepping.DESIRED_YAW_RATE])
+
     @property
     def desired_angular(self) -> float:
         """Desired yaw rate [rad/s]."""
