@@ -104,3 +104,22 @@ print(len(chain_frames.stats.cache_hits))
                                        timeout=600) for mode in ("compile", "break"))
     assert compiled.returncode == 0 and loaded.returncode == 0, compiled.stderr + loaded.stderr
     assert loaded.stdout.splitlines() == [compiled.stdout.splitlines()[0], "1"]  # the same frames, from the cache
+
+
+def test_numba_is_imported_without_scipy_and_pyyaml_unless_a_numba_config_file_is_there(tmp_path: Path) -> None:
+    """numba imports SciPy only to check its version and PyYAML only to read a ``.numba_config.yaml`` in the working
+    directory: shc's kernels import numba without them (shc_cli.model.jit), but with such a file numba reads it."""
+    code = """
+import sys
+import shc_cli.model.jit
+from numba.core import config
+print("scipy" in sys.modules, "yaml" in sys.modules, config.COLOR_SCHEME)
+"""
+    plain, configured = tmp_path / "plain", tmp_path / "configured"
+    plain.mkdir()
+    configured.mkdir()
+    (configured / ".numba_config.yaml").write_text("color_scheme: light_bg\n", encoding="utf-8")
+    outputs = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=folder, timeout=120)
+               for folder in (plain, configured)]
+    assert all(output.returncode == 0 for output in outputs), outputs[0].stderr + outputs[1].stderr
+    assert [output.stdout.strip() for output in outputs] == ["False False no_color", "False True light_bg"]

@@ -14,15 +14,50 @@ check): a loaded kernel is machine code that needs no typing; a kernel that has 
 from __future__ import annotations
 
 import logging
+import os
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from importlib.machinery import ModuleSpec
+from types import ModuleType
 from typing import Any
 
-import numba
-from numba.core import event
-from numba.core.caching import FunctionCache
 
-from shc_cli.events import NOTICE
+class _Without:
+    """An import finder that makes the named top-level modules missing while it is on ``sys.meta_path``."""
+
+    def __init__(self, names: set[str]) -> None:
+        self.names = names
+
+    def find_spec(self, name: str, path: Sequence[str] | None = None,
+                  target: ModuleType | None = None) -> ModuleSpec | None:
+        if name in self.names:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+        return None
+
+
+def _import_numba() -> None:
+    """Import numba without two imports its package makes only to check things shc does not use (≈ 0.03 s of every
+    command that loads a kernel): SciPy, imported to check that its version is at least 1.0, and PyYAML, imported
+    to read a ``.numba_config.yaml`` in the working directory (left alone when there is one). Modules already
+    imported stay; nothing else changes: compiling a kernel (a cache miss) imports SciPy as numba needs it."""
+    if "numba" in sys.modules:
+        return
+    names = {"scipy"} | (set() if os.path.isfile(".numba_config.yaml") else {"yaml"})
+    finder = _Without({name for name in names if name not in sys.modules})
+    sys.meta_path.insert(0, finder)
+    try:
+        import numba  # noqa: F401
+    finally:
+        sys.meta_path.remove(finder)
+
+
+_import_numba()
+
+import numba  # noqa: E402
+from numba.core import event  # noqa: E402
+from numba.core.caching import FunctionCache  # noqa: E402
+
+from shc_cli.events import NOTICE  # noqa: E402
 
 __all__ = ["njit"]
 
