@@ -46,6 +46,25 @@ def test_version(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     assert (code, out.strip()) == (0, f"shc {__version__}")
 
 
+def test_a_command_runs_in_an_app_of_its_own_with_the_same_help_and_errors() -> None:
+    """``shc COMMAND …`` builds that command alone (``shc_cli.cli._app_for``: typer builds every command's options
+    first); its help, its errors and the options before it are the whole app's."""
+    from typer.testing import CliRunner
+
+    from shc_cli.cli import _app_for, app
+
+    assert [c.callback.__name__ for c in _app_for(["--debug", "run-hw", "x"]).registered_commands
+            if c.callback] == ["run_hw"]
+    for args in (["--help"], ["export", "bag"], ["nothere"], []):
+        assert _app_for(args) is app
+    runner = CliRunner()
+    for args in (["simulate", "--help"], ["simulate", "--bogus"], ["--debug", "workspace", "--help"],
+                 ["run-hw", "--help"], ["plan", "--duration"]):
+        whole, alone = runner.invoke(app, args), runner.invoke(_app_for(args), args)
+        assert _app_for(args) is not app
+        assert (alone.exit_code, alone.output) == (whole.exit_code, whole.output) and whole.output
+
+
 def test_help_imports_nothing_heavy() -> None:
     """``shc --help`` must not import numpy, numba, pydantic, matplotlib, nor the viewer or renderer (viser, mujoco,
     imageio-ffmpeg, Pillow): that is what keeps it ≈ 0.1 s (measured by benchmarks/bench_startup.py, not here —
