@@ -158,10 +158,28 @@ class ServoModel:
         if self._pd is not None:
             kernels.pd_torque(goal, position, speed, *self._pd, out)
             return
+        integral = self.integral_for(goal)
+        kernels.firmware_torque(goal, position, speed, step, out if integral is None else integral,  # (unused)
+                                *self._firmware, out)
+
+    def integral_for(self, goal: np.ndarray) -> np.ndarray | None:
+        """The I term's running sum of the error [rad·s], one per servo of ``goal`` (created at first use), which
+        :func:`~shc_cli.backends.servo_kernels.firmware_torque` updates; None without an I term."""
         if self.volts_per_rad_s > 0.0 and self._integral is None:
             self._integral = np.zeros(goal.shape, dtype=float)
-        integral = self._integral if self._integral is not None else out  # (unused without an I term)
-        kernels.firmware_torque(goal, position, speed, step, integral, *self._firmware, out)
+        return self._integral
+
+    @property
+    def firmware_parameters(self) -> tuple[float, ...]:
+        """:func:`~shc_cli.backends.servo_kernels.firmware_torque`'s scalar arguments after ``integral``, in order
+        (``volts_per_rad`` … ``viscous``)."""
+        return self._firmware
+
+    @property
+    def supply_parameters(self) -> tuple[float, ...]:
+        """:func:`~shc_cli.backends.servo_kernels.supply_power`'s scalar arguments of :meth:`power` (the engine
+        applies no Coulomb friction), in order (``friction`` … ``regenerative``)."""
+        return (self._friction, *self._supply)
 
     def electrical(self, torque: np.ndarray, speed: np.ndarray, friction_in_engine: bool = False) -> Electrical:
         """Motor torque, current and supply power from the output torque and joint speed the engine reports.

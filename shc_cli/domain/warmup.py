@@ -8,7 +8,8 @@ machine (≈ 5× a short simulation; docs/performance.md), so the README's set-u
 ``shc simulate`` of a new install then starts as fast as the second.
 
 The kernels are compiled by running what calls them, with the types the commands pass (numba compiles one version
-per argument-type signature): the servo laws of every ``[servo] control``, then a short simulation — start-up, the
+per argument-type signature): the servo laws of every ``[servo] control`` and MuJoCo's compiled control period
+(:mod:`shc_cli.backends.mujoco_.substeps`) of each, then a short simulation — start-up, the
 workspace search, walking — with and without admittance control, into a throwaway run directory.
 """
 
@@ -18,6 +19,10 @@ import logging
 import tempfile
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
 
@@ -54,3 +59,22 @@ def _servo_laws() -> None:
         model.power(zeros, zeros)
     servo_kernels.velocity_motor(zeros, zeros, zeros, 1.0, 0.5, 1.0, zeros.copy())
     servo_kernels.velocity_motor_force(zeros, zeros, 1.0, 1.0, zeros.copy())
+    _mujoco_periods(robot)
+
+
+def _mujoco_periods(robot: Robot) -> None:
+    """MuJoCo's control period kernel of every ``[servo] control``: one period of the robot held in the air."""
+    from shc_cli.backends.engine import EngineOptions
+    from shc_cli.backends.engine_registry import open_engine
+    from shc_cli.backends.terrain import parse_terrain
+    from shc_cli.model.chains import Chains
+
+    joints = Chains.from_robot(robot).default_joints()
+    for control in ("position", "pd", "dynamixel"):
+        servo = robot.servo.model_copy(update={"control": control})
+        world = open_engine(robot.model_copy(update={"servo": servo}),
+                            EngineOptions(parse_terrain("flat"), 4, True, engine="mujoco"), joints)
+        try:
+            world.step()
+        finally:
+            world.close()

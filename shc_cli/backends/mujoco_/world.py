@@ -18,7 +18,10 @@ behave as PyBullet's (docs/physics-model.md):
   current limit), exactly PyBullet's explicit law; the servo's ``armature`` as joint armature.
 
 Torque and speed are averaged over each control period's physics steps and turned into electrical power by the
-engine-independent :meth:`~shc_cli.backends.servo.ServoModel.power`, exactly as in PyBullet. ``mujoco`` is imported
+engine-independent :meth:`~shc_cli.backends.servo.ServoModel.power`, exactly as in PyBullet. A control period — the
+servo law, ``mj_step`` and the sums of every physics step, then the means and the power — runs in one compiled
+kernel (:mod:`~shc_cli.backends.mujoco_.substeps`: the same operations as the Python loop it replaced, which stays
+for a MuJoCo library it cannot call). ``mujoco`` is imported
 here only; it needs no GL to simulate.
 """
 
@@ -32,6 +35,7 @@ import numpy as np
 from shc_cli.backends import servo_kernels
 from shc_cli.backends.engine import EngineOptions, Reading, rpy_from_matrix, spawn_height
 from shc_cli.backends.imu import Imu
+from shc_cli.backends.mujoco_ import substeps as substeps_kernels
 from shc_cli.backends.mujoco_.gl import import_for_physics
 from shc_cli.backends.mujoco_.mjcf import Options, robot_mjcf, velocity_stiffness
 from shc_cli.backends.servo import ServoModel
@@ -126,7 +130,16 @@ class MujocoWorld:
         """The actuators' controls, one per servo in servo order (a view into ``data``, fetched once)."""
         self._force = data.actuator_force
         """The actuators' forces after a step (a view into ``data``)."""
-        self._work = np.zeros(len(joints))
+        entries = substeps_kernels.entries(mujoco)
+        self._pointers = None if entries is None else np.array(
+            [*entries, int(model._address), int(data._address)], dtype=np.int64)
+        """``mj_step``, MuJoCo's log handler functions, ``mjModel*`` and ``mjData*`` for the compiled control period
+        (None: the physics steps run from Python)."""
+        self._firmware = np.array(self.servo_model.firmware_parameters, dtype=float)
+        self._supply = np.array(self.servo_model.supply_parameters, dtype=float)
+        self._motor = np.array([self._gain, self._keep, self._speed, self._kv, self._stall], dtype=float)
+        self._work = np.zeros((4, len(joints)))
+        self._guard = substeps_kernels.guard_buffer()
         self._ray_hit = np.zeros(1, dtype=np.int32)
         self.command(initial_joints)
 
@@ -149,13 +162,54 @@ class MujocoWorld:
 
     def step(self) -> None:
         """Advance one control period; torque and speed averaged over its physics steps give the power."""
+        if self._pointers is not None:
+            self._step_compiled()
+            return
+        total = np.zeros(len(self._goals))
+        self.physics_time += self._step_python(total)
+        positions = np.array(self._q)
+        # mj_step integrates q += v·h with the new v (semi-implicit Euler): the displacement is the mean speed.
+        mean_speed = (positions - self._positions) / self.control_period
+        self._positions = positions
+        self._mean_torque = total / self.substeps
+        self._mean_power = self.servo_model.power(self._mean_torque, mean_speed)
+
+    def _step_compiled(self) -> None:
+        """:meth:`step` in one kernel (:mod:`~shc_cli.backends.mujoco_.substeps`): the physics steps with the servo
+        law, then the means and the power, the same operations in the same order as :meth:`_step_python` and
+        :meth:`step`'s end."""
+        kernels = substeps_kernels  # (short)
+        n = len(self._goals)
+        positions, torque, power = np.empty(n), np.empty(n), np.empty(n)
+        common = (self._pointers, self._guard, kernels.CLOCK, self.substeps)
+        if self.explicit is not None:
+            integral = self.explicit.integral_for(self._goals)
+            physics, failed = kernels.firmware_period(
+                *common, self.timestep, self.control_period, self._goals, self._q, self._v,
+                self._ctrl if integral is None else integral, self._firmware, self._ctrl, self._force, self._supply,
+                self._work, self._positions, positions, torque, power)
+        elif self.compliant:
+            physics, failed = kernels.compliant_period(*common, self.control_period, self._q, self._force,
+                                                       self._supply, self._work, self._positions, positions,
+                                                       torque, power)
+        else:
+            physics, failed = kernels.velocity_period(*common, self.control_period, self._goals, self._q, self._v,
+                                                      self._motor, self._ctrl, self._supply, self._work,
+                                                      self._positions, positions, torque, power)
+        self.physics_time += physics * 1e-9
+        if failed:
+            raise self.mujoco.FatalError(kernels.error_message(self._guard))
+        self._positions, self._mean_torque, self._mean_power = positions, torque, power
+
+    def _step_python(self, total: np.ndarray) -> float:
+        """The control period's physics steps from Python (a MuJoCo library :func:`substeps.entries` cannot
+        find); returns the time inside ``mj_step`` [s]."""
         mj_step, model, data = self.mujoco.mj_step, self.model, self.data
         q, v, ctrl, goals, force = self._q, self._v, self._ctrl, self._goals, self._force
         clock = time.perf_counter
-        total = np.zeros(len(goals))
         physics = 0.0
         explicit, step = self.explicit, self.timestep
-        if explicit is not None:  # the servo model's torque from the state before the step, as in PyBullet
+        if explicit is not None:
             torque_into = explicit.torque_into
             for _ in range(self.substeps):
                 torque_into(goals, q, v, step, ctrl)
@@ -169,7 +223,7 @@ class MujocoWorld:
                 mj_step(model, data)
                 physics += clock() - started
                 total += force
-        else:  # PyBullet's velocity motor: the speed that closes position_gain of the error
+        else:
             gain, keep, speed, kv, stall = self._gain, self._keep, self._speed, self._kv, self._stall
             motor, motor_force = servo_kernels.velocity_motor, servo_kernels.velocity_motor_force
             for _ in range(self.substeps):
@@ -179,13 +233,7 @@ class MujocoWorld:
                 physics += clock() - started
                 # the implicit step applied kv·(ctrl − v_new); a clamped one (explicit) the stall torque
                 motor_force(ctrl, v, kv, stall, total)
-        self.physics_time += physics
-        positions = np.array(q)
-        # mj_step integrates q += v·h with the new v (semi-implicit Euler): the displacement is the mean speed.
-        mean_speed = (positions - self._positions) / self.control_period
-        self._positions = positions
-        self._mean_torque = total / self.substeps
-        self._mean_power = self.servo_model.power(self._mean_torque, mean_speed)
+        return physics
 
     def read(self) -> Reading:
         """Sensor readings now.
