@@ -1,28 +1,30 @@
 """One control period of the MuJoCo world in one compiled call: the servo law, ``mj_step`` and the force sum of
-every physics step.
+every physics step, then the period's mean torque and speed and the servos' power.
 
 :meth:`~shc_cli.backends.mujoco_.world.MujocoWorld.step` runs ``substeps`` (4) physics steps per control period;
 in Python each paid the servo kernel's call, two ``perf_counter`` calls, the binding's ``mj_step`` call and a
-NumPy addition (≈ 8 µs, a third of the loop's overhead over MuJoCo's own time). The kernels here run that loop in
-machine code and call MuJoCo's C ``mj_step`` directly on the raw ``mjModel*`` / ``mjData*`` (``model._address``,
-``data._address``) through a function address passed as an integer (:func:`_mj_step`), so numba caches them like
-every kernel of shc (a ``ctypes`` function baked in as a global would not be cacheable). Each performs the
-operations of the Python loop it replaces in the same order — the servo laws are
-:mod:`shc_cli.backends.servo_kernels`' own functions — so every result is the same to the last bit.
+NumPy addition, and the period's end a few NumPy operations and the power's kernel (≈ 12 µs per period over
+MuJoCo's own time, ≈ 3.5 µs here). The kernels here run that loop in machine code and call MuJoCo's C ``mj_step``
+directly on the raw ``mjModel*`` / ``mjData*`` (``model._address``, ``data._address``) through its address passed
+as an integer (:func:`_guarded_step`), so numba caches them like every kernel of shc (a ``ctypes`` function baked
+in as a global would not be cacheable). Each performs the operations of the Python code it replaces in the same
+order — the servo laws are :mod:`shc_cli.backends.servo_kernels`' own functions — so every result is the same to the
+last bit (``tests/test_mujoco_substeps.py``).
 
 * **Timing**: each ``mj_step`` is timed with ``clock_gettime(clock)``, the clock of :func:`time.perf_counter`
-  (``CLOCK_MONOTONIC`` on Linux), before and after it, exactly as the Python loop did: the world's
-  ``physics_time`` stays MuJoCo's own stepping time [the kernels return it in ns].
+  (``CLOCK_MONOTONIC`` on Linux), right before and after it, as the Python loop did: the world's ``physics_time``
+  stays MuJoCo's own stepping time (the kernels return it in ns). It no longer includes the binding's call
+  (argument conversion, the GIL's release, its error guard: ≈ 0.3 µs a step, ≈ 1.5 % of ``mj_step``'s time).
 * **Warnings** (``mju_warning``, e.g. an unstable simulation) reach MuJoCo's global log handler, hence the handler
   :func:`~shc_cli.backends.mujoco_.world.import_mujoco` installed, as from the Python binding.
 * **Errors** (``mju_error``, which does not return; by default MuJoCo then prints, appends to ``MUJOCO_LOG.TXT``
   and exits the process): as the binding does, each ``mj_step`` runs under a thread-local log handler
-  (:func:`_guarded_step`) that jumps back (``setjmp``/``longjmp``) to the kernel with the message; the kernel stops
-  and reports it, and the world raises the binding's ``mujoco.FatalError``. Warnings pass through that handler to
-  the global one.
+  (:func:`_log_handler`) that jumps back (``setjmp``/``longjmp``) into the kernel with the message; the kernel
+  stops and reports it, and the world raises the binding's ``mujoco.FatalError`` with the binding's text. Warnings
+  pass through that handler to the global one.
 
-The kernels hold the GIL while they step (≈ 0.1 ms per call); MuJoCo's warning handler takes it again, which the
-holding thread may.
+The kernels hold the GIL while they step (≈ 0.1 ms a call; the binding released it inside ``mj_step``); MuJoCo's
+warning handler takes it again, which the holding thread may.
 """
 
 from __future__ import annotations
@@ -77,11 +79,16 @@ class Entries(NamedTuple):
 
 def entries(mujoco: Any) -> Entries | None:
     """The C functions of the MuJoCo library the ``mujoco`` binding loaded, or None when they cannot be found
-    (another platform's library name, another MuJoCo version): the world then steps from Python.
+    (another platform's library name, another MuJoCo version) or numba's compiler is off (``NUMBA_DISABLE_JIT``):
+    the world then steps from Python.
 
     The library is opened by its path in the package (the dynamic loader returns the copy already loaded); that it
     is the binding's copy is checked on the warning handler :func:`~shc_cli.backends.mujoco_.world.import_mujoco`
     installed through the binding (another copy would have none)."""
+    from numba.core import config
+
+    if getattr(config, "DISABLE_JIT", False):
+        return None
     folder = Path(mujoco.__file__).parent
     for path in sorted(folder.glob("libmujoco.so*")):
         try:
@@ -144,6 +151,8 @@ def _log_handler(module: ir.Module) -> ir.Function:
     builder.cbranch(builder.icmp_unsigned("==", address, ir.Constant(_I64, 0)), done, call)
     builder.position_at_end(call)
     builder.call(builder.inttoptr(address, _HANDLER.as_pointer()), [message])
+    # the warning handler ran Python, which may have let another thread step another world (and set the pointer)
+    builder.store(guard, _guard_pointer(module))
     builder.branch(done)
     builder.position_at_end(done)
     builder.ret_void()
