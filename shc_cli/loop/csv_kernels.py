@@ -98,7 +98,10 @@ def write_g6(x, out, pos):  # type: ignore[no-untyped-def]
         return pos + 3
     if a < 1e-39 or a >= 1e49:
         return -1
-    e = math.floor(math.log10(a))
+    # floor(log10 a), or one less, from the binary exponent and the chord of log10 over the mantissa (a log10
+    # call costs more than the whole estimate); the range checks below correct it, exactly as before
+    mantissa, exponent2 = math.frexp(a)  # a = mantissa·2^exponent2, mantissa in [½, 1)
+    e = math.floor((exponent2 - 2 + 2.0 * mantissa) * 0.3010299956639812)
     p = _scaled(a, 5 - e)
     if p < 1e5:
         e -= 1
