@@ -156,7 +156,7 @@ class MujocoWorld:
 
     def command(self, targets: np.ndarray) -> None:
         """Position targets of every servo ``(L, n)`` [rad]."""
-        self._goals = targets[self.slot_rows, self.slot_cols].astype(float)
+        self._goals = self.layout.servo_order(targets).astype(float)  # (a new array)
         if self.compliant:
             self.data.ctrl[:] = self._goals
 
