@@ -6,7 +6,7 @@ a fresh process and reads its ``summary.json``:
 * **loop** — the analysed (RUNNING) simulated time over its wall time (``running_wall_time_s``; goal ≥ 50×);
 * **loop ÷ mj_step** — ``running_wall_time_s`` over ``running_physics_time_s`` (MuJoCo's ``mj_step`` alone, timed
   around each C call inside the compiled control period, :mod:`shc_cli.backends.mujoco_.substeps`; before it, around
-  each call of the Python binding's ``mj_step``, which also counted the binding's ≈ 0.3 µs a call, ≈ 1.5 %): the
+  each call of the Python binding's ``mj_step``, which also counted the binding's ≈ 0.55 µs a call, ≈ 3 %): the
   loop's overhead as a ratio that load changes far less than the factors themselves;
 * **whole command** — the 60 s walked over the process's wall time: imports, robot checks, model, start-up, log,
   summary and plots (goal ≥ 25×), and over its CPU time (user + system, ``os.wait4``), which is what it would take on

@@ -4,7 +4,7 @@ every physics step, then the period's mean torque and speed and the servos' powe
 :meth:`~shc_cli.backends.mujoco_.world.MujocoWorld.step` runs ``substeps`` (4) physics steps per control period;
 in Python each paid the servo kernel's call, two ``perf_counter`` calls, the binding's ``mj_step`` call and a
 NumPy addition, and the period's end a few NumPy operations and the power's kernel (≈ 12 µs per period over
-MuJoCo's own time, ≈ 3.5 µs here). The kernels here run that loop in machine code and call MuJoCo's C ``mj_step``
+MuJoCo's own time, ≈ 3 µs here). The kernels here run that loop in machine code and call MuJoCo's C ``mj_step``
 directly on the raw ``mjModel*`` / ``mjData*`` (``model._address``, ``data._address``) through its address passed
 as an integer (:func:`_guarded_step`), so numba caches them like every kernel of shc (a ``ctypes`` function baked
 in as a global would not be cacheable). Each performs the operations of the Python code it replaces in the same
@@ -14,7 +14,8 @@ last bit (``tests/test_mujoco_substeps.py``).
 * **Timing**: each ``mj_step`` is timed with ``clock_gettime(clock)``, the clock of :func:`time.perf_counter`
   (``CLOCK_MONOTONIC`` on Linux), right before and after it, as the Python loop did: the world's ``physics_time``
   stays MuJoCo's own stepping time (the kernels return it in ns). It no longer includes the binding's call
-  (argument conversion, the GIL's release, its error guard: ≈ 0.3 µs a step, ≈ 1.5 % of ``mj_step``'s time).
+  (argument conversion, the GIL's release, its error guard: ≈ 0.55 µs a step, ≈ 3 % of ``mj_step``'s time,
+  ``benchmarks/bench_mujoco_period.py``).
 * **Warnings** (``mju_warning``, e.g. an unstable simulation) reach MuJoCo's global log handler, hence the handler
   :func:`~shc_cli.backends.mujoco_.world.import_mujoco` installed, as from the Python binding.
 * **Errors** (``mju_error``, which does not return; by default MuJoCo then prints, appends to ``MUJOCO_LOG.TXT``
