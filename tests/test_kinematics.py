@@ -174,3 +174,44 @@ def test_padding_short_legs_changes_nothing() -> None:
     np.testing.assert_array_equal(a.q, b.q[:, :3])
     np.testing.assert_array_equal(b.q[:, 3:], 0.0)
     np.testing.assert_array_equal(a.tip, b.tip)
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+@settings(max_examples=10, deadline=None)
+@given(fractions=joint_fraction, seed=st.integers(0, 2**16))
+def test_ik_steps_from_kept_frames_equal_the_plain_steps_bit_for_bit(name: str, fractions: list[float],
+                                                                     seed: int) -> None:
+    """The controller's IK step keeps each leg's frames of its result and starts the next step from them
+    (ik_step_frames_kernel): over steps towards moving targets — and after some legs' joints were set from outside,
+    one of them to −0.0 — joints, speeds, tips, flags and proximity equal the plain kernel's bit for bit."""
+    from shc_cli.model.kernels import ik_step_frames_kernel, ik_step_kernel
+
+    c = CHAINS[name]
+    q = _within_limits(c, fractions)
+    rng = np.random.default_rng(seed)
+    plain = [q.copy(), np.zeros_like(q), c.tips(q)]
+    kept = [q.copy(), np.zeros_like(q), c.tips(q)]
+    frames, frames_q = np.empty((c.size, c.d.shape[1] + 1, 4, 4)), np.full(c.d.shape, np.nan)
+    for step in range(12):
+        if step in (4, 8):  # joints set from outside (a pack, a direct move): those legs' frames are stale
+            legs = rng.random(c.size) < 0.5
+            moved = _within_limits(c, list(rng.random(len(fractions))))
+            moved[0, 0] = -0.0 if step == 8 else moved[0, 0]
+            for arrays in (plain, kept):
+                arrays[0] = np.where(legs[:, None], moved, arrays[0])
+                arrays[2] = c.tips(arrays[0])
+        target = plain[2] + rng.normal(size=(c.size, 3)) * 0.01
+        outputs = []
+        for arrays, keep in ((plain, False), (kept, True)):
+            q_out, qd_out, tip_out = np.empty_like(q), np.empty_like(q), np.empty((c.size, 3))
+            flags, proximity = np.zeros(c.size, dtype=np.int64), np.ones(c.size)
+            common = (c.base, c.d, c.theta, c.r, c.alpha, c.lower, c.upper, c.max_vel, arrays[0], arrays[1],
+                      arrays[2], target, 0.01, True, True, q_out, qd_out, tip_out, flags, proximity)
+            if keep:
+                ik_step_frames_kernel(*common, frames, frames_q, 1.0)
+            else:
+                ik_step_kernel(*common, 1.0)
+            arrays[:] = [q_out, qd_out, tip_out]
+            outputs.append((q_out, qd_out, tip_out, flags, proximity))
+        for a, b in zip(*outputs, strict=True):
+            assert a.tobytes() == b.tobytes()

@@ -154,6 +154,9 @@ class Model:
     def __post_init__(self) -> None:
         self.tips = self.chains.tips(self.joints)
         self._flags = np.zeros(self.chains.size, dtype=np.int64)
+        self._frames = np.empty((self.chains.size, self.chains.d.shape[1] + 1, 4, 4))
+        self._frames_q = np.full(self.chains.d.shape, np.nan)
+        """Each leg's frames of the joints ``_frames_q`` (:func:`~shc_cli.model.kernels.ik_step_frames_kernel`)."""
         self._proximity = np.ones(self.chains.size)
         self._flags[:] = 1
 
@@ -161,17 +164,19 @@ class Model:
                 active: np.ndarray | None = None) -> tuple[int, int]:
         """One OpenSHC IK step of every leg (or of the ``active`` legs) towards ``targets`` (base_link) [m].
 
-        The same compiled kernel as :func:`shc_cli.model.ik.ik_step`, called directly on the model's own arrays
-        (no input copies, no :class:`~shc_cli.model.ik.StepResult`): this is the per-cycle hot path, ≈ 8 µs
-        against ≈ 12 µs for ``ik_step`` on 6 legs, so it does not go through that wrapper. Legs not active
+        The step of :func:`shc_cli.model.ik.ik_step`, called directly on the model's own arrays (no input copies, no
+        :class:`~shc_cli.model.ik.StepResult`): this is the per-cycle hot path, ≈ 8 µs against ≈ 12 µs for
+        ``ik_step`` on 6 legs, so it does not go through that wrapper; and each leg's frames of its last result are
+        kept, which its next step starts from (:func:`~shc_cli.model.kernels.ik_step_frames_kernel`). Legs not active
         keep their joints, velocities and tips. Returns (legs off target by > 5 mm, legs with a clamped joint);
         :attr:`proximity` then holds OpenSHC's ``applyIK`` result per leg.
         """
         c = self.chains
         joints, velocities, tips = np.empty_like(self.joints), np.empty_like(self.joints), np.empty_like(self.tips)
-        kernels.ik_step_kernel(c.base, c.d, c.theta, c.r, c.alpha, c.lower, c.upper, c.max_vel, self.joints,
-                               self.joint_velocities, self.tips, targets, dt, clamp_positions, clamp_velocities,
-                               joints, velocities, tips, self._flags, self._proximity, 1.0)
+        kernels.ik_step_frames_kernel(c.base, c.d, c.theta, c.r, c.alpha, c.lower, c.upper, c.max_vel, self.joints,
+                                      self.joint_velocities, self.tips, targets, dt, clamp_positions,
+                                      clamp_velocities, joints, velocities, tips, self._flags, self._proximity,
+                                      self._frames, self._frames_q, 1.0)
         flags = self._flags.tolist()
         if active is not None:
             keep = ~np.asarray(active, dtype=bool)

@@ -117,7 +117,7 @@ def tips_kernel(base, d, theta, r, alpha, q, tips):  # type: ignore[no-untyped-d
 def ik_step_one(  # type: ignore[no-untyped-def]
     base, d, theta, r, alpha, lower, upper, max_vel,
     q, qd, current_tip, desired_tip, dt, clamp_positions, clamp_velocities,
-    q_out, qd_out, tip_out, frames, jac, z, v, delta, null_space=1.0,
+    q_out, qd_out, tip_out, frames, jac, z, v, delta, null_space=1.0, frames_ready=False,
 ):
     """One DLS step with joint-limit avoidance for one chain (study §2.1–§2.2).
 
@@ -126,11 +126,14 @@ def ik_step_one(  # type: ignore[no-untyped-def]
     ``frames`` ``(n + 1, 4, 4)``, ``jac`` ``(3, n)``, ``z`` ``(n, 3)``, ``v`` ``(n,)`` and ``delta`` ``(3,)`` are
     scratch space (allocated once per batch by the callers). ``null_space`` scales the limit-avoidance
     motion: 1 is OpenSHC; 0 gives a plain damped-least-squares step (used to polish planning solutions).
+    ``frames_ready``: ``frames`` already holds the frames of ``q`` (:func:`ik_step_frames_kernel`). On return
+    ``frames`` holds the frames of ``q_out``.
     """
     n = d.shape[0]
     w = JOINT_LIMIT_COST_WEIGHT
     lam2 = DLS_COEFFICIENT * DLS_COEFFICIENT
-    chain_frames(base, d, theta, r, alpha, q, frames)
+    if not frames_ready:
+        chain_frames(base, d, theta, r, alpha, q, frames)
     # Tip displacement in the leg frame: T_leg⁻¹·p_des − T_leg⁻¹·p_cur.
     for i in range(3):
         des = 0.0
@@ -256,6 +259,35 @@ def ik_step_kernel(  # type: ignore[no-untyped-def]
             q[b], qd[b], current_tip[b], desired_tip[b], dt, clamp_positions, clamp_velocities,
             q_out[b], qd_out[b], tip_out[b], frames, jac, z, v, delta, null_space,
         )
+
+
+@njit(cache=True)
+def ik_step_frames_kernel(  # type: ignore[no-untyped-def]
+    base, d, theta, r, alpha, lower, upper, max_vel,
+    q, qd, current_tip, desired_tip, dt, clamp_positions, clamp_velocities,
+    q_out, qd_out, tip_out, flags_out, proximity_out, frames, frames_q, null_space=1.0,
+):
+    """:func:`ik_step_kernel` keeping each chain's frames: ``frames[b]`` ``(n + 1, 4, 4)`` holds the frames of the
+    joints ``frames_q[b]`` (NaN: none yet). A chain whose joints ``q[b]`` are those, bit for bit, starts from them
+    instead of computing them again — the frames of one step's result are where the controller's next step starts
+    (the same function of the same values: the same bits). Both are updated to ``q_out``."""
+    chains, n = d.shape
+    jac, z, v, delta = np.empty((3, n)), np.empty((n, 3)), np.empty(n), np.empty(3)
+    for b in range(chains):
+        ready = True
+        for k in range(n):
+            now = q[b, k]
+            kept = frames_q[b, k]
+            if not (now == kept and math.copysign(1.0, now) == math.copysign(1.0, kept)):  # (NaN: never equal)
+                ready = False
+                break
+        flags_out[b], proximity_out[b] = ik_step_one(
+            base[b], d[b], theta[b], r[b], alpha[b], lower[b], upper[b], max_vel[b],
+            q[b], qd[b], current_tip[b], desired_tip[b], dt, clamp_positions, clamp_velocities,
+            q_out[b], qd_out[b], tip_out[b], frames[b], jac, z, v, delta, null_space, ready,
+        )
+        for k in range(n):
+            frames_q[b, k] = q_out[b, k]
 
 
 @njit(cache=True)
