@@ -64,6 +64,18 @@ class WalkController:
         self._plane_tips: np.ndarray | None = None
         self._no_contacts = np.zeros(len(self.leg_ids), dtype=np.bool_)
 
+    @property
+    def cycle(self) -> StepCycle:
+        """The step cycle the legs follow."""
+        return self._cycle
+
+    @cycle.setter
+    def cycle(self, cycle: StepCycle) -> None:
+        self._cycle = cycle
+        self._cycle_values = (cycle.period, cycle.swing_start, cycle.swing_end, cycle.stance_start, cycle.stance_end,
+                              cycle.swing_period, cycle.stance_period, cycle.frequency)
+        """What the compiled cycle reads of it, in its argument order (read once, not every cycle)."""
+
     # -- limits -----------------------------------------------------------------------------------------------
 
     def limits_for(self, linear_input: Vector, angular_input: float) -> tuple[float, float, float, float]:
@@ -99,12 +111,11 @@ class WalkController:
             contacts: feet on the ground by their force sensors (rough-terrain mode), ``None`` without sensing.
             step_depth: reactive target lowering in rough-terrain mode [m].
         """
-        cycle = self.cycle
+        legs = self.legs
         state, moved = stepping.walk_update(
-            self.legs.vectors, self.legs.nodes, self.legs.floats, self.legs.integers, self.counters, self._walk,
-            int(self.state), self._table, self._bearing_step, cycle.period, cycle.swing_start, cycle.swing_end,
-            cycle.stance_start, cycle.stance_end, cycle.swing_period, cycle.stance_period, cycle.frequency,
-            self.time_delta, float(linear_input[0]), float(linear_input[1]), float(angular_input),
+            legs.vectors, legs.nodes, legs.floats, legs.integers, self.counters, self._walk, int(self.state),
+            self._table, self._bearing_step, *self._cycle_values, self.time_delta, float(linear_input[0]),
+            float(linear_input[1]), float(angular_input),
             self._throttle, self.swing_height, self.swing_width, self.walk_plane, self.walk_plane_normal,
             np.asarray(default_body_position, dtype=float), legs_walking, posing_complete, self._limit_out,
             self.rough_terrain, float(step_depth), contacts is not None,
