@@ -81,8 +81,8 @@ class Pose:
 
     def inverse_transform(self, vectors: np.ndarray) -> np.ndarray:
         """``R⁻¹(v − p)`` for vectors ``(..., 3)``, evaluated as OpenSHC does: ``R⁻¹(−p) + R⁻¹v``."""
-        if self.rotation is IDENTITY:
-            return np.asarray((-self.position) + vectors)
+        if self.rotation is IDENTITY:  # v − p is v + (−p) in IEEE arithmetic: the same bits, one array less
+            return np.asarray(vectors - self.position)
         inverse = self.rotation.T
         return np.asarray(inverse @ (-self.position) + vectors @ self.rotation)
 
