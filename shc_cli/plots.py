@@ -56,38 +56,12 @@ def _subplots(*grid: int, figsize: tuple[float, float], dpi: float, **options: A
     """``pyplot.subplots`` without pyplot: a :class:`~matplotlib.figure.Figure` on its own Agg canvas and its axes
     (``options``: :meth:`Figure.subplots`'). No figure manager and no global figure list: nothing to close, the
     figure goes with its last reference."""
-    Figure, FigureCanvasAgg = _figure_classes()
-    figure = Figure(figsize=figsize, dpi=dpi)
-    FigureCanvasAgg(figure)
-    return figure, figure.subplots(*grid, **options)
-
-
-def _figure_classes() -> tuple[Any, Any]:
-    """matplotlib's ``Figure`` and ``FigureCanvasAgg``, imported — the first time in a process — without writing
-    the property lists into the docstrings of the ``Artist`` classes it defines on the way (``set()``'s, and those
-    interpolating ``%(Line2D:kwdoc)s``; ``matplotlib.artist.kwdoc``: 0.07 s of the 0.25 s import — nothing of shc
-    reads a docstring). Only those docstrings, in this process, lack the lists: ``kwdoc`` itself is put back, and
-    classes imported later get their lists whole."""
-    import sys
-
-    if "matplotlib.figure" not in sys.modules:
-        import matplotlib.artist
-        from matplotlib import _docstring
-
-        kwdoc = matplotlib.artist.kwdoc
-        matplotlib.artist.kwdoc = lambda artist: ""
-        try:
-            import matplotlib.backends.backend_agg
-            import matplotlib.figure
-        finally:
-            matplotlib.artist.kwdoc = kwdoc
-            params = getattr(getattr(_docstring, "interpd", None), "params", {})
-            for key in [key for key, value in params.items() if key.endswith(":kwdoc") and value == ""]:
-                del params[key]  # made again, whole, on the next request
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    return Figure, FigureCanvasAgg
+    figure = Figure(figsize=figsize, dpi=dpi)
+    FigureCanvasAgg(figure)
+    return figure, figure.subplots(*grid, **options)
 
 
 def _tight(figure: Any) -> None:

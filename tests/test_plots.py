@@ -192,28 +192,3 @@ def test_pareto_projection_of_three_objectives_draws_no_front_line(tmp_path: Pat
     labels = _legend_texts(figures["pareto_cot__mean_speed_mps.png"])
     assert any("on the 3-objective Pareto front" in label for label in labels)
     assert "non-dominated in cot and mean_speed_mps (1)" in labels
-
-
-def test_matplotlib_imported_for_shc_figures_keeps_kwdoc_and_draws(tmp_path: Path) -> None:
-    """shc's figures import matplotlib without the property lists in its Artist docstrings (shc_cli.plots
-    ._figure_classes): in a fresh process, matplotlib's ``kwdoc`` is its own again afterwards and still lists the
-    properties, later classes get whole docstrings, and a figure draws."""
-    import subprocess
-    import sys
-
-    script = f"""
-import matplotlib.artist
-original = matplotlib.artist.kwdoc
-from shc_cli.plots import _figure_classes, _subplots
-Figure, Canvas = _figure_classes()
-assert matplotlib.artist.kwdoc is original
-from matplotlib.lines import Line2D
-assert "linewidth" in matplotlib.artist.kwdoc(Line2D)
-from matplotlib import _docstring
-assert "linewidth" in _docstring.interpd.params["Line2D:kwdoc"]
-figure, axes = _subplots(figsize=(2, 2), dpi=50)
-axes.plot([0, 1], [0, 1])
-figure.savefig({str(tmp_path / "line.png")!r})
-"""
-    subprocess.run([sys.executable, "-c", script], check=True, timeout=120)
-    assert (tmp_path / "line.png").stat().st_size > 0
