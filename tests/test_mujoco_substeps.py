@@ -87,3 +87,19 @@ def test_an_mju_error_inside_the_kernel_is_the_bindings_fatal_error(tmp_path: Pa
         world.close()
     assert messages[0] == messages[1] == "mj_step: invalid integrator"
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
+
+
+def test_another_mujoco_release_steps_from_python() -> None:
+    """The kernels read MuJoCo's ``mjLogMessage`` at fixed offsets and call its private log-handler entry points,
+    checked on one release: any other steps from Python instead (never a struct read at a moved offset)."""
+    import types
+
+    import mujoco
+
+    from shc_cli.backends.mujoco_ import substeps
+
+    assert substeps.entries(mujoco) is not None  # the release installed here is the checked one
+    assert mujoco.__version__.startswith(substeps.CHECKED_VERSION)
+    for version in ("4.1.0", "3.3.7", "5.0.0", "40.0.1"):
+        other = types.SimpleNamespace(__version__=version, __file__=mujoco.__file__)
+        assert substeps.entries(other) is None, version

@@ -67,6 +67,12 @@ _HANDLER = ir.FunctionType(ir.VoidType(), [_I8P])
 """``mjfLogHandler``: ``void (*)(const mjLogMessage*)``."""
 
 
+CHECKED_VERSION = "4.0."
+"""The MuJoCo release whose ``mjLogMessage`` layout (the offsets above) and private log-handler entry points the
+kernels were written and tested against; with any other release the world steps from Python (the same results,
+≈ 9 µs more a control period) rather than read a struct whose layout may have moved."""
+
+
 class Entries(NamedTuple):
     """Addresses of MuJoCo's C functions the kernels call."""
 
@@ -80,8 +86,8 @@ class Entries(NamedTuple):
 
 def entries(mujoco: Any) -> Entries | None:
     """The C functions of the MuJoCo library the ``mujoco`` binding loaded, or None when they cannot be found
-    (another platform's library name, another MuJoCo version) or numba's compiler is off (``NUMBA_DISABLE_JIT``):
-    the world then steps from Python.
+    (another platform's library name, another MuJoCo version), the release is not :data:`CHECKED_VERSION`, or
+    numba's compiler is off (``NUMBA_DISABLE_JIT``): the world then steps from Python.
 
     The library is opened by its path in the package (the dynamic loader returns the copy already loaded); that it
     is the binding's copy is checked on the warning handler :func:`~shc_cli.backends.mujoco_.world.import_mujoco`
@@ -89,6 +95,11 @@ def entries(mujoco: Any) -> Entries | None:
     from numba.core import config
 
     if getattr(config, "DISABLE_JIT", False):
+        return None
+    version = str(getattr(mujoco, "__version__", ""))
+    if not version.startswith(CHECKED_VERSION):
+        log.debug("MuJoCo %s: the physics steps from Python (the compiled period is checked on %s.*)", version,
+                  CHECKED_VERSION)
         return None
     folder = Path(mujoco.__file__).parent
     for path in sorted(folder.glob("libmujoco.so*")):
