@@ -462,27 +462,17 @@ KINDS = [
 # -- running and judging a case ----------------------------------------------------------------------------------
 
 
-_COMMAND: list[Any] = []
-
-
 def _shc(argv: list[str]) -> tuple[int, str, str]:
     """``shc`` in-process through its ``main()`` (one-line errors, exit codes): (exit code, stdout, stderr).
 
-    The click command typer builds from the app is built once and reused (building it is half the cost of a case).
+    ``main()`` builds the click command of the one command it runs (``cli._app_for``), which is cheap enough per case.
     """
     import contextlib
     import io
 
-    import typer.main
-
-    from shc_cli import cli
-
-    if not _COMMAND:
-        _COMMAND.append(typer.main.get_command(cli.app))
     out, err = io.StringIO(), io.StringIO()
-    saved, saved_app = sys.argv, cli.app
+    saved = sys.argv
     sys.argv = ["shc", *argv]
-    cli.app = _COMMAND[0]  # what main() calls
     code = 0
     try:
         with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
@@ -490,7 +480,7 @@ def _shc(argv: list[str]) -> tuple[int, str, str]:
     except SystemExit as done:
         code = done.code if isinstance(done.code, int) else (0 if done.code is None else 1)
     finally:
-        sys.argv, cli.app = saved, saved_app
+        sys.argv = saved
     return code, out.getvalue(), err.getvalue()
 
 
