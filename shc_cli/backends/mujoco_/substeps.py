@@ -234,6 +234,16 @@ def _step(pointers, guard, clock):  # type: ignore[no-untyped-def]
 
 
 @njit(cache=True)
+def _step_summed(pointers, guard, clock, force, total):  # type: ignore[no-untyped-def]
+    """:func:`_step`, then the actuator forces after it added to ``total`` (not when MuJoCo raised an error)."""
+    spent, failed = _step(pointers, guard, clock)
+    if not failed:
+        for i in range(total.shape[0]):
+            total[i] += force[i]
+    return spent, failed
+
+
+@njit(cache=True)
 def _period_end(q, previous, control_period, substeps, total, supply, work, positions, torque, power):  # type: ignore[no-untyped-def]
     """The control period's means and power, as the Python loop computed them: ``positions`` = ``q``; the mean
     speed ``(q − previous) / control_period`` (``work[1]``); ``torque`` = ``total / substeps``; ``power`` =
@@ -261,12 +271,10 @@ def firmware_period(pointers, guard, clock, substeps, step, control_period, goal
     for _ in range(substeps):
         firmware_torque(goals, q, v, step, integral, firmware[0], firmware[1], firmware[2], firmware[3], firmware[4],
                         firmware[5], firmware[6], firmware[7], firmware[8], ctrl)
-        spent, failed = _step(pointers, guard, clock)
+        spent, failed = _step_summed(pointers, guard, clock, force, total)
         physics += spent
         if failed:
             return physics, 1
-        for i in range(total.shape[0]):
-            total[i] += force[i]
     _period_end(q, previous, control_period, substeps, total, supply, work, positions, torque, power)
     return physics, 0
 
@@ -280,12 +288,10 @@ def compliant_period(pointers, guard, clock, substeps, control_period, q, force,
     total[:] = 0.0
     physics = 0
     for _ in range(substeps):
-        spent, failed = _step(pointers, guard, clock)
+        spent, failed = _step_summed(pointers, guard, clock, force, total)
         physics += spent
         if failed:
             return physics, 1
-        for i in range(total.shape[0]):
-            total[i] += force[i]
     _period_end(q, previous, control_period, substeps, total, supply, work, positions, torque, power)
     return physics, 0
 
