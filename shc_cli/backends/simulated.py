@@ -49,7 +49,6 @@ class SimulatedBackend:
     def __init__(self, robot: Robot, world: Engine) -> None:
         self.robot, self.world = robot, world
         self.slots = JointSlots.of(robot)
-        self.rows, self.cols = self.slots.rows, self.slots.cols
         self.reading: Reading | None = None
         self._running = False
         self._first = True  # the spawn reading is not fed to the controller (it starts from its joints)

@@ -234,10 +234,9 @@ class LogRecorder(Generic[ReadingT]):
         ``self.row % …``), at every :meth:`flush` and when the run directory closes."""
         run.before_close(self.write_rows)
         self.slots = JointSlots.of(robot)
-        self.rows, self.cols = self.slots.rows, self.slots.cols
         self.dt = robot.time_delta
         self.measured = backend.measured
-        self.zero_joints = np.zeros(len(self.rows))
+        self.zero_joints = np.zeros(len(self.slots.rows))
         self.zero_legs = np.zeros(len(robot.legs))
         self.zero_body = np.zeros(len(MEASURED_BODY_COLUMNS) - 1)
         self._states: tuple[object, object] = (None, None)

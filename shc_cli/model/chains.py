@@ -81,7 +81,7 @@ class JointSlots:
 
     def padded(self, values: NDArray[np.float64]) -> FloatArray:
         """Per-joint values (servo order) as a new padded ``(L, n)`` array, 0 where a leg has fewer joints."""
-        if len(self.rows) == self.legs * self.width:  # no padding
+        if self.dense:
             return np.array(values, dtype=float).reshape(self.legs, self.width)
         out = np.zeros((self.legs, self.width))
         out[self.rows, self.cols] = values
@@ -95,7 +95,7 @@ class JointSlots:
     def servo_order(self, values: NDArray[np.float64]) -> FloatArray:
         """The real joints of a padded ``(L, n)`` array in servo order ``(J,)``, as ``values[rows, cols]``: without
         padding (:attr:`dense`) a view of ``values`` (or a copy if it is not contiguous), else a new array."""
-        if len(self.rows) == self.legs * self.width:
+        if self.dense:
             return values.reshape(-1)
         flat: FloatArray = values[self.rows, self.cols]
         return flat

@@ -209,7 +209,7 @@ class MujocoWorld:
         clock = time.perf_counter
         physics = 0.0
         explicit, step = self.explicit, self.timestep
-        if explicit is not None:
+        if explicit is not None:  # the servo model's torque from the state before the step, as in PyBullet
             torque_into = explicit.torque_into
             for _ in range(self.substeps):
                 torque_into(goals, q, v, step, ctrl)
@@ -223,7 +223,7 @@ class MujocoWorld:
                 mj_step(model, data)
                 physics += clock() - started
                 total += force
-        else:
+        else:  # PyBullet's velocity motor: the speed that closes position_gain of the error
             gain, keep, speed, kv, stall = self._gain, self._keep, self._speed, self._kv, self._stall
             motor, motor_force = servo_kernels.velocity_motor, servo_kernels.velocity_motor_force
             for _ in range(self.substeps):
