@@ -85,3 +85,30 @@ def test_one_failed_leg_keeps_two_thirds_of_the_tripods_speed_with_a_margin(fail
 def test_fewer_than_three_legs_are_refused_in_one_line() -> None:
     with pytest.raises(GaitPlanningError, match="at least three"):
         plan_gait({"A": (0.1, 0.1), "B": (0.1, -0.1)}, ["A", "B"], stride_m=0.1)
+
+
+def _bullet_stance() -> dict[str, tuple[float, float]]:
+    robot = load_robot("bullet").robot
+    return {leg: (spec.stance.x, spec.stance.y) for leg, spec in robot.legs.items()}
+
+
+@pytest.mark.parametrize("failed", [("AR", "BR"), ("AR", "CR"), ("BL", "CL")])
+def test_three_collinear_feet_need_a_moved_stance_and_get_one_within_reach(failed: tuple[str, ...]) -> None:
+    """Two failed legs on one side leave the other side's three feet on one line: no table holds on Bullet's own
+    stance (S3, S4); moving the stance positions by at most ``reach_m`` finds a wave that holds."""
+    stance = _bullet_stance()
+    left = [leg for leg in stance if leg not in failed]
+    with pytest.raises(GaitPlanningError, match="static margin"):
+        plan_gait(stance, left, stride_m=0.15)
+    planned = plan_gait(stance, left, stride_m=0.15, reach_m=0.2)
+    assert planned.margin_m >= 0.02
+    assert planned.duty_factor == pytest.approx(0.75)
+    moved = [math.dist(planned.stance[leg], stance[leg]) for leg in left]
+    assert 0 < max(moved) <= 0.2 + 1e-9
+
+
+def test_a_reachability_test_that_refuses_every_move_leaves_no_gait() -> None:
+    stance = _bullet_stance()
+    left = [leg for leg in stance if leg not in ("AR", "BR")]
+    with pytest.raises(GaitPlanningError):
+        plan_gait(stance, left, stride_m=0.15, reach_m=0.2, reachable=lambda leg, xy: False)

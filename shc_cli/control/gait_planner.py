@@ -20,15 +20,17 @@ any subset of a robot's legs, with no trials, from the geometry alone:
 :func:`plan_gait` returns the fastest candidate whose worst margin reaches ``min_margin_m``, the widest margin
 breaking ties. All lengths are in the walk plane, in the body frame [m].
 
-Not yet here: moving the stance positions of the legs that are left (two failed legs on one side leave the
-other side a single foot, and no phase table alone keeps those robots statically stable: the planner then says so).
+Where no table holds on the robot's own stance positions (two failed legs on one side leave that side a single
+foot: standing on the other side's three collinear feet has no area), the stance positions of the legs left may
+be moved (``reach_m``, within their workspace: ``reachable``): a greedy search, each step the move of one leg by a
+quarter of ``reach_m`` that most widens the margin (or speeds the gait), until a table holds.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,6 +61,8 @@ class PlannedGait:
         body_shift_m: centre-of-mass offset from the body origin at each sampled instant of the cycle that gives
             ``margin_m``, ``(K, 2)`` [m] (:data:`SAMPLES_PER_UNIT` × 4 samples a group spacing).
         duty_factor: stance share of the cycle ``β``.
+        stance: the stance (identity tip) position of each walking leg the margin holds for (x, y) [m]: the
+            robot's own, or moved where no gait holds on it (``reach_m``).
         speed_share: body speed relative to a tripod's at the same stride and step frequency, ``(1 − β)/β``.
     """
 
@@ -67,6 +71,7 @@ class PlannedGait:
     margin_m: float
     body_shift_m: np.ndarray
     duty_factor: float
+    stance: dict[str, tuple[float, float]]
 
     @property
     def speed_share(self) -> float:
@@ -216,9 +221,69 @@ def _gait(name: str, groups: Sequence[Sequence[str]], a: int, w: int) -> Gait:
                 offset_multiplier={leg: off // step for leg, off in offsets.items()})
 
 
+def _search(stance: Mapping[str, tuple[float, float]], legs: Sequence[str], stride_m: float, heading_rad: float,
+            min_margin_m: float, name: str, sway: bool, sway_stride_m: float | None,
+            exhaustive: bool) -> tuple[PlannedGait | None, float]:
+    """The fastest candidate holding ``min_margin_m`` (widest margin among equals), and the widest margin of any
+    candidate looked at; without ``exhaustive`` the search stops after the first duty factor that holds."""
+    best: PlannedGait | None = None
+    widest = -math.inf
+    for g, a, w in _candidates(len(legs)):
+        duty = 1.0 - w / (g * a)
+        if best is not None and duty > best.duty_factor + 1e-12 and not exhaustive:
+            break
+        for groups in _ordered_partitions(legs, g):
+            margin, shift = worst_margin(stance, groups, w / a, stride_m, heading_rad, sway, sway_stride_m)
+            widest = max(widest, margin)
+            if margin < min_margin_m:
+                continue
+            if best is None or duty < best.duty_factor - 1e-12 or (
+                    abs(duty - best.duty_factor) <= 1e-12 and margin > best.margin_m + 1e-12):
+                best = PlannedGait(_gait(name, groups, a, w), groups, margin, shift, duty,
+                                   {leg: stance[leg] for leg in legs})
+    return best, widest
+
+
+Reachable = Callable[[str, tuple[float, float]], bool]
+"""Whether a leg's tip can stand at (x, y) in the walk plane [m]."""
+
+
+def _redistributed(stance: Mapping[str, tuple[float, float]], legs: Sequence[str], stride_m: float,
+                   heading_rad: float, min_margin_m: float, name: str, sway: bool, sway_stride_m: float | None,
+                   reach_m: float, reachable: Reachable | None) -> PlannedGait | None:
+    """Greedy moves of the walking legs' stance positions until a gait holds the margin (see the module)."""
+    step = reach_m / 4.0
+    current = {leg: stance[leg] for leg in legs}
+    best, widest = _search(current, legs, stride_m, heading_rad, min_margin_m, name, sway, sway_stride_m, True)
+    for _ in range(4 * len(legs)):
+        if best is not None:
+            return best
+        trial_best: tuple[float, dict[str, tuple[float, float]], PlannedGait | None] | None = None
+        for leg in legs:
+            x0, y0 = stance[leg]
+            x, y = current[leg]
+            for dx, dy in ((step, 0.0), (-step, 0.0), (0.0, step), (0.0, -step)):
+                moved = (x + dx, y + dy)
+                if math.hypot(moved[0] - x0, moved[1] - y0) > reach_m + 1e-12:
+                    continue
+                if reachable is not None and not reachable(leg, moved):
+                    continue
+                trial = {**current, leg: moved}
+                found, margin = _search(trial, legs, stride_m, heading_rad, min_margin_m, name, sway, sway_stride_m,
+                                        True)
+                score = margin + (1.0 if found is not None else 0.0)
+                if trial_best is None or score > trial_best[0]:
+                    trial_best = (score, trial, found)
+        if trial_best is None or (trial_best[2] is None and trial_best[0] <= widest + 1e-9):
+            return None
+        widest, current, best = max(widest, trial_best[0]), trial_best[1], trial_best[2]
+    return best
+
+
 def plan_gait(stance: Mapping[str, tuple[float, float]], legs: Sequence[str], stride_m: float,
               heading_rad: float = 0.0, min_margin_m: float = 0.02, name: str = "planned",
-              sway: bool = True, sway_stride_m: float | None = None) -> PlannedGait:
+              sway: bool = True, sway_stride_m: float | None = None, reach_m: float = 0.0,
+              reachable: Reachable | None = None) -> PlannedGait:
     """The fastest generated gait for ``legs`` that keeps the worst static margin ≥ ``min_margin_m``.
 
     Args:
@@ -231,6 +296,10 @@ def plan_gait(stance: Mapping[str, tuple[float, float]], legs: Sequence[str], st
         sway: let the body sway through the cycle (else one shift for the whole cycle).
         sway_stride_m: the stride whose stance-foot speed bounds the sway [m] (default ``stride_m``; give the
             walkspace's largest stride to let a slow walk sway as fast as a full-speed one).
+        reach_m: when no gait holds on the identity stance, how far each leg's stance position may move [m]
+            (0: not at all); the moves are searched greedily in steps of a quarter of it.
+        reachable: tells whether a leg's tip can stand at (x, y) [m] (its workspace); default: anywhere within
+            ``reach_m``.
 
     Raises:
         GaitPlanningError: no candidate keeps the margin (fewer than three legs, or a stride too long for them).
@@ -239,17 +308,10 @@ def plan_gait(stance: Mapping[str, tuple[float, float]], legs: Sequence[str], st
     if len(legs) < 3:
         raise GaitPlanningError(f"{len(legs)} leg(s) left ({', '.join(legs) or 'none'}): a statically stable "
                                 "gait needs at least three")
-    best: PlannedGait | None = None
-    for g, a, w in _candidates(len(legs)):
-        duty = 1.0 - w / (g * a)
-        if best is not None and duty > best.duty_factor + 1e-12:
-            break
-        for groups in _ordered_partitions(legs, g):
-            margin, shift = worst_margin(stance, groups, w / a, stride_m, heading_rad, sway, sway_stride_m)
-            if margin < min_margin_m:
-                continue
-            if best is None or margin > best.margin_m + 1e-12:
-                best = PlannedGait(_gait(name, groups, a, w), groups, margin, shift, duty)
+    best, _ = _search(stance, legs, stride_m, heading_rad, min_margin_m, name, sway, sway_stride_m, False)
+    if best is None and reach_m > 0:
+        best = _redistributed(stance, legs, stride_m, heading_rad, min_margin_m, name, sway, sway_stride_m, reach_m,
+                              reachable)
     if best is None:
         raise GaitPlanningError(f"no gait keeps a {min_margin_m:g} m static margin on legs {', '.join(legs)} "
                                 f"at a {stride_m:g} m stride; shorten the stride")
