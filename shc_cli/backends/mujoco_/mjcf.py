@@ -15,8 +15,12 @@ simulate the same bodies (``tests/test_engines.py`` checks both engines' foot fr
 
 Terrain: the infinite ground plane, every box of :meth:`Terrain.boxes` as a static geom, a height field as an
 ``hfield``. Robot geoms are in group 1 and collide only with terrain geoms (group 0): no self-collision, as in
-PyBullet. Friction and restitution are mapped to PyBullet's combined contact (docs/physics-model.md):
-PyBullet multiplies the two bodies' coefficients, MuJoCo takes the larger, so every geom gets ``friction²``.
+PyBullet. Friction is mapped to PyBullet's combined contact (docs/physics-model.md): PyBullet multiplies the two
+bodies' coefficients, MuJoCo takes the larger, so every geom gets ``friction²``. Restitution is not mapped: MuJoCo's
+only stand-in, an under-damped contact spring, bounces every contact at every speed, while PyBullet gives no
+restitution below its 0.2 m/s threshold — where a walking foot lands. The under-damped spring made ATHENA slip back
+down the 10° ramp (0.009 against PyBullet's 0.039 m/s); PyBullet walks it the same with restitution 0.5 and 0
+(1.182 and 1.181 m in 30 s), so critically damped contacts are the faithful mapping.
 
 MJCF built in code rather than compiled from the generated URDF: MuJoCo's URDF reader has no capsules
 (PyBullet's ``<capsule>`` extension), no actuators, sensors, contact filters or solver options, so those would
@@ -59,7 +63,9 @@ class Options:
         fixed_base: no free joint: the body is held in the air.
         stand: a weld ``stand`` holds the body where it spawns until deactivated.
         friction: PyBullet-style friction of feet and terrain (contact coefficient ``friction²``).
-        restitution: PyBullet-style restitution of feet and terrain (contact restitution ``restitution²``).
+        restitution: PyBullet-style restitution of feet and terrain: not applied (MuJoCo has no restitution
+            coefficient, and PyBullet applies none below :data:`RESTITUTION_THRESHOLD_MPS`, where walking feet land;
+            every contact stays critically damped, docs/physics-model.md).
     """
 
     timestep: float
@@ -98,17 +104,9 @@ def dh_quat(dh: DH) -> tuple[float, ...]:
     return _qmul(_axis_quat(2, dh.theta), _axis_quat(0, dh.alpha))
 
 
-def contact_restitution_ratio(restitution: float) -> float:
-    """MuJoCo ``solref`` damping ratio giving a bounce of ``restitution`` (PyBullet's combined one, r·r).
-
-    A contact is a damped spring; a half oscillation of damping ratio ζ returns ``e = exp(−πζ/√(1−ζ²))`` of the
-    impact speed, so ``ζ = −ln e / √(π² + ln² e)``; e = 0 is critical damping (ζ = 1, MuJoCo's default).
-    """
-    e = restitution * restitution
-    if e <= 0.0:
-        return 1.0
-    log = math.log(min(e, 0.999))
-    return -log / math.sqrt(math.pi**2 + log * log)
+RESTITUTION_THRESHOLD_MPS = 0.2
+"""Bullet's restitution velocity threshold [m/s] (``btContactSolverInfo::m_restitutionVelocityThreshold``, which
+PyBullet leaves at its default): a contact approaching slower than this gets no restitution at all."""
 
 
 def robot_mjcf(robot: Robot, terrain: Terrain, options: Options) -> str:
@@ -117,11 +115,10 @@ def robot_mjcf(robot: Robot, terrain: Terrain, options: Options) -> str:
     ET.SubElement(root, "compiler", angle="radian", autolimits="true", inertiafromgeom="false")
     ET.SubElement(root, "option", timestep=_num(options.timestep), gravity=_vec((0.0, 0.0, -GRAVITY)),
                   integrator="implicitfast", cone="pyramidal")
-    ratio = contact_restitution_ratio(options.restitution)
     mu = options.friction * options.friction
     default = ET.SubElement(root, "default")
     ET.SubElement(default, "geom", friction=f"{_num(mu)} 0.005 0.0001",
-                  solref=f"{_num(CONTACT_TIME_CONSTANT)} {_num(ratio)}", condim="3")
+                  solref=f"{_num(CONTACT_TIME_CONSTANT)} 1", condim="3")
     ET.SubElement(ET.SubElement(root, "visual"), "global", offwidth="1280", offheight="720")
     asset = ET.SubElement(root, "asset")
     world = ET.SubElement(root, "worldbody")

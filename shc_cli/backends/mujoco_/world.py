@@ -27,6 +27,7 @@ here only; it needs no GL to simulate.
 
 from __future__ import annotations
 
+import logging
 import time
 from typing import Any
 
@@ -37,13 +38,16 @@ from shc_cli.backends.engine import EngineOptions, Reading, rpy_from_matrix, spa
 from shc_cli.backends.imu import Imu
 from shc_cli.backends.mujoco_ import substeps as substeps_kernels
 from shc_cli.backends.mujoco_.gl import import_for_physics
-from shc_cli.backends.mujoco_.mjcf import Options, robot_mjcf, velocity_stiffness
+from shc_cli.backends.mujoco_.mjcf import RESTITUTION_THRESHOLD_MPS, Options, robot_mjcf, velocity_stiffness
 from shc_cli.backends.servo import ServoModel
 from shc_cli.backends.terrain import Terrain
 from shc_cli.errors import BackendError
+from shc_cli.events import NOTICE, event
 from shc_cli.model.body import leg_names
 from shc_cli.model.chains import JointSlots
 from shc_cli.spec.robot import Robot
+
+log = logging.getLogger(__name__)
 
 RAY_GROUPS = np.array([1, 0, 0, 0, 0, 0], dtype=np.uint8)
 """Geom groups the height ray sees: the terrain's (0), not the robot's."""
@@ -85,6 +89,10 @@ class MujocoWorld:
         timestep = control_period / substeps
         self.timestep = timestep
         """Physics step [s]."""
+        if restitution > 0.0:
+            event(log, NOTICE, "restitution", "note: MuJoCo applies no restitution (--restitution %g): PyBullet gives "
+                  "none below %g m/s, where walking feet land; the contacts stay critically damped", restitution,
+                  RESTITUTION_THRESHOLD_MPS)
         self.xml = robot_mjcf(robot, self.terrain, Options(timestep, height, fixed_base, stand, friction, restitution))
         self.model = model = mujoco.MjModel.from_xml_string(self.xml)
         self.data = data = mujoco.MjData(model)
