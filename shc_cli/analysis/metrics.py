@@ -69,8 +69,13 @@ class WalkFigures:
         commanded_speed_mps: mean horizontal desired velocity after the limits [m/s].
         mean_power_w: mean total servo power [W]; ``None`` for a run without power (a plan).
         mass_kg: the simulated body's mass (:func:`shc_cli.model.body.body_mass`) [kg].
-        cot: paper eq. 22 ``P̄ / (m·g·v)``; ``None`` when not walking on the ground, without power, or the body
-            hardly moved.
+        walked_m: the distance walked: the length of the body's path sampled once per gait cycle
+            (:func:`shc_cli.analysis.progress.cycle_path_length`: it follows a curve or a closed path, not the
+            body's sway within a step) [m].
+        cot: paper eq. 22 ``P̄ / (m·g·v)`` with ``v`` the distance walked over the window; ``None`` when not walking
+            on the ground, without power, or the body hardly moved.
+        cot_displacement: the same with ``v`` the displacement speed (start to end in a straight line: a path that
+            returns to its start has none).
     """
 
     span_s: float
@@ -81,13 +86,17 @@ class WalkFigures:
     commanded_speed_mps: float
     mean_power_w: float | None
     mass_kg: float
+    walked_m: float
     cot: float | None
+    cot_displacement: float | None
 
 
-def walk_figures(run: RunLog, rows: np.ndarray, walking: bool) -> WalkFigures:
+def walk_figures(run: RunLog, rows: np.ndarray, walking: bool, period: int | None = None) -> WalkFigures:
     """:class:`WalkFigures` of ``run`` over ``rows`` (ascending row indices; the cost of transport only when
     ``walking``: scenario WG). Fewer than two rows are no walk: distances and speeds 0 (a robot thrown off the
-    floor at start-up, caught by the fall check in its first RUNNING cycle, once had 7 m/s)."""
+    floor at start-up, caught by the fall check in its first RUNNING cycle, once had 7 m/s). ``period``: the gait
+    period in cycles for the distance walked (default: the gait the summary names, :func:`_period`)."""
+    from shc_cli.analysis.progress import cycle_path_length
     from shc_cli.model.body import body_mass
 
     dt = run.dt
@@ -95,13 +104,16 @@ def walk_figures(run: RunLog, rows: np.ndarray, walking: bool) -> WalkFigures:
     commanded = float(np.linalg.norm(run.desired[rows, :2], axis=1).mean()) if len(rows) else 0.0
     power = float(run.power[rows].mean()) if run.power is not None and len(rows) else None
     if len(rows) < 2:
-        return WalkFigures(len(rows) * dt, 0.0, 0.0, 0.0, 0.0, commanded, power, mass, None)
+        return WalkFigures(len(rows) * dt, 0.0, 0.0, 0.0, 0.0, commanded, power, mass, 0.0, None, None)
     span = (rows[-1] - rows[0] + 1) * dt
     path = window_path(run.position[:, :2], rows)
     path_speed, speed = body_speeds(path, span)
-    cot = cost_of_transport(power, mass, speed) if walking and power is not None else None  # eq. 22
+    walked = cycle_path_length(path, _period(run) if period is None else period)
+    measured = walking and power is not None
+    cot = cost_of_transport(power, mass, walked / span) if measured and power is not None else None  # eq. 22
+    cot_displacement = cost_of_transport(power, mass, speed) if measured and power is not None else None
     return WalkFigures(span, speed * span, float(path[-1, 0] - path[0, 0]), speed, path_speed, commanded, power,
-                       mass, cot)
+                       mass, walked, cot, cot_displacement)
 
 
 def window_mask(run: RunLog, window: Window) -> np.ndarray:
@@ -289,7 +301,8 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
     figures = walk_figures(run, rows, walking)
     speed, commanded = figures.displacement_speed_mps, figures.commanded_speed_mps
     # mean_speed_mps: the displacement speed under its first name (sweep tables and older readers use it)
-    out.update(distance_m=figures.distance_m, displacement_speed_mps=speed, path_speed_mps=figures.path_speed_mps,
+    out.update(distance_m=figures.distance_m, walked_m=figures.walked_m,
+               displacement_speed_mps=speed, path_speed_mps=figures.path_speed_mps,
                mean_speed_mps=speed, commanded_speed_mps=commanded,
                speed_ratio=float(speed / commanded) if commanded > 1e-9 else None)
     steady = rows if window.steady else np.flatnonzero(window_mask(run, Window(window.skip_s, steady=True)))
@@ -298,6 +311,7 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
         out["steady_speed_mps"] = float(moved / ((steady[-1] - steady[0] + 1) * dt))
     if run.power is not None:
         out["mean_power_w"], out["cot"] = figures.mean_power_w, figures.cot
+        out["cot_displacement"] = figures.cot_displacement
     from shc_cli.analysis.joint_limits import joint_limit_fraction
 
     out["joint_limit_fraction"] = joint_limit_fraction(run, rows)

@@ -85,19 +85,20 @@ class PhysicsRecord:
         finished = self.log = read_tables(directory, robot) if self.cycles else None
         rows = np.flatnonzero(finished.running) if finished is not None else np.zeros(0, dtype=np.intp)
         if finished is not None:
-            figures = walk_figures(finished, rows, scenario == "WG")
+            figures = walk_figures(finished, rows, scenario == "WG", controller.cycle.period)
             progress = window_progress(finished, rows, controller.cycle.period,  # nothing to travel in the air
                                        0.0 if self.airborne else figures.commanded_speed_mps)
             distance, forward, speed = figures.distance_m, figures.forward_distance_m, figures.displacement_speed_mps
             path_speed, commanded, power = figures.path_speed_mps, figures.commanded_speed_mps, figures.mean_power_w
-            mass, cot = figures.mass_kg, figures.cot
+            mass, cot, cot_displacement, walked = figures.mass_kg, figures.cot, figures.cot_displacement, \
+                figures.walked_m
         else:  # stopped before its first cycle: nothing was walked
             from shc_cli.analysis.progress import progress_fields
             from shc_cli.model.body import body_mass
 
             progress = progress_fields(0.0, 0.0, 0.0)
             distance = forward = speed = path_speed = commanded = 0.0
-            power, mass, cot = None, body_mass(robot), None
+            power, mass, cot, cot_displacement, walked = None, body_mass(robot), None, None, 0.0
         return RunSummary.model_validate({
             "robot": robot.name,
             "gait": gait,
@@ -124,6 +125,8 @@ class PhysicsRecord:
             "cycle_frequency_hz": controller.cycle.frequency,
             "duty_factor": controller.cycle.duty_factor,
             "cot": cot,
+            "cot_displacement": cot_displacement,
+            "walked_m": walked,
             "max_tilt_rad": self.max_tilt,
             "fell": self.fell,
             **final_poses(finished),

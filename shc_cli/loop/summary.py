@@ -147,9 +147,15 @@ class RunSummary(BaseModel):
     servo_model: str | None = Field(None, description="simulate: the robot's servo model (servo.model; 'generic' "
                                                       "when its file gives no [servo]: power is then indicative).")
     cot: float | None = Field(None, description="simulate: cost of transport, paper eq. 22: mean power "
-                                                           "÷ (mass · g · displacement speed) [dimensionless]; null "
-                                                           "when not walking on the ground (scenario other than "
-                                                           "WG) or the body hardly moved.")
+                                                "÷ (mass · g · v), v the distance walked (the body's path sampled "
+                                                "once per gait cycle: a curve or a closed path counts) ÷ the window "
+                                                "[dimensionless]; null when not walking on the ground (scenario "
+                                                "other than WG) or the body hardly moved.")
+    cot_displacement: float | None = Field(None, description="simulate: the same with v the displacement speed "
+                                                             "(straight-line start to end: a path back to its "
+                                                             "start has none) [dimensionless].")
+    walked_m: NonNegativeFloat | None = Field(None, description="simulate: distance walked over the window, the "
+                                                                "body's path sampled once per gait cycle [m].")
     max_tilt_rad: NonNegativeFloat | None = Field(None, description="simulate: largest body tilt while RUNNING "
                                                                     "[rad].")
     fell: bool | None = Field(None, description="simulate: the robot fell (tilt or height check); the run stopped "
