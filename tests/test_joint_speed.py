@@ -84,7 +84,7 @@ def test_no_cycle_commands_a_joint_beyond_its_speed_limit(robot: str, pick: int,
 
 def test_a_short_time_to_start_takes_longer_rather_than_faster_than_the_servos() -> None:
     """OpenSHC's direct start-up moves the joints in time_to_start whatever the distance; with 0.2 s the cubic
-    transition would move its fastest joint at 2.06 × max_vel (openshc_default: 41.1 cycles needed, not 20). shc
+    transition (10 cycles of 20 ms) would move openshc_default's fastest joint at 2.14 × max_vel. shc
     stretches it to the cycles the servos need (1.5·|Δq|/(max_vel·dt), docs/deviations.md)."""
     robot = load_robot(ROOT / "robots" / "openshc_default.toml").robot
     quick = robot.model_copy(update={"start_up": robot.start_up.model_copy(update={"time_to_start": 0.2})})
@@ -95,7 +95,7 @@ def test_a_short_time_to_start_takes_longer_rather_than_faster_than_the_servos()
     bound = speed_limits(quick)
     travel = np.abs(commands[-1] - commands[0])
     needed = int(np.ceil((1.5 * travel / bound).max()))
-    assert needed == 42  # OpenSHC's 20 cycles would be too fast
+    assert needed == 22  # 1.5 × 1.4285 rad / (5 rad/s × 0.02 s) = 21.4; OpenSHC's 10 cycles would be too fast
     assert len(commands) - 2 == needed  # the UNKNOWN → PACKED cycle, then the transition
     assert fastest(commands, bound) <= 1.0 + TOLERANCE
     assert controller.joint_speed_limited_cycles == 0  # planned within the limit, never cut by the guard
