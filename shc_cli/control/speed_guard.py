@@ -28,6 +28,7 @@ class SpeedGuard:
         self.chains, self.dt = chains, dt
         self.bound = chains.max_vel * dt
         """Each joint's largest motion in one cycle, ``max_vel·dt`` [rad]."""
+        self._check = self.bound + kernels.SPEED_TOLERANCE
         self.limited = np.zeros(chains.size, dtype=np.int64)
         """Per leg, 1 where a joint's speed was limited this cycle (the IK's velocity clamp or the guard)."""
         self._guarded = np.zeros(chains.size, dtype=np.int64)
@@ -40,9 +41,9 @@ class SpeedGuard:
               ) -> tuple[FloatArray, FloatArray, FloatArray] | None:
         """Limit ``joints`` (this cycle's command) to ``before ± max_vel·dt``: the new joints, velocities and tips,
         or None when no joint moved too far."""
-        out, rates = np.empty_like(joints), np.empty_like(joints)
-        if not kernels.limit_joint_speed_kernel(before, joints, self.bound, out, velocities, rates, self.dt,
-                                                self._guarded):
+        if not kernels.joint_speed_exceeded(before, joints, self._check):
             return None
+        out, rates = np.empty_like(joints), np.empty_like(joints)
+        kernels.limit_joint_speed_kernel(before, joints, self.bound, out, velocities, rates, self.dt, self._guarded)
         self.limited |= self._guarded
         return out, rates, self.chains.tips(out)

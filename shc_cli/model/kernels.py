@@ -355,3 +355,15 @@ def limit_joint_speed_kernel(before, joints, bound, joints_out, velocities, velo
             velocities_out[b, k] = rate
         count += limited_out[b]
     return count
+
+
+@njit(cache=True)
+def joint_speed_exceeded(before, joints, limit):  # type: ignore[no-untyped-def]
+    """Whether any joint of ``joints`` is further than ``limit`` (``max_vel·dt`` + :data:`SPEED_TOLERANCE`) from
+    ``before``, ``(B, n)``: the guard's check, cheaper than limiting (the common case is nothing to limit)."""
+    chains, n = joints.shape
+    for b in range(chains):
+        for k in range(n):
+            if abs(joints[b, k] - before[b, k]) > limit[b, k]:
+                return True
+    return False
