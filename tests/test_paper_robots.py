@@ -89,10 +89,6 @@ def test_the_mammalian_a_legs_point_backwards_with_the_yaw_locked() -> None:
 TABLE_II = {"bullet_insectoid_a": (0.046, 0.287), "bullet_insectoid_b": (0.060, 0.348),
             "bullet_mammalian_a": (0.049, 0.207), "bullet_mammalian_b": (0.063, 0.210)}
 """The paper's Table II: walkspace area [m²] and stride length [m] (docs/experiments/openshc-cot.md: our reading)."""
-AREA_GIVEN_UP = {"bullet_insectoid_a"}
-"""Rows whose area no longer matches: insectoid A's feet stand 0.40 m out (robots/bullet.toml, issue 42) so that its
-walk stays within the joint limits and speeds at full throttle; at 0.35 m the area matched (0.0475 m²) but the legs,
-folded near their limits, drifted onto them above ~60 % of the stride. The stride still matches."""
 
 
 @pytest.mark.parametrize("name", sorted(TABLE_II))
@@ -104,10 +100,7 @@ def test_table_ii_rows_within_10_percent(name: str) -> None:
     gait = load_gait(robot.walker.gait).gait
     report = analyse_workspace(robot, gait)
     area, stride = TABLE_II[name]
-    if name in AREA_GIVEN_UP:  # the feet stand further out than Table II's area allows
-        assert report.walkspace_area() < 0.6 * area
-    else:
-        assert report.walkspace_area() == pytest.approx(area, rel=0.10)
+    assert report.walkspace_area() == pytest.approx(area, rel=0.10)
     assert report.walkspace_stride() == pytest.approx(stride, rel=0.10)
 
 
