@@ -10,6 +10,7 @@ from shc_cli.domain.ros_node import NodeConfig
 def run_ros(config: NodeConfig) -> None:
     """Run the node; print where it listens, then one line when it stops (exit 0 also after Ctrl-C: that is how an
     open-ended node ends; 3 after a servo fault, as run-hw)."""
+    from shc_cli.analysis.run_line import speed_note
     from shc_cli.api import ros_node
     from shc_cli.commands.outcome import EXIT_FAULT
 
@@ -19,6 +20,7 @@ def run_ros(config: NodeConfig) -> None:
               f"{s.cycle_time_max_ms:.2f} ms)" if s.rate_hz and s.cycle_time_p50_ms is not None
               and s.cycle_time_p99_ms is not None and s.cycle_time_max_ms is not None else "")
     fault = f", FAULT: {s.fault}" if s.fault else ""
-    typer.echo(f"{s.robot} / {s.gait}: {s.cycles} cycles{timing}, stopped by {s.stop_reason}{fault} → {result.path}")
+    typer.echo(f"{s.robot} / {s.gait}: {s.cycles} cycles{timing}, stopped by {s.stop_reason}{speed_note(s)}{fault} "
+               f"→ {result.path}")
     if s.fault:
         raise typer.Exit(EXIT_FAULT)

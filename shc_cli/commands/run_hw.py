@@ -14,6 +14,7 @@ __all__ = ["run_hw"]
 
 def run_hw(config: HardwareConfig) -> Path:
     """Run on the servos, print one line; returns the run directory (exit 3 after a servo fault)."""
+    from shc_cli.analysis.run_line import speed_note
     from shc_cli.api import run_hardware
     from shc_cli.commands.outcome import EXIT_FAULT
 
@@ -22,7 +23,7 @@ def run_hw(config: HardwareConfig) -> Path:
     fault = f", FAULT: {summary.fault}" if summary.fault else ""
     typer.echo(f"{summary.robot} on {summary.port}: {summary.cycles} cycles, cycle time mean "
                f"{summary.cycle_time_mean_ms:.2f} ms, p99 {summary.cycle_time_p99_ms:.2f} ms, "
-               f"{summary.overruns} overruns, ended {summary.final_state}{fault} → {run.path}")
+               f"{summary.overruns} overruns, ended {summary.final_state}{speed_note(summary)}{fault} → {run.path}")
     if summary.fault:
         raise typer.Exit(EXIT_FAULT)
     return run.path

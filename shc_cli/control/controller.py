@@ -32,7 +32,8 @@ from shc_cli.control.sensing import (
     inclination_pose,
     support_centroid_pose,
 )
-from shc_cli.control.startup import iterations, plan_direct_startup
+from shc_cli.control.speed_guard import SpeedGuard
+from shc_cli.control.startup import plan_direct_startup, transition_iterations
 from shc_cli.control.states import LegMode as LegMode
 from shc_cli.control.states import RobotState as RobotState  # re-exported: the controller's interface
 from shc_cli.control.walk import WalkController, WalkState
@@ -85,6 +86,8 @@ _OFF_TARGET = tuple(int(not flags & 1) for flags in range(8))
 """Per IK flags value (bit 0 on target, bits 1–2 a position or a velocity clamped): 1 if the leg missed its target."""
 _CLAMPED = tuple(int(flags & 6 != 0) for flags in range(8))
 """Per IK flags value: 1 if a joint of the leg was clamped."""
+_SPEED_CLAMPED = tuple(int(flags & 4 != 0) for flags in range(8))
+"""Per IK flags value: 1 if the IK clamped a joint of the leg to its speed limit (``clamp_joint_velocities``)."""
 
 # Enum members bound once: attribute access on an Enum class is slow, and these are read every cycle.
 _UNKNOWN, _RUNNING = RobotState.UNKNOWN, RobotState.RUNNING
@@ -111,6 +114,9 @@ class CycleOutput:
         walk_state: walk state after the cycle.
         ik_deviations: legs whose tip missed its target by more than 5 mm this cycle.
         ik_clamped: legs with a joint clamped to a limit this cycle.
+        joint_speed_limited: legs with a joint whose commanded motion this cycle was limited to ``max_vel``: by the
+            IK's velocity clamp (OpenSHC's ``clamp_joint_velocities``) or by shc's per-cycle joint speed guard
+            (:meth:`Model.limit_speed`, docs/deviations.md).
         odometry: the body's estimated planar pose (x [m], y [m], yaw [rad]) in the odom frame (the robot's start
             pose: origin at its start position, x along its start heading), from leg odometry fused with the IMU
             (:mod:`shc_cli.control.odometry`); an shc addition, OpenSHC has none.
@@ -129,6 +135,7 @@ class CycleOutput:
     walk_state: WalkState
     ik_deviations: int = 0
     ik_clamped: int = 0
+    joint_speed_limited: int = 0
     odometry: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
@@ -159,6 +166,25 @@ class Model:
         """Each leg's frames of the joints ``_frames_q`` (:func:`~shc_cli.model.kernels.ik_step_frames_kernel`)."""
         self._proximity = np.ones(self.chains.size)
         self._flags[:] = 1
+        self.guard: SpeedGuard | None = None
+        """The joint speed guard, once :meth:`start_cycle` has been given the control period."""
+
+    def start_cycle(self, dt: float) -> FloatArray:
+        """Begin a control cycle: returns the joints it starts from (the last command), for :meth:`limit_speed`."""
+        if self.guard is None or self.guard.dt != dt:
+            self.guard = SpeedGuard(self.chains, dt)
+        self.guard.limited[:] = 0
+        return self.joints
+
+    def limit_speed(self, before: FloatArray) -> int:
+        """The last step of every cycle (:mod:`shc_cli.control.speed_guard`): no joint moves further than
+        ``max_vel·dt`` from ``before``; returns the legs whose joint speed was limited this cycle (by the guard or by
+        the IK's velocity clamp)."""
+        assert self.guard is not None
+        limited = self.guard.apply(before, self.joints, self.joint_velocities)
+        if limited is not None:
+            self.joints, self.joint_velocities, self.tips = limited
+        return int(self.guard.limited.sum())
 
     def step_ik(self, targets: FloatArray, dt: float, clamp_positions: bool, clamp_velocities: bool,
                 active: np.ndarray | None = None) -> tuple[int, int]:
@@ -183,6 +209,8 @@ class Model:
             joints[keep], velocities[keep], tips[keep] = self.joints[keep], self.joint_velocities[keep], self.tips[keep]
             flags = [1 if kept else f for kept, f in zip(keep.tolist(), flags, strict=True)]
         self.joints, self.joint_velocities, self.tips = joints, velocities, tips
+        if clamp_velocities and self.guard is not None:
+            self.guard.clamped_by_ik(np.fromiter(map(_SPEED_CLAMPED.__getitem__, flags), np.int64, len(flags)))
         return sum(map(_OFF_TARGET.__getitem__, flags)), sum(map(_CLAMPED.__getitem__, flags))
 
     @property
@@ -260,6 +288,8 @@ class Controller(LegManipulation):
         self._throttle = robot.walker.velocity_input_mode == "throttle"
         self.pose_reset = PoseReset.NO_RESET
         self.cycles = 0
+        self.joint_speed_limited_cycles = 0
+        """Cycles in which a joint's commanded speed was limited (:attr:`CycleOutput.joint_speed_limited`)."""
         self.pending_gait: Gait | None = None
         self.pending_parameters: list[tuple[str, float]] = []
         self.cruise_on = False
@@ -355,6 +385,7 @@ class Controller(LegManipulation):
         self.cycles += 1
         self.sensors = sensors if self.uses_sensors else None
         self._receive(command or Command())
+        before = self.model.start_cycle(self.dt)
         if self.state != _UNKNOWN:
             self._update_pose()
         deviations = clamped = 0
@@ -362,7 +393,11 @@ class Controller(LegManipulation):
             self._transition_state()  # in RUNNING the running cycle handles it first (study §9.4)
         if self.state == _RUNNING:
             deviations, clamped = self._running()
+        limited = self.model.limit_speed(before)
+        if limited:
+            self.joint_speed_limited_cycles += 1
         out = self._output(deviations, clamped)
+        out.joint_speed_limited = limited
         out.odometry = self._update_odometry(sensors, out.stance_progress >= 0.0)
         return out
 
@@ -548,7 +583,8 @@ class Controller(LegManipulation):
         if self._transition is None:
             if target is None:
                 target = plan_direct_startup(self.robot, self.model.chains, self.default_joints)
-            steps = iterations(self.robot.start_up.time_to_start, self.dt)
+            steps = transition_iterations(self.model.joints, target, self.model.chains.max_vel,
+                                          self.robot.start_up.time_to_start, self.dt)
             self._transition = _Transition(self.model.joints.copy(), target, 0, steps)
         move = self._transition
         move.count += 1

@@ -9,6 +9,8 @@ moved to it by a cubic joint-space transition.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from shc_cli.control.bezier import cubic, quartic, smooth_step
@@ -25,6 +27,23 @@ def iterations(duration: float, time_delta: float) -> int:
     ratio = duration / time_delta
     rounded = int(ratio + 0.5) if ratio >= 0 else -int(0.5 - ratio)
     return max(1, rounded)
+
+
+CUBIC_PEAK_RATE = 1.5
+"""Largest slope of OpenSHC's cubic transition ``3s² − 2s³`` (at s = ½): its fastest cycle moves a joint at most
+1.5·|Δq|/n."""
+
+
+def transition_iterations(origin: FloatArray, target: FloatArray, max_vel: FloatArray, duration: float,
+                          time_delta: float) -> int:
+    """Cycles of a joint-space transition from ``origin`` to ``target``: OpenSHC's ``round(duration/dt)``, or more
+    where that would move a joint faster than its ``max_vel`` (an shc addition, docs/deviations.md: no start-up or
+    shut-down commands a joint beyond its speed limit; a longer transition rather than a guard-limited one that
+    ends short of its target)."""
+    n = iterations(duration, time_delta)
+    travel = np.abs(np.asarray(target, dtype=float) - np.asarray(origin, dtype=float))
+    needed = float(np.max(CUBIC_PEAK_RATE * travel / (np.asarray(max_vel, dtype=float) * time_delta), initial=0.0))
+    return max(n, math.ceil(needed - 1e-9))
 
 
 def stance_targets(robot: Robot) -> FloatArray:

@@ -2,10 +2,11 @@
 
 :func:`execute` is what ``plan``, ``simulate`` and ``run-hw`` share around :class:`~shc_cli.loop.run_loop.RunLoop`:
 SIGINT and SIGTERM become a stop request (the loop ends the run, or shuts the robot down first), every logged
-row is flushed and closed, the summary gets ``"complete"`` and ``"stop_reason"``, the plots are drawn and the
-directory gets its final name — for an interrupted run too (only ``"complete": false`` marks it). A second
-signal while finishing skips the plots (not the summary, made from the log read back); the rows are on disk before
-anything else happens. Meanwhile the package's log records go to the directory's ``events.log``
+row is flushed and closed, the summary gets ``"complete"``, ``"stop_reason"`` and the controller's count of
+cycles whose joint speeds it limited (``"joint_speed_limited_cycles"``, ``"joint_speed_limited_share"``), the
+plots are drawn and the directory gets its final name — for an interrupted run too (only ``"complete": false``
+marks it). A second signal while finishing skips the plots (not the summary, made from the log read back); the rows
+are on disk before anything else happens. Meanwhile the package's log records go to the directory's ``events.log``
 (:mod:`shc_cli.events`).
 """
 
@@ -56,7 +57,12 @@ def execute(loop: RunLoop[ReadingT], run: RunDirectory, summarise: Callable[[Loo
             except KeyboardInterrupt:  # not from shc's handler: the rows and a minimal summary
                 summary = RunSummary(cycles=result.cycles, summary_skipped=True)
             signals.finishing = True  # from here a repeated signal skips what is left (the plots)
-            summary = summary.updated(complete=result.complete, stop_reason=result.stop_reason)
+            controller = loop.controller
+            limited = controller.joint_speed_limited_cycles
+            summary = summary.updated(complete=result.complete, stop_reason=result.stop_reason,
+                                      joint_speed_limited_cycles=limited,
+                                      joint_speed_limited_share=limited / controller.cycles if controller.cycles
+                                      else 0.0)
             late = signals.late is not None
             if late:
                 summary.plots_skipped = True

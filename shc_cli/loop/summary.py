@@ -16,7 +16,8 @@ What each kind writes:
   input, what a real robot does not measure.
 * ``plan``, ``simulate``, ``run-hw`` with ``--path``: the path file's copy, the follower's tolerance and each
   waypoint's result (:class:`WaypointSummary`).
-* every run: ``complete`` and ``stop_reason`` (an interrupted run is marked only by them).
+* every run: ``complete`` and ``stop_reason`` (an interrupted run is marked only by them), and how often the
+  controller had to limit a joint's speed (``joint_speed_limited_cycles``, ``joint_speed_limited_share``).
 """
 
 from __future__ import annotations
@@ -136,6 +137,15 @@ class RunSummary(BaseModel):
                                                                         "its target by more than 5 mm.")
     ik_clamp_count: NonNegativeInt | None = Field(None, description="plan: leg-cycles with a joint clamped to its "
                                                                     "limit.")
+    joint_speed_limited_cycles: NonNegativeInt | None = Field(None, description="plan, simulate, run-hw, ros: "
+                                                                                "control cycles (start-up included) "
+                                                                                "in which the controller limited a "
+                                                                                "joint's commanded speed to its "
+                                                                                "max_vel (the IK's velocity clamp or "
+                                                                                "shc's per-cycle guard) [cycles].")
+    joint_speed_limited_share: NonNegativeFloat | None = Field(None, description="plan, simulate, run-hw, ros: "
+                                                                                 "joint_speed_limited_cycles ÷ the "
+                                                                                 "control cycles [ratio].")
     walkspace: dict[str, float] | None = Field(None, description="plan: the walkspace radius per bearing "
                                                                  "[degrees → m].")
 

@@ -318,3 +318,52 @@ def linear_search_kernel(  # type: ignore[no-untyped-def]
             distance_out[b] = math.sqrt(dist)
             if stop_on_failure and ((flags & 1) == 0 or prox == 0.0):
                 break
+
+
+SPEED_TOLERANCE = 1e-12
+"""Joint motion beyond ``max_vel·dt`` [rad] that :func:`limit_joint_speed_kernel` lets pass: the rounding of
+``q + max_vel·dt − q`` after an IK step clamped to ``max_vel``, never a real excess."""
+
+
+@njit(cache=True)
+def limit_joint_speed_kernel(before, joints, bound, joints_out, velocities, velocities_out, dt, limited_out):  # type: ignore[no-untyped-def]
+    """The per-cycle joint speed guard (docs/deviations.md): each joint moves at most ``bound`` (``max_vel·dt``)
+    from ``before`` (the joints the cycle started from), ``(B, n)`` arrays.
+
+    A joint that moved further is put at ``before ± bound`` in ``joints_out`` and its velocity in
+    ``velocities_out`` becomes ``± bound / dt``; every other value is copied. ``limited_out[b]`` is 1 where a joint of
+    chain ``b`` was limited, else 0. Returns the number of chains limited.
+    """
+    chains, n = joints.shape
+    count = 0
+    for b in range(chains):
+        limited_out[b] = 0
+        for k in range(n):
+            step = joints[b, k] - before[b, k]
+            limit = bound[b, k]
+            value = joints[b, k]
+            rate = velocities[b, k]
+            if step > limit + SPEED_TOLERANCE:
+                value = before[b, k] + limit
+                rate = limit / dt
+                limited_out[b] = 1
+            elif step < -limit - SPEED_TOLERANCE:
+                value = before[b, k] - limit
+                rate = -limit / dt
+                limited_out[b] = 1
+            joints_out[b, k] = value
+            velocities_out[b, k] = rate
+        count += limited_out[b]
+    return count
+
+
+@njit(cache=True)
+def joint_speed_exceeded(before, joints, limit):  # type: ignore[no-untyped-def]
+    """Whether any joint of ``joints`` is further than ``limit`` (``max_vel·dt`` + :data:`SPEED_TOLERANCE`) from
+    ``before``, ``(B, n)``: the guard's check, cheaper than limiting (the common case is nothing to limit)."""
+    chains, n = joints.shape
+    for b in range(chains):
+        for k in range(n):
+            if abs(joints[b, k] - before[b, k]) > limit[b, k]:
+                return True
+    return False
