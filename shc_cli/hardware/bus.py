@@ -111,7 +111,8 @@ class Slot:
 class BusState:
     """One sync read: per joint (controller order) position [rad], velocity [rad/s], current [mA]; per servo (slot
     order) whether it answered and whether its status carried the hardware-error alert bit; and why servos did not
-    answer (slot → "no reply" or "corrupt reply")."""
+    answer (slot → "no reply" or "corrupt reply"). ``bridged`` (slot order) marks the servos whose values are their
+    last reading standing in for a missed one (:class:`shc_cli.backends.dynamixel.MissedReads`); None: none."""
 
     positions: np.ndarray
     velocities: np.ndarray
@@ -119,6 +120,7 @@ class BusState:
     answered: np.ndarray
     alerts: np.ndarray
     failures: dict[int, str] = field(default_factory=dict)
+    bridged: np.ndarray | None = None
 
 
 @dataclass

@@ -370,6 +370,10 @@ class Hardware(Strict):
         "configured). Dynamixels ship with 500 µs: with 30 servos that alone is 15 ms per sync read")
     current_limit_ma: Annotated[float, Field(gt=0)] | None = Field(
         None, description="current limit written to the servos at start-up [mA] (None: leave as configured)")
+    missed_reads_fault: Annotated[int, Field(ge=1, le=100)] = Field(
+        3, description="consecutive cycles a servo's state read may fail (no reply or a corrupt one, after the "
+        "cycle's retry) before run-hw stops on a fault; until then its last reading is used (bridged) and counted. "
+        "1: the first failed cycle is a fault")
     servos: dict[str, ServoMap] = Field(
         default_factory=dict, description="one entry per joint, keyed '<LEG>_<joint>' (e.g. AR_coxa)")
 
