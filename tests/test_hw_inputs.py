@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import threading
 import time
 
 import pytest
@@ -129,7 +130,10 @@ def test_a_gait_for_other_legs_is_refused_on_stdin(monkeypatch: pytest.MonkeyPat
 
 
 class _FakeGamepad:
-    """An evdev InputDevice stand-in: sticks and buttons, a few events, then unplugged (OSError)."""
+    """An evdev InputDevice stand-in: sticks and buttons, a few events, then unplugged (OSError) once the test has
+    read the command (:attr:`unplug` set)."""
+
+    unplug = threading.Event()
 
     def __init__(self, path: str) -> None:
         self.path, self.name, self.closed = path, "Fake Pad", False
@@ -144,7 +148,7 @@ class _FakeGamepad:
 
         yield InputEvent(0, 0, ecodes.EV_ABS, ecodes.ABS_Y, 0)  # full forward
         yield InputEvent(0, 0, ecodes.EV_KEY, ecodes.BTN_SELECT, 1)  # packed
-        time.sleep(0.3)
+        self.unplug.wait(timeout=5.0)
         raise OSError(19, "No such device")  # unplugged
 
     def close(self) -> None:
@@ -162,6 +166,7 @@ def test_gamepad_is_found_read_and_its_loss_stops_the_robot(monkeypatch: pytest.
 
     from shc_cli.loop.input_sources import GamepadInput, InputError
 
+    _FakeGamepad.unplug.clear()
     monkeypatch.setattr(evdev, "list_devices", lambda: ["/dev/input/event3", "/dev/input/event7"])
     monkeypatch.setattr(evdev, "InputDevice", lambda path: (_Keyboard if path.endswith("3") else _FakeGamepad)(path))
     pad = GamepadInput()  # the keyboard (no sticks) is skipped
@@ -171,6 +176,7 @@ def test_gamepad_is_found_read_and_its_loss_stops_the_robot(monkeypatch: pytest.
         time.sleep(0.01)
     command = pad.next()
     assert command is not None and command.velocity[0] == 1.0 and command.state_request == RobotState.PACKED
+    _FakeGamepad.unplug.set()  # now unplug it
     while not pad.finished and time.monotonic() < deadline:
         time.sleep(0.01)
     assert pad.next() is None  # unplugged: the input is over, run-hw stops and shuts down
