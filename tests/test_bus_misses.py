@@ -238,3 +238,17 @@ def test_an_unplugged_servo_faults_within_the_stated_time_and_the_torque_goes_of
     assert faulted and faulted[0] - clock.wall < 3 * (0.01 + 2 * 0.040) + 1.0  # [s] of wall time, load's slack
     events = [json.loads(line) for line in (tmp_path / "run" / "events.log").read_text().splitlines()]
     assert [e["event"] for e in events].count("read_bridged") == 2
+
+
+@pytest.mark.parametrize("value", ["0", "101"])
+def test_a_count_out_of_range_is_one_line_and_exit_2(value: str, tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    from tests.test_cli import run
+
+    code, _, stderr = run(["run-hw", "bullet", "--port", "/dev/ttyNOTHERE0", "--missed-reads-fault", value,
+                           "--out", str(tmp_path / "run")], capsys, monkeypatch)
+    assert code == 2 and stderr.count("\n") == 1, stderr
+    assert "--missed-reads-fault" in stderr and "give 1 to 100" in stderr and "Traceback" not in stderr
+    code, _, stderr = run(["validate", str(_robot(tmp_path, "XM430-W350", f"missed_reads_fault = {value}"))], capsys,
+                          monkeypatch)
+    assert code == 2 and "missed_reads_fault" in stderr, stderr

@@ -52,7 +52,8 @@ class MissedReads:
     (``read_bridged``, at INFO: ``events.log``, the terminal with ``-v``).
 
     A servo that is really silent is therefore a fault at its ``limit``-th cycle: within ``limit`` × (the period +
-    the bus's two packet timeouts, ≈ 35 ms each with the vendors' SDKs) of its last reply.
+    the bus's two packet timeouts, ≈ 35 ms each with the vendors' SDKs, + up to 50 ms waiting for silence on
+    Protocol 1.0 and Feetech buses) of its last reply.
 
     Args:
         keys: each servo's joint name (the bus's slot order).
