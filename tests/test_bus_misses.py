@@ -142,6 +142,26 @@ def test_n_consecutive_missed_cycles_are_a_fault_naming_the_servo(model: str, tm
         assert faults[2] is not None and faults[2].startswith("no reply from BR_femur in 3 consecutive cycles")
 
 
+@pytest.mark.parametrize("model", ["XM430-W350", "AX-12A"])
+def test_a_start_setting_whose_status_was_missed_is_written_again(model: str, tmp_path: Path) -> None:
+    """The start's Return Delay Time writes (the emulated servos ship with 500 µs, the robot file says 0): a missed
+    status is written once more, not a refusal to start; two missed are."""
+    from shc_cli.hardware.bus import HardwareError
+
+    with _backend(tmp_path, model) as (emulator, backend, _):
+        bus, servo = backend.bus, emulator.servos[3]
+        delay = servo.model.return_delay_time if model == "XM430-W350" else servo.addr["delay"]
+        retries = bus.retries
+        bus.return_delays = [500e-6] * 18  # as the start check reads them
+        emulator.faults(3).drop_replies = 1
+        assert bus.configure() == ["return delay time 0 µs written to 18 servos"]
+        assert servo.table[delay] == 0 and bus.retries == retries + 1
+        bus.return_delays = [500e-6] * 18
+        emulator.faults(3).drop_replies = 2
+        with pytest.raises(HardwareError, match="servo 3 refused Return Delay Time"):
+            bus.configure()
+
+
 def test_the_count_is_the_robot_files_and_one_faults_at_once(tmp_path: Path) -> None:
     from shc_cli.spec.loading import load_robot
 
@@ -226,6 +246,7 @@ def test_an_unplugged_servo_faults_within_the_stated_time_and_the_torque_goes_of
                                   clock=clock, sleep=clock.sleep)
             goal_writes = [p for p in bus.packets[clock.marker:] if p.instruction == 0x83
                            and int.from_bytes(p.params[0:2], "little") == 116]
+            bus.drain(last=0x83, timeout=5.0)  # the torque-off SYNC WRITE has no reply: let the emulator take it
             torque = [bus.torque_on(k + 1) for k in range(18) if k + 1 != MISSED]
     finally:
         logging.getLogger("shc_cli").removeHandler(handler)

@@ -47,10 +47,16 @@ def test_dynamixel_sdk_drives_the_emulated_bus() -> None:
         PortHandler,
     )
 
+    from shc_cli.hardware.bus import patient_port
+
     now = [10.0]  # the servos' clock: the test moves it instead of waiting
     with BusEmulator({1: "MX-106", 2: "MX-106", 3: "XM430-W350"}, clock=lambda: now[0]) as bus:
-        port = PortHandler(bus.port)
+        # the bus's port (a reply that came while this process was not scheduled is read), blocking in its reads
+        # instead of the SDK's polling, which holds the interpreter the emulator thread needs: on a loaded machine
+        # the SDK's own port timed out here (test_a_reply_that_arrived_while_the_process_stalled_... shows why)
+        port = patient_port(PortHandler)(bus.port)
         assert port.openPort() and port.setBaudRate(1_000_000)
+        port.ser.timeout = 0.001
         handler = PacketHandler(2.0)
         try:
             assert handler.ping(port, 3) == (1020, COMM_SUCCESS, 0)

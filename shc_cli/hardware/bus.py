@@ -353,13 +353,20 @@ class ServoBus:
         return self.lines[self.slots[index].bus].port
 
     def _write(self, index: int, address: int, data: bytes, name: str) -> None:
-        """One WRITE with its status checked (and the payload checked for what the SDK would not stuff)."""
+        """One WRITE with its status checked (and the payload checked for what the SDK would not stuff); a status
+        that did not come is asked for by writing once more (the start's settings: the same bytes again)."""
         from dynamixel_sdk import COMM_SUCCESS
 
         slot = self.slots[index]
         if p2.needs_stuffing(address.to_bytes(2, "little") + data):
             raise HardwareError(f"{slot.key}: the {name} write contains FF FF FD, which dynamixel-sdk sends unstuffed")
-        result, error = self._handler.writeTxRx(self._port_of(index), slot.servo_id, address, len(data), list(data))
+        for attempt in range(2):
+            result, error = self._handler.writeTxRx(self._port_of(index), slot.servo_id, address, len(data),
+                                                    list(data))
+            if result == COMM_SUCCESS or attempt:
+                break
+            self._port_of(index).clearPort()
+            self.retries += 1
         if result != COMM_SUCCESS or error & 0x7F:
             reason = self._handler.getTxRxResult(result) if result != COMM_SUCCESS else p2.error_name(error)
             raise HardwareError(f"{slot.key}: servo {slot.servo_id} refused {name} (address {address}): {reason}")
