@@ -205,11 +205,12 @@ def test_the_rule_on_made_up_readings() -> None:
 
 
 class _Unplugging(VirtualClock):
-    """The virtual clock of a run that unplugs a servo at virtual time ``at`` (the emulator's ``vanish``)."""
+    """The virtual clock of a run that unplugs a servo at virtual time ``at`` (the emulator's ``vanish``), or with
+    ``drops`` makes it leave that many replies unsent from then on."""
 
-    def __init__(self, at: float) -> None:
+    def __init__(self, at: float, drops: int | None = None) -> None:
         super().__init__()
-        self.at, self.marker, self.wall = self.now + at, -1, 0.0
+        self.at, self.marker, self.wall, self.drops = self.now + at, -1, 0.0, drops
         self.cycles_after = 0
 
     def sleep(self, seconds: float) -> None:
@@ -218,8 +219,33 @@ class _Unplugging(VirtualClock):
             self.cycles_after += 1
         elif self.now >= self.at and self.bus is not None:
             servo = self.bus.servos[MISSED]
-            servo.faults.vanish_after_packets = servo.packets_seen
+            if self.drops is None:
+                servo.faults.vanish_after_packets = servo.packets_seen
+            else:
+                servo.faults.drop_replies = self.drops
             self.marker, self.wall = len(self.bus.packets), time.monotonic()
+
+
+def test_a_run_that_bridged_two_cycles_ends_normally_and_says_so(tmp_path: Path) -> None:
+    """run-hw's domain: BR_femur misses its replies in two consecutive cycles mid-walk; the run goes on to its end
+    (no fault), the summary counts the two bridged cycles and a warning says it."""
+    from shc_cli.domain.hardware import HardwareConfig, run_hardware
+    from shc_cli.hardware.emulator import BusEmulator
+
+    clock = _Unplugging(at=2.5, drops=2 * 2)
+    with BusEmulator({k + 1: "XM430-W350" for k in range(18)}, clock=clock) as bus:
+        clock.bus = bus
+        result = run_hardware(HardwareConfig(robot=str(_robot(tmp_path, "XM430-W350")), ports=[bus.port],
+                                             velocity="1,0,0", duration=3.0, out=tmp_path / "run",
+                                             stop_state="running"), clock=clock, sleep=clock.sleep)
+    summary = result.summary
+    assert summary.fault is None and summary.stopped_by_request
+    assert summary.bridged_cycles is not None and summary.bridged_cycles >= 2  # (+ any the loaded machine made)
+    assert summary.missed_cycles_max is not None and summary.missed_cycles_max >= 2
+    assert summary.read_retries is not None and summary.read_retries >= 2
+    events = [json.loads(line) for line in (tmp_path / "run" / "events.log").read_text().splitlines()]
+    [warning] = [e for e in events if e["event"] == "reads_bridged"]
+    assert warning["level"] == "warning" and "cycles missed a servo's reading" in warning["message"]
 
 
 def test_an_unplugged_servo_faults_within_the_stated_time_and_the_torque_goes_off(tmp_path: Path) -> None:

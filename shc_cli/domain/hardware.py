@@ -170,7 +170,7 @@ def bus_run_fields(robot: Robot, controller: Controller, backend: DynamixelBacke
     from shc_cli.backends.dynamixel import UNMEASURED
 
     bus, misses = backend.bus, backend.misses
-    if misses.bridged_cycles:
+    if misses.bridged_cycles and misses.fault is None:
         event(log, logging.WARNING, "reads_bridged", "warning: %d of %d cycles missed a servo's reading (the last "
               "one stood in; at most %d in a row, %d would be a fault); %d reads repeated", misses.bridged_cycles,
               result.cycles, misses.longest, misses.limit, bus.retries)
