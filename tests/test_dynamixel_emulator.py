@@ -116,7 +116,7 @@ def _stalling(base: type) -> type:
     the reply arrives meanwhile, unread. The stall is made, not waited for: the read waits until the reply is in
     the input buffer (or nothing came within a second: no servo), then the SDK's packet clock is set 80 ms on."""
 
-    class Stalling(base):  # type: ignore[misc, valid-type]
+    class Stalling(base):  # type: ignore[misc]
         stalled = False
 
         def readPort(self, length: int) -> list[int]:

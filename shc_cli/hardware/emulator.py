@@ -8,9 +8,9 @@ speaks the protocol) as if it were a USB2Dynamixel. Each servo has a control tab
 the firmware's P/I/D law, the motor's torque–speed line, armature, viscous and Coulomb gearbox friction), and
 Present Current, Present Velocity and Present Position report its motor current, speed and angle in the model's
 units (e.g. 2.69 mA, 0.229 rpm, ticks), optionally with Gaussian current noise. Faults can be injected per servo at
-any time: no reply, the next k replies dropped, a corrupted CRC, Hardware Error Status bits (the status error byte then carries the alert
-bit), overload (also turns its torque off, as real servos do), vanishing after a given number of packets, and a
-present position whose bytes contain ``FF FF FD`` (so status packets need byte stuffing).
+any time: no reply, the next k replies dropped, a corrupted CRC, Hardware Error Status bits (the status error
+byte then carries the alert bit), overload (also turns its torque off, as real servos do), vanishing after a given
+number of packets, and a present position whose bytes contain ``FF FF FD`` (so status packets need byte stuffing).
 
 Instructions: PING (unicast and broadcast), READ, WRITE, SYNC READ, SYNC WRITE; anything else gets an
 "instruction error" status. Replies are sent in ID order for broadcast ping and in the order of the IDs for sync
