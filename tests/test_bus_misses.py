@@ -163,11 +163,12 @@ def test_a_start_setting_whose_status_was_missed_is_written_again(model: str, tm
 
 
 def test_the_count_is_the_robot_files_and_one_faults_at_once(tmp_path: Path) -> None:
+    from shc_cli.hardware.buses import servo_bus
     from shc_cli.spec.loading import load_robot
 
-    assert load_robot(str(_robot(tmp_path, "XM430-W350"))).robot.hardware.missed_reads_fault == 3  # the default
-    assert load_robot(str(_robot(tmp_path, "XM430-W350", "missed_reads_fault = 5"))).robot.hardware \
-        .missed_reads_fault == 5
+    for extra, limit in (("", 3), ("missed_reads_fault = 5", 5)):  # the default 3, or the robot file's
+        robot = load_robot(str(_robot(tmp_path, "XM430-W350", extra))).robot
+        assert DynamixelBackend(robot, servo_bus(robot, ["/dev/null"]), dry_run=True).misses.limit == limit
     with _backend(tmp_path, limit=1) as (emulator, backend, _):
         _cycle(backend, _goals(backend, 0))
         emulator.faults(MISSED).drop_replies = 2

@@ -127,7 +127,8 @@ class DynamixelBackend:
         clock: the monotonic clock [s] (injectable for tests).
         sleep: the wait [s] (injectable for tests).
         missed_reads_fault: consecutive cycles without a servo's reading that are a fault (None: the robot file's
-            ``hardware.missed_reads_fault``; :class:`MissedReads`).
+            ``hardware.missed_reads_fault``, else :data:`~shc_cli.spec.robot.MISSED_READS_FAULT`, 3;
+            :class:`MissedReads`).
     """
 
     def __init__(self, robot: Robot, bus: ServoBus, dry_run: bool, run: Tables | None = None,
@@ -151,7 +152,9 @@ class DynamixelBackend:
         self.cycle_times: list[float] = []
         self.overruns = 0
         self._deadline = self._began = 0.0
-        limit = robot.hardware.missed_reads_fault if missed_reads_fault is None else missed_reads_fault
+        from shc_cli.spec.robot import MISSED_READS_FAULT
+
+        limit = missed_reads_fault or robot.hardware.missed_reads_fault or MISSED_READS_FAULT
         self.misses = MissedReads([slot.key for slot in bus.slots], bus.layout.rows, bus.layout.cols, limit)
 
     def start(self) -> np.ndarray:
