@@ -243,6 +243,9 @@ def run_hw(
     overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
     live: LiveOption = False,
     live_port: LivePortOption = 8765,
+    missed_reads_fault: Annotated[int | None, typer.Option(
+        metavar="N", help="Consecutive cycles a servo may miss its reading (its last one stands in) before that is "
+                          "a fault [default: hardware.missed_reads_fault, 3].")] = None,
 ) -> None:
     """Run the controller on the robot's servos (Dynamixel Protocol 2.0 or 1.0, Feetech STS), safely."""
     from shc_cli.commands.run_hw import run_hw as run
@@ -251,7 +254,8 @@ def run_hw(
     run(HardwareConfig(robot=robot, ports=port, baud=baud, gait=gait, on_fault=on_fault, on_stop=on_stop,
                        stop_state=stop_state, input_mode=input_mode, velocity=velocity, duration=duration,
                        commands=commands, path=path, out=out, dry_run=dry_run, profile_velocity=profile_velocity,
-                       watchdog=watchdog, overwrite=overwrite, live=live, live_port=live_port))
+                       watchdog=watchdog, overwrite=overwrite, live=live, live_port=live_port,
+                       missed_reads_fault=missed_reads_fault))
 
 
 @app.command()

@@ -47,9 +47,16 @@ def test_dynamixel_sdk_drives_the_emulated_bus() -> None:
         PortHandler,
     )
 
-    with BusEmulator({1: "MX-106", 2: "MX-106", 3: "XM430-W350"}) as bus:
-        port = PortHandler(bus.port)
+    from shc_cli.hardware.bus import patient_port
+
+    now = [10.0]  # the servos' clock: the test moves it instead of waiting
+    with BusEmulator({1: "MX-106", 2: "MX-106", 3: "XM430-W350"}, clock=lambda: now[0]) as bus:
+        # the bus's port (a reply that came while this process was not scheduled is read), blocking in its reads
+        # instead of the SDK's polling, which holds the interpreter the emulator thread needs: on a loaded machine
+        # the SDK's own port timed out here (test_a_reply_that_arrived_while_the_process_stalled_... shows why)
+        port = patient_port(PortHandler)(bus.port)
         assert port.openPort() and port.setBaudRate(1_000_000)
+        port.ser.timeout = 0.001
         handler = PacketHandler(2.0)
         try:
             assert handler.ping(port, 3) == (1020, COMM_SUCCESS, 0)
@@ -57,7 +64,7 @@ def test_dynamixel_sdk_drives_the_emulated_bus() -> None:
             assert handler.ping(port, 9)[1] == COMM_RX_TIMEOUT
             assert handler.write1ByteTxRx(port, 1, 64, 1) == (COMM_SUCCESS, 0)  # torque on
             assert handler.write4ByteTxRx(port, 1, 116, 3000) == (COMM_SUCCESS, 0)
-            time.sleep(0.25)  # ≈ 8 time constants
+            now[0] += 0.25  # ≈ 8 time constants
             position, result, error = handler.read4ByteTxRx(port, 1, 132)
             assert (result, error) == (COMM_SUCCESS, 0) and abs(position - 3000) <= 2
             writer = GroupSyncWrite(port, handler, 116, 4)
@@ -106,15 +113,19 @@ def test_the_emulated_servo_moves_on_its_injected_clock() -> None:
 
 def _stalling(base: type) -> type:
     """``base`` whose first read finds nothing and then is not scheduled for 80 ms (a loaded machine, a VM pause):
-    the reply arrives meanwhile, unread."""
+    the reply arrives meanwhile, unread. The stall is made, not waited for: the read waits until the reply is in
+    the input buffer (or nothing came within a second: no servo), then the SDK's packet clock is set 80 ms on."""
 
-    class Stalling(base):  # type: ignore[misc, valid-type]
+    class Stalling(base):  # type: ignore[misc]
         stalled = False
 
         def readPort(self, length: int) -> list[int]:
             if not self.stalled:
                 self.stalled = True
-                time.sleep(0.08)
+                deadline = time.monotonic() + 1.0
+                while not self.ser.in_waiting and time.monotonic() < deadline:
+                    time.sleep(0.0005)  # an event wait: until the reply's bytes are here
+                self.packet_start_time -= 80.0  # [ms]: the SDK's clock says the stall passed
                 return []
             return list(super().readPort(length))
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import threading
 import time
 
 import pytest
@@ -77,7 +78,7 @@ def test_keys_nudge_and_clamp_the_velocity() -> None:
 def test_stdin_lines_hold_until_changed_and_the_watchdog_zeroes_the_velocity() -> None:
     lines = io.StringIO('{"velocity": [0.5, 0, 0.1], "pose_velocity": [0, 0, 1, 0, 0, 0]}\n{"state": "ready"}\n'
                         '{"state": "flying"}\n{"gait": "wave"}\n')
-    source = StdinInput(lines, watchdog_s=0.2, load_gait=lambda name: load_gait(name).gait)  # type: ignore[arg-type,return-value]
+    source = StdinInput(lines, watchdog_s=0.2, load_gait=lambda name: load_gait(name).gait)
     deadline = time.monotonic() + 5.0
     while not source.finished and time.monotonic() < deadline:
         time.sleep(0.01)
@@ -98,7 +99,7 @@ def test_stdin_lines_hold_until_changed_and_the_watchdog_zeroes_the_velocity() -
 
 
 def test_stdin_parse_validates_before_applying() -> None:
-    source = StdinInput(io.StringIO(""), load_gait=lambda name: load_gait(name).gait)  # type: ignore[arg-type,return-value]
+    source = StdinInput(io.StringIO(""), load_gait=lambda name: load_gait(name).gait)
     held = HeldInput()
     source._parse('{"velocity": [0.5, 0, 0.1], "state": "packed", "gait": "wave"}')(held)
     assert held.velocity == [0.5, 0.0, 0.1] and held.state == RobotState.PACKED
@@ -129,7 +130,10 @@ def test_a_gait_for_other_legs_is_refused_on_stdin(monkeypatch: pytest.MonkeyPat
 
 
 class _FakeGamepad:
-    """An evdev InputDevice stand-in: sticks and buttons, a few events, then unplugged (OSError)."""
+    """An evdev InputDevice stand-in: sticks and buttons, a few events, then unplugged (OSError) once the test has
+    read the command (:attr:`unplug` set)."""
+
+    unplug = threading.Event()
 
     def __init__(self, path: str) -> None:
         self.path, self.name, self.closed = path, "Fake Pad", False
@@ -144,7 +148,7 @@ class _FakeGamepad:
 
         yield InputEvent(0, 0, ecodes.EV_ABS, ecodes.ABS_Y, 0)  # full forward
         yield InputEvent(0, 0, ecodes.EV_KEY, ecodes.BTN_SELECT, 1)  # packed
-        time.sleep(0.3)
+        self.unplug.wait(timeout=5.0)
         raise OSError(19, "No such device")  # unplugged
 
     def close(self) -> None:
@@ -162,6 +166,7 @@ def test_gamepad_is_found_read_and_its_loss_stops_the_robot(monkeypatch: pytest.
 
     from shc_cli.loop.input_sources import GamepadInput, InputError
 
+    _FakeGamepad.unplug.clear()
     monkeypatch.setattr(evdev, "list_devices", lambda: ["/dev/input/event3", "/dev/input/event7"])
     monkeypatch.setattr(evdev, "InputDevice", lambda path: (_Keyboard if path.endswith("3") else _FakeGamepad)(path))
     pad = GamepadInput()  # the keyboard (no sticks) is skipped
@@ -171,6 +176,7 @@ def test_gamepad_is_found_read_and_its_loss_stops_the_robot(monkeypatch: pytest.
         time.sleep(0.01)
     command = pad.next()
     assert command is not None and command.velocity[0] == 1.0 and command.state_request == RobotState.PACKED
+    _FakeGamepad.unplug.set()  # now unplug it
     while not pad.finished and time.monotonic() < deadline:
         time.sleep(0.01)
     assert pad.next() is None  # unplugged: the input is over, run-hw stops and shuts down

@@ -144,7 +144,9 @@ def test_a_fault_mid_walk_stops_the_goals_names_the_servo_and_exits_3(model: str
         reason = {"overload": "BR_femur: overload", "vanish": "no reply from BR_femur",
                   "corrupt": "corrupt reply (checksum or length) from BR_femur"}[fault]
         assert f"fault: {reason}" in stderr
-        assert len(_goal_writes(bus, model, marker)) <= 1
+        # a protection bit stops at once; a silent or garbled servo at its 3rd cycle unread (missed_reads_fault),
+        # the two cycles before bridged with its last reading, each writing its goals
+        assert len(_goal_writes(bus, model, marker)) <= (1 if fault == "overload" else 1 + 2)
         heard = [k + 1 for k in range(18) if not (fault == "vanish" and k + 1 == FAULTED)]  # a vanished one hears none
         assert not any(bus.torque_on(servo) for servo in heard)  # torque released
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())

@@ -71,6 +71,26 @@ def _answered(call: Any, *args: Any) -> Any:
     return out
 
 
+def _handled(bus: Protocol1Emulator, count: int) -> None:
+    """Wait until the emulator has handled its ``count``-th packet (an instruction without a status packet, e.g. a
+    SYNC WRITE, is taken a moment after the host wrote it): then the test may move the servos' clock."""
+    deadline = time.monotonic() + 2.0
+    while len(bus.packets) < count and time.monotonic() < deadline:
+        time.sleep(0.0005)
+    with bus.lock:  # held while a packet is handled
+        assert len(bus.packets) >= count
+
+
+class _Clock:
+    """The servos' clock [s]: the test moves it (``clock.now += s``) instead of waiting."""
+
+    def __init__(self) -> None:
+        self.now = 100.0
+
+    def __call__(self) -> float:
+        return self.now
+
+
 @contextmanager
 def _port(bus: Protocol1Emulator, sdk: Any) -> Iterator[Any]:
     port = sdk.PortHandler(bus.port)
@@ -85,7 +105,8 @@ def _port(bus: Protocol1Emulator, sdk: Any) -> Iterator[Any]:
 def test_dynamixel_sdk_protocol1_drives_ax_servos() -> None:
     import dynamixel_sdk as sdk
 
-    with Protocol1Emulator({1: "AX-12A", 2: "AX-12A", 3: "AX-18A"}) as bus, _port(bus, sdk) as port:
+    clock = _Clock()
+    with Protocol1Emulator({1: "AX-12A", 2: "AX-12A", 3: "AX-18A"}, clock=clock) as bus, _port(bus, sdk) as port:
         handler = sdk.PacketHandler(1.0)
         assert handler.ping(port, 1) == (12, sdk.COMM_SUCCESS, 0)  # AX-12A: model number 12
         assert handler.ping(port, 3)[0] == 18
@@ -94,6 +115,7 @@ def test_dynamixel_sdk_protocol1_drives_ax_servos() -> None:
         assert handler.read1ByteTxRx(port, 1, 5) == (250, sdk.COMM_SUCCESS, 0)  # factory return delay 500 µs
         assert handler.write2ByteTxRx(port, 1, 30, 1024) == (sdk.COMM_SUCCESS, 8)  # Range Error: not applied
         assert bus.goal(1) == 512
+        sent = len(bus.packets)  # every packet so far had a status packet: all taken
         writer = sdk.GroupSyncWrite(port, handler, 24, 1)  # torque on, one SYNC WRITE
         for servo in (1, 2, 3):
             writer.addParam(servo, [1])
@@ -102,10 +124,11 @@ def test_dynamixel_sdk_protocol1_drives_ax_servos() -> None:
         writer.addParam(1, [0x00, 0x02])  # 512
         writer.addParam(2, [0x90, 0x01])  # 400: moves clockwise
         assert writer.txPacket() == sdk.COMM_SUCCESS
-        time.sleep(0.02)
+        _handled(bus, sent + 2)  # both SYNC WRITEs
+        clock.now += 0.02
         speed, result, _ = handler.read2ByteTxRx(port, 2, 38)
         assert result == sdk.COMM_SUCCESS and speed & 0x400 and speed & 0x3FF > 0  # bit 10: clockwise
-        time.sleep(0.3)
+        clock.now += 0.3
         assert abs(handler.read2ByteTxRx(port, 2, 36)[0] - 400) <= 1
         bus.protect(3)  # overload: the error byte of every status, and Shutdown turns the torque off
         assert handler.read1ByteTxRx(port, 3, 24) == (0, sdk.COMM_SUCCESS, 32)
@@ -133,15 +156,18 @@ def test_mx_bulk_read_through_dynamixel_sdk_without_group_bulk_read() -> None:
 def test_feetech_sdk_drives_sts_servos() -> None:
     import scservo_sdk as sdk
 
-    with Protocol1Emulator({1: "STS3215", 2: "STS3215", 3: "STS3215"}) as bus, _port(bus, sdk) as port:
+    clock = _Clock()
+    with Protocol1Emulator({1: "STS3215", 2: "STS3215", 3: "STS3215"}, clock=clock) as bus, _port(bus, sdk) as port:
         handler = sdk.PacketHandler(0)  # STS (0: little-endian words; 1 would be SCS)
         assert handler.ping(port, 2) == (777, sdk.COMM_SUCCESS, 0)  # model number: the word at address 3
         assert handler.read1ByteTxRx(port, 3, 5) == (3, sdk.COMM_SUCCESS, 0)  # ID at address 5
         assert handler.write1ByteTxRx(port, 1, 40, 1) == (sdk.COMM_SUCCESS, 0)  # torque on
         writer = sdk.GroupSyncWrite(port, handler, 42, 2)
         writer.addParam(1, [0x00, 0x07])  # 1792: backwards
+        sent = len(bus.packets)
         assert writer.txPacket() == sdk.COMM_SUCCESS
-        time.sleep(0.02)
+        _handled(bus, sent + 1)
+        clock.now += 0.02
         reader = sdk.GroupSyncRead(port, handler, 56, 4)
         for servo in (1, 2, 3):
             reader.addParam(servo)
@@ -149,7 +175,7 @@ def test_feetech_sdk_drives_sts_servos() -> None:
         speed = reader.getData(1, 58, 2)
         assert speed & 0x8000 and speed & 0x7FFF > 0  # bit 15: the negative direction
         assert reader.getData(2, 56, 2) == 2048 and reader.getData(3, 56, 2) == 2048
-        time.sleep(0.3)
+        clock.now += 0.3
         assert abs(handler.read2ByteTxRx(port, 1, 56)[0] - 1792) <= 1
         bus.protect(2)  # overload: in the status packets, and Unloading Condition turns the torque off
         assert handler.read1ByteTxRx(port, 2, 40) == (0, sdk.COMM_SUCCESS, 32)

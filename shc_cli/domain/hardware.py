@@ -10,8 +10,10 @@ its period with a drift-free deadline (``next += period``) and counts overruns. 
 keyboard, gamepad) drives velocity, posing, gait and the robot state once the start-up is done. Ctrl-C, SIGTERM or
 the end of the input: the robot stops walking and shuts down to ``stop_state`` (sequence mode: shut-down sequence
 and pack; direct mode: back to the joints it started from), then the torque goes off (or is held, ``on_stop``).
-A servo fault (no reply to the sync read, hardware error status) stops commanding motion at once — no further goal
-is written — and holds or turns the torque off (``on_fault``), naming the servo. ``dry_run`` does everything
+A servo fault (hardware error status; or no proper reply to its state read in ``hardware.missed_reads_fault``
+consecutive cycles, default 3 — a single missed cycle is bridged with the servo's last reading and counted,
+:class:`~shc_cli.backends.dynamixel.MissedReads`) stops commanding motion at once — no further goal is written —
+and holds or turns the torque off (``on_fault``), naming the servo. ``dry_run`` does everything
 except the current-limit, torque-enable and goal writes.
 
 The run directory has the ``simulate`` log format (quantities a real robot does not measure — body pose, IMU,
@@ -40,6 +42,7 @@ if TYPE_CHECKING:
     from collections.abc import Callable
 
     from shc_cli.backends.base import InputSource
+    from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Controller
     from shc_cli.hardware.bus import BusState, ServoBus
     from shc_cli.live.foxglove_server import FoxgloveTransport
@@ -79,6 +82,8 @@ class HardwareConfig(BaseModel):
         live: stream the run while it happens on a Foxglove WebSocket server on 127.0.0.1:``live_port`` (the
             controller's topics and the measured ``/joint_states``, :mod:`shc_cli.domain.live`).
         live_port: that server's port (0: any free port).
+        missed_reads_fault: consecutive cycles without a servo's reading that are a fault (None: the robot file's
+            ``hardware.missed_reads_fault``, default 3).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -102,6 +107,15 @@ class HardwareConfig(BaseModel):
     overwrite: bool = False
     live: bool = False
     live_port: int = 8765
+    missed_reads_fault: int | None = None
+
+    @field_validator("missed_reads_fault")
+    @classmethod
+    def _missed(cls, value: int | None) -> int | None:
+        if value is not None and not 1 <= value <= 100:
+            raise SpecError([Issue(None, None, "--missed-reads-fault", f"{value} is not a count of cycles",
+                                   "give 1 to 100 (1: the first missed cycle is a fault)")])
+        return value
 
     @field_validator("on_fault", "on_stop", mode="before")
     @classmethod
@@ -149,16 +163,21 @@ def prepare_bus(bus: ServoBus, robot: Robot, dry_run: bool) -> None:
               robot.time_delta * 1e3)
 
 
-def bus_run_fields(robot: Robot, controller: Controller, bus: ServoBus, result: LoopResult, dry_run: bool,
-                   stop_state: str) -> dict[str, object]:
+def bus_run_fields(robot: Robot, controller: Controller, backend: DynamixelBackend, result: LoopResult,
+                   dry_run: bool, stop_state: str) -> dict[str, object]:
     """The summary fields every run on a servo bus gives (run-hw, ``shc ros --backend bus``): what ran, on which
-    bus, how it ended."""
+    bus, how it ended, the reads it repeated and bridged (a warning when it bridged any)."""
     from shc_cli.backends.dynamixel import UNMEASURED
 
+    bus, misses = backend.bus, backend.misses
+    if misses.bridged_cycles and misses.fault is None:
+        event(log, logging.WARNING, "reads_bridged", "warning: %d of %d cycles missed a servo's reading (the last "
+              "one stood in; at most %d in a row, %d would be a fault); %d reads repeated", misses.bridged_cycles,
+              result.cycles, misses.longest, misses.limit, bus.retries)
     return {
         "robot": robot.name, "gait": controller.gait.name, "scenario": "hardware", "port": bus.port_name,
         "baud": bus.baud, "dry_run": dry_run, "cycles": result.cycles, "sim_time_s": result.cycles * robot.time_delta,
-        "wire_time_ms": bus.wire_time() * 1e3, "read_retries": bus.retries, "fault": result.fault,
+        "wire_time_ms": bus.wire_time() * 1e3, **backend.bus_statistics(), "fault": result.fault,
         "stopped_by_request": result.stop_reason != "fault", "final_state": controller.state.name,
         "stop_state": stop_state, "step_frequency_hz": controller.parameters["step_frequency"],
         "step_period_cycles": controller.cycle.period, "duty_factor": controller.cycle.duty_factor,
@@ -201,7 +220,7 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
         directory = c.out or default_run_directory("run-hw")
         run = RunDirectory(directory, c.overwrite)
         backend = DynamixelBackend(robot, bus, c.dry_run, run, c.on_fault, c.on_stop, clock=clock or time.perf_counter,
-                                   sleep=sleep or time.sleep)
+                                   sleep=sleep or time.sleep, missed_reads_fault=c.missed_reads_fault)
         controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
                                 direct_shutdown=True)
         run.write_robot(robot)
@@ -234,7 +253,7 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
                 event(log, logging.WARNING, "overruns", "warning: the loop missed its %.0f ms period in %d of %d "
                       "cycles", dt * 1e3, backend.overruns, result.cycles)
             return RunSummary.model_validate({
-                **bus_run_fields(robot, controller, bus, result, c.dry_run, stop.name), **backend.statistics(),
+                **bus_run_fields(robot, controller, backend, result, c.dry_run, stop.name), **backend.statistics(),
                 "input": "path" if c.path is not None else c.input_mode,
                 "watchdog_trips": getattr(source, "watchdog_trips", 0),
                 "odometry_pose": list(controller.odometry.pose), **path_fields(),

@@ -108,7 +108,7 @@ def run_on_bus(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose
         def summarise(result: LoopResult) -> RunSummary:
             assert backend is not None
             return RunSummary.model_validate({
-                **bus_run_fields(robot, controller, bus, result, c.dry_run, stop.name), "backend": "bus",
+                **bus_run_fields(robot, controller, backend, result, c.dry_run, stop.name), "backend": "bus",
                 "ros_master": node.master_uri, "node": node.name, **session.clock.statistics(), **path_fields()})
 
         path, summary, _ = execute(loop, run, summarise, after_loop=release)

@@ -111,7 +111,8 @@ class Slot:
 class BusState:
     """One sync read: per joint (controller order) position [rad], velocity [rad/s], current [mA]; per servo (slot
     order) whether it answered and whether its status carried the hardware-error alert bit; and why servos did not
-    answer (slot → "no reply" or "corrupt reply")."""
+    answer (slot → "no reply" or "corrupt reply"). ``bridged`` (slot order) marks the servos whose values are their
+    last reading standing in for a missed one (:class:`shc_cli.backends.dynamixel.MissedReads`); None: none."""
 
     positions: np.ndarray
     velocities: np.ndarray
@@ -119,6 +120,7 @@ class BusState:
     answered: np.ndarray
     alerts: np.ndarray
     failures: dict[int, str] = field(default_factory=dict)
+    bridged: np.ndarray | None = None
 
 
 @dataclass
@@ -351,13 +353,20 @@ class ServoBus:
         return self.lines[self.slots[index].bus].port
 
     def _write(self, index: int, address: int, data: bytes, name: str) -> None:
-        """One WRITE with its status checked (and the payload checked for what the SDK would not stuff)."""
+        """One WRITE with its status checked (and the payload checked for what the SDK would not stuff); a status
+        that did not come is asked for by writing once more (the start's settings: the same bytes again)."""
         from dynamixel_sdk import COMM_SUCCESS
 
         slot = self.slots[index]
         if p2.needs_stuffing(address.to_bytes(2, "little") + data):
             raise HardwareError(f"{slot.key}: the {name} write contains FF FF FD, which dynamixel-sdk sends unstuffed")
-        result, error = self._handler.writeTxRx(self._port_of(index), slot.servo_id, address, len(data), list(data))
+        for attempt in range(2):
+            result, error = self._handler.writeTxRx(self._port_of(index), slot.servo_id, address, len(data),
+                                                    list(data))
+            if result == COMM_SUCCESS or attempt:
+                break
+            self._port_of(index).clearPort()
+            self.retries += 1
         if result != COMM_SUCCESS or error & 0x7F:
             reason = self._handler.getTxRxResult(result) if result != COMM_SUCCESS else p2.error_name(error)
             raise HardwareError(f"{slot.key}: servo {slot.servo_id} refused {name} (address {address}): {reason}")

@@ -148,10 +148,17 @@ class Protocol1Bus(ServoBus):
         return bytes(data), error, ""
 
     def _write(self, index: int, address: int, data: bytes, name: str) -> None:
+        """One WRITE with its status checked; without a proper status it is written once more after the line fell
+        silent (the start's settings: the same bytes again)."""
         slot = self.slots[index]
         line = self.lines[slot.bus]
-        self._clear(line)
-        result, error = self._handler.writeTxRx(line.port, slot.servo_id, address, len(data), list(data))
+        for attempt in range(2):
+            self._clear(line)
+            result, error = self._handler.writeTxRx(line.port, slot.servo_id, address, len(data), list(data))
+            if result == self._sdk.COMM_SUCCESS or attempt:
+                break
+            self.retries += 1
+            self._settle(line)
         if result != self._sdk.COMM_SUCCESS or error & ~self.alert_bits:
             reason = (self._handler.getTxRxResult(result) if result != self._sdk.COMM_SUCCESS
                       else ", ".join(hardware_error_names(error, self.family)))

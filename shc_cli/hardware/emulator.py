@@ -8,9 +8,9 @@ speaks the protocol) as if it were a USB2Dynamixel. Each servo has a control tab
 the firmware's P/I/D law, the motor's torque–speed line, armature, viscous and Coulomb gearbox friction), and
 Present Current, Present Velocity and Present Position report its motor current, speed and angle in the model's
 units (e.g. 2.69 mA, 0.229 rpm, ticks), optionally with Gaussian current noise. Faults can be injected per servo at
-any time: no reply, a corrupted CRC, Hardware Error Status bits (the status error byte then carries the alert
-bit), overload (also turns its torque off, as real servos do), vanishing after a given number of packets, and a
-present position whose bytes contain ``FF FF FD`` (so status packets need byte stuffing).
+any time: no reply, the next k replies dropped, a corrupted CRC, Hardware Error Status bits (the status error
+byte then carries the alert bit), overload (also turns its torque off, as real servos do), vanishing after a given
+number of packets, and a present position whose bytes contain ``FF FF FD`` (so status packets need byte stuffing).
 
 Instructions: PING (unicast and broadcast), READ, WRITE, SYNC READ, SYNC WRITE; anything else gets an
 "instruction error" status. Replies are sent in ID order for broadcast ping and in the order of the IDs for sync
@@ -52,6 +52,8 @@ class Faults:
     overload: bool = False
     vanish_after_packets: int | None = None
     stuffing_position: bool = False
+    drop_replies: int = 0
+    """The next this many status packets of the servo are not sent (each a missed reply; then it answers again)."""
 
 
 @dataclass
@@ -305,6 +307,9 @@ class BusEmulator:
 
     def _reply(self, servo: EmulatedServo, params: bytes = b"", error: int = 0) -> list[bytes]:
         if servo.faults.no_reply or not servo.present:
+            return []
+        if servo.faults.drop_replies > 0:
+            servo.faults.drop_replies -= 1
             return []
         data = bytearray(p2.status(servo.servo_id, error | servo.error_byte, params))
         if servo.faults.corrupt_crc:

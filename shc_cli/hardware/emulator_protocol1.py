@@ -17,9 +17,10 @@ bus keeps the baud rate's time line: an instruction ends its bytes' time after i
 goes out the servo's Return Delay Time after the bus fell silent plus its own bytes' time; ``latency_s`` adds a
 USB adapter's turnaround to each answered instruction.
 
-Faults per servo (:class:`Faults`, changed at any time): no reply, a corrupt checksum, error bits (voltage,
-overheating, overload: in every status packet while set; a bit in Shutdown also turns the torque off), overload at
-the next goal write, vanishing after a number of packets, replies later than ``late_reply_s``.
+Faults per servo (:class:`Faults`, changed at any time): no reply, the next k replies dropped, a corrupt checksum,
+error bits (voltage, overheating, overload: in every status packet while set; a bit in Shutdown also turns the
+torque off), overload at the next goal write, vanishing after a number of packets, replies later than
+``late_reply_s``.
 
 Choices where the documents leave room (each marked ``choice``): a write outside an item's range is refused with
 the Range Error bit (Protocol 1.0) and not applied; a Goal Position outside the angle limits gets the Angle Limit
@@ -173,6 +174,8 @@ class Faults:
     vanish_after_packets: int | None = None
     late_reply_s: float = 0.0
     """Extra delay of every status packet [s] (longer than the host's timeout: a late reply)."""
+    drop_replies: int = 0
+    """The next this many status packets of the servo are not sent (each a missed reply; then it answers again)."""
 
 
 class EmulatedServo:
@@ -505,6 +508,9 @@ class Protocol1Emulator:
 
     def _status(self, servo: EmulatedServo, error: int = 0, params: bytes = b"") -> list[tuple[EmulatedServo, bytes]]:
         if servo.faults.no_reply or servo.vanished:
+            return []
+        if servo.faults.drop_replies > 0:
+            servo.faults.drop_replies -= 1
             return []
         data = bytearray(p1.status(servo.servo_id, error | servo.error_byte, params))
         if servo.faults.corrupt_checksum:

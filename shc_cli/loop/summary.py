@@ -204,7 +204,19 @@ class RunSummary(BaseModel):
     backend: str | None = Field(None, description="ros: none (outputs only) or the physics engine.")
     wire_time_ms: NonNegativeFloat | None = Field(None, description="run-hw: bus time one cycle needs (packets and "
                                                                     "return delays) [ms].")
-    read_retries: NonNegativeInt | None = Field(None, description="run-hw: sync reads repeated after a bad reply.")
+    read_retries: NonNegativeInt | None = Field(None, description="run-hw, ros on a bus: state reads asked again at "
+                                                                  "once, in the same cycle, after a missing or bad "
+                                                                  "reply.")
+    bridged_cycles: NonNegativeInt | None = Field(None, description="run-hw, ros on a bus: cycles in which a servo's "
+                                                                    "state read failed even after the retry, its "
+                                                                    "last reading standing in.")
+    bridged_reads: NonNegativeInt | None = Field(None, description="run-hw, ros on a bus: servo readings stood in "
+                                                                   "for (bridged_cycles counted per servo).")
+    missed_cycles_max: NonNegativeInt | None = Field(None, description="run-hw, ros on a bus: the most consecutive "
+                                                                       "cycles a servo went without a reading.")
+    missed_reads_fault: NonNegativeInt | None = Field(None, description="run-hw, ros on a bus: consecutive cycles "
+                                                                        "without a servo's reading that are a fault "
+                                                                        "(hardware.missed_reads_fault).")
     fault: str | None = Field(None, description="run-hw: the fault that ended the run (names the servo); null "
                                                 "when none.")
     stopped_by_request: bool | None = Field(None, description="run-hw: the run ended by a stop request or the "

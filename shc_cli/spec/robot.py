@@ -356,6 +356,11 @@ class ServoMap(Strict):
         "for 4096-tick models, 512 for the AX series' 1024)")
 
 
+MISSED_READS_FAULT = 3
+"""Consecutive cycles without a servo's reading that are a run-hw fault unless ``hardware.missed_reads_fault`` says
+otherwise (docs/commands.md, run-hw, Faults)."""
+
+
 class Hardware(Strict):
     """The real robot's servo buses (``shc run-hw``): the servo model names the protocol (Dynamixel Protocol 2.0
     or 1.0, Feetech STS/SCS), units and control table (:mod:`shc_cli.hardware.models`)."""
@@ -370,6 +375,10 @@ class Hardware(Strict):
         "configured). Dynamixels ship with 500 µs: with 30 servos that alone is 15 ms per sync read")
     current_limit_ma: Annotated[float, Field(gt=0)] | None = Field(
         None, description="current limit written to the servos at start-up [mA] (None: leave as configured)")
+    missed_reads_fault: Annotated[int, Field(ge=1, le=100)] | None = Field(
+        None, description="consecutive cycles a servo's state read may fail (no reply or a corrupt one, after the "
+        "cycle's retry) before run-hw stops on a fault; until then its last reading is used (bridged) and counted. "
+        "1: the first failed cycle is a fault (None: MISSED_READS_FAULT, 3)")
     servos: dict[str, ServoMap] = Field(
         default_factory=dict, description="one entry per joint, keyed '<LEG>_<joint>' (e.g. AR_coxa)")
 
