@@ -84,10 +84,13 @@ class WalkFigures:
     cot: float | None
 
 
-def walk_figures(run: RunLog, rows: np.ndarray, walking: bool) -> WalkFigures:
+def walk_figures(run: RunLog, rows: np.ndarray, walking: bool, period: int = 0) -> WalkFigures:
     """:class:`WalkFigures` of ``run`` over ``rows`` (ascending row indices; the cost of transport only when
     ``walking``: scenario WG). Fewer than two rows are no walk: distances and speeds 0 (a robot thrown off the
-    floor at start-up, caught by the fall check in its first RUNNING cycle, once had 7 m/s)."""
+    floor at start-up, caught by the fall check in its first RUNNING cycle, once had 7 m/s). With the gait's
+    ``period`` [cycles], a window that made no progress (:func:`shc_cli.analysis.progress.progress_fields`: the
+    summary's NO PROGRESS) has no cost of transport either: its power over a speed near zero means nothing, and the
+    summary line, ``summary.json`` and ``shc analyze`` say so alike."""
     from shc_cli.model.body import body_mass
 
     dt = run.dt
@@ -100,6 +103,11 @@ def walk_figures(run: RunLog, rows: np.ndarray, walking: bool) -> WalkFigures:
     path = window_path(run.position[:, :2], rows)
     path_speed, speed = body_speeds(path, span)
     cot = cost_of_transport(power, mass, speed) if walking and power is not None else None  # eq. 22
+    if cot is not None and period > 0:
+        from shc_cli.analysis.progress import cycle_path_length, progress_fields
+
+        if progress_fields(cycle_path_length(path, period), commanded, len(rows) * dt)["no_progress"]:
+            cot = None
     return WalkFigures(span, speed * span, float(path[-1, 0] - path[0, 0]), speed, path_speed, commanded, power,
                        mass, cot)
 
@@ -286,7 +294,7 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
     if len(rows) < 2:
         return out
     walking = (summary.scenario or "WG") == "WG"
-    figures = walk_figures(run, rows, walking)
+    figures = walk_figures(run, rows, walking, summary.step_period_cycles or _period(run))
     speed, commanded = figures.displacement_speed_mps, figures.commanded_speed_mps
     # mean_speed_mps: the displacement speed under its first name (sweep tables and older readers use it)
     out.update(distance_m=figures.distance_m, displacement_speed_mps=speed, path_speed_mps=figures.path_speed_mps,

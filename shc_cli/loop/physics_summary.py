@@ -85,7 +85,7 @@ class PhysicsRecord:
         finished = self.log = read_tables(directory, robot) if self.cycles else None
         rows = np.flatnonzero(finished.running) if finished is not None else np.zeros(0, dtype=np.intp)
         if finished is not None:
-            figures = walk_figures(finished, rows, scenario == "WG")
+            figures = walk_figures(finished, rows, scenario == "WG", controller.cycle.period)
             progress = window_progress(finished, rows, controller.cycle.period,  # nothing to travel in the air
                                        0.0 if self.airborne else figures.commanded_speed_mps)
             distance, forward, speed = figures.distance_m, figures.forward_distance_m, figures.displacement_speed_mps
