@@ -118,3 +118,18 @@ def test_simulate_standing_commands_smooth_joints(args: list[str], tmp_path: Pat
     commanded = _columns(out / "log.csv", "_cmd", 6.0)
     assert commanded.shape[1] == 30 and len(commanded) > 150
     assert _second_difference_rms(commanded).max() < SMOOTH
+
+
+@pytest.mark.slow  # a simulation per Bullet file
+@pytest.mark.parametrize("name", BULLETS)
+def test_simulate_stance_ground_commands_smooth_joints_on_every_bullet(name: str, tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                       monkeypatch) -> None:
+    """``shc simulate ROBOT --scenario SG`` for every Bullet file in robots/, 3 s: no commanded joint alternates."""
+    out = tmp_path / "run"
+    code, _, err = run(["simulate", name, "--scenario", "SG", "--duration", "3", "--no-plots", "--out", str(out)],
+                       capsys, monkeypatch)
+    assert code == 0, err
+    start = json.loads((out / "summary.json").read_text())["sim_time_s"] - 3.0
+    commanded = _columns(out / "log.csv", "_cmd", start + 0.5)
+    assert commanded.shape[1] == 30 and len(commanded) > 200
+    assert _second_difference_rms(commanded).max() < SMOOTH
