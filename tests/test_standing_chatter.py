@@ -133,3 +133,13 @@ def test_simulate_stance_ground_commands_smooth_joints_on_every_bullet(name: str
     commanded = _columns(out / "log.csv", "_cmd", start + 0.5)
     assert commanded.shape[1] == 30 and len(commanded) > 200
     assert _second_difference_rms(commanded).max() < SMOOTH
+
+
+@pytest.mark.parametrize("value", ["1.0", "-0.1"])
+def test_a_cap_outside_zero_to_one_is_one_line(value: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """At 1 the velocity term cancels the last motion exactly (an undamped two-cycle oscillation); above, it grows."""
+    robot = tmp_path / "cap.toml"
+    robot.write_text(f'extends = "bullet"\nname = "cap"\n[ik]\nlimit_avoidance_cap = {value}\n', encoding="utf-8")
+    code, _, err = run(["validate", str(robot)], capsys, monkeypatch)
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1 and "ik.limit_avoidance_cap" in err and "Traceback" not in err
