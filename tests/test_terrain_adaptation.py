@@ -145,8 +145,8 @@ def test_rough_terrain_mode_keeps_more_feet_down_on_blocks(engine: str, tmp_path
     feet land where the ground is and the default footholds follow, so fewer cycles have fewer than three feet
     down (8 s, seed 0, OpenSHC's IK step: MuJoCo 5.1 % vs 13.4 %, PyBullet 22.5 % vs 32.7 %). With shc's default
     ``ik.limit_avoidance_cap`` the margin shrinks below this test's 10 % (MuJoCo 10.0 vs 11.0 %, PyBullet 29.4 vs
-    31.4 %) and varies in sign with the blocks' seed (MuJoCo seeds 1, 2: 8.0 vs 17.0 %, 15.6 vs 8.0 %; OpenSHC's
-    step on seed 2: 9.3 vs 8.8 %) — open (issue 42)."""
+    31.4 %). Both vary in sign with the blocks' seed: MuJoCo, seeds 0–3, mean 7.5 vs 8.6 % with OpenSHC's step
+    (seed 1: 9.4 vs 4.0 %), 10.2 vs 10.6 % with the cap (seed 2: 15.6 vs 8.0 %) — open (issue 42)."""
     robot = tmp_path / "bullet_rough.toml"
     robot.write_text(ROUGH_ROBOT + OPENSHC_IK, encoding="utf-8")
     normal = tmp_path / "bullet_normal.toml"
