@@ -24,8 +24,10 @@ def record(robot: Robot, gait: Gait, joints: np.ndarray | None, velocity: np.nda
            requests: list[RobotState | None], remote: np.ndarray) -> tuple[Recorded, list[CycleOutput]]:
     """Run the controller with ``velocity[c]`` and ``requests[c]`` in cycle ``c`` (``remote[c]``: the robot state
     the remote asks for then); record what the recorder would see: the inputs received before cycle ``c``'s output
-    are those that act in cycle ``c + 1``."""
-    controller = Controller(robot, gait, joints=joints)
+    are those that act in cycle ``c + 1``. The controller runs OpenSHC's IK step (``ik.limit_avoidance_cap`` 0), as
+    the replay does: the run stands in for a recording of OpenSHC."""
+    openshc = robot.model_copy(update={"ik": robot.ik.model_copy(update={"limit_avoidance_cap": 0.0})})
+    controller = Controller(openshc, gait, joints=joints)
     outputs = [controller.step(Command(velocity=tuple(v), state_request=r))  # type: ignore[arg-type]
                for v, r in zip(velocity, requests, strict=True)]
     n = len(outputs)

@@ -95,8 +95,11 @@ def walk_figures(run: RunLog, rows: np.ndarray, walking: bool, period: int | Non
     """:class:`WalkFigures` of ``run`` over ``rows`` (ascending row indices; the cost of transport only when
     ``walking``: scenario WG). Fewer than two rows are no walk: distances and speeds 0 (a robot thrown off the
     floor at start-up, caught by the fall check in its first RUNNING cycle, once had 7 m/s). ``period``: the gait
-    period in cycles for the distance walked (default: the gait the summary names, :func:`_period`)."""
-    from shc_cli.analysis.progress import cycle_path_length
+    period in cycles for the distance walked (default: the gait the summary names, :func:`_period`). A window that
+    made no progress (:func:`shc_cli.analysis.progress.progress_fields`: the summary's NO PROGRESS) has no cost of
+    transport either: its power over a speed near zero means nothing, and the summary line, ``summary.json`` and
+    ``shc analyze`` say so alike."""
+    from shc_cli.analysis.progress import cycle_path_length, progress_fields
     from shc_cli.model.body import body_mass
 
     dt = run.dt
@@ -112,6 +115,8 @@ def walk_figures(run: RunLog, rows: np.ndarray, walking: bool, period: int | Non
     measured = walking and power is not None
     cot = cost_of_transport(power, mass, walked / span) if measured and power is not None else None  # eq. 22
     cot_displacement = cost_of_transport(power, mass, speed) if measured and power is not None else None
+    if cot is not None and progress_fields(walked, commanded, len(rows) * dt)["no_progress"]:
+        cot = cot_displacement = None
     return WalkFigures(span, speed * span, float(path[-1, 0] - path[0, 0]), speed, path_speed, commanded, power,
                        mass, walked, cot, cot_displacement)
 
@@ -298,7 +303,7 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
     if len(rows) < 2:
         return out
     walking = (summary.scenario or "WG") == "WG"
-    figures = walk_figures(run, rows, walking)
+    figures = walk_figures(run, rows, walking, summary.step_period_cycles or _period(run))
     speed, commanded = figures.displacement_speed_mps, figures.commanded_speed_mps
     # mean_speed_mps: the displacement speed under its first name (sweep tables and older readers use it)
     out.update(distance_m=figures.distance_m, walked_m=figures.walked_m,

@@ -156,6 +156,8 @@ class Model:
     chains: Chains
     joints: FloatArray
     joint_velocities: FloatArray
+    avoidance_cap: float = 0.0
+    """``ik.limit_avoidance_cap`` (0: OpenSHC's IK step, :func:`~shc_cli.model.kernels.ik_step_one`)."""
     tips: FloatArray = field(init=False)
 
     def __post_init__(self) -> None:
@@ -202,7 +204,7 @@ class Model:
         kernels.ik_step_frames_kernel(c.base, c.d, c.theta, c.r, c.alpha, c.lower, c.upper, c.max_vel, self.joints,
                                       self.joint_velocities, self.tips, targets, dt, clamp_positions,
                                       clamp_velocities, joints, velocities, tips, self._flags, self._proximity,
-                                      self._frames, self._frames_q, 1.0)
+                                      self._frames, self._frames_q, 1.0, self.avoidance_cap)
         flags = self._flags.tolist()
         if active is not None:
             keep = ~np.asarray(active, dtype=bool)
@@ -249,7 +251,7 @@ class Controller(LegManipulation):
         self.dt = robot.time_delta
         chains = Chains.from_robot(robot)
         start = chains.default_joints() if joints is None else np.array(joints, dtype=float)
-        self.model = Model(chains, start.copy(), np.zeros_like(start))
+        self.model = Model(chains, start.copy(), np.zeros_like(start), robot.ik.limit_avoidance_cap)
         self.rest_joints = start.copy()
         """Where a direct shut-down takes the joints (the initial joints) [rad]."""
         self.default_joints = chains.default_joints()

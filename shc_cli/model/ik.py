@@ -63,6 +63,7 @@ def ik_step(
     clamp_positions: bool = True,
     clamp_velocities: bool = False,
     avoid_limits: bool = True,
+    avoidance_cap: float = 0.0,
 ) -> StepResult:
     """One OpenSHC IK step for every chain (study §2.1–§2.2, position only).
 
@@ -76,6 +77,8 @@ def ik_step(
         clamp_positions: clamp to the joint limits.
         clamp_velocities: clamp ``|q̇|`` to ``max_vel`` (OpenSHC skips this in its "simulation" calls).
         avoid_limits: add OpenSHC's null-space limit avoidance (off only to polish planning solutions).
+        avoidance_cap: 0 is OpenSHC; c > 0 limits each limit-avoidance term to c times what it corrects
+            (``ik.limit_avoidance_cap`` of the robot file, docs/deviations.md).
 
     The general, allocating entry (any arrays in, a fresh :class:`StepResult` out), used by :func:`solve` and
     the start-up sequence's planning. The controller's per-cycle loop calls the same kernel through
@@ -93,6 +96,7 @@ def ik_step(
         np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(qd, dtype=float),
         np.ascontiguousarray(current_tip, dtype=float), np.ascontiguousarray(desired_tip, dtype=float),
         float(dt), clamp_positions, clamp_velocities, q_new, qd_new, tip, flags, near, 1.0 if avoid_limits else 0.0,
+        float(avoidance_cap),
     )
     return StepResult(q_new, qd_new, tip, (flags & 1) != 0, near, (flags & 2) != 0, (flags & 4) != 0)
 

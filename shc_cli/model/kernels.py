@@ -105,7 +105,7 @@ def tips_kernel(base, d, theta, r, alpha, q, tips):  # type: ignore[no-untyped-d
 def ik_step_one(  # type: ignore[no-untyped-def]
     base, d, theta, r, alpha, lower, upper, max_vel,
     q, qd, current_tip, desired_tip, dt, clamp_positions, clamp_velocities,
-    q_out, qd_out, tip_out, frames, jac, z, v, delta, null_space=1.0, frames_ready=False,
+    q_out, qd_out, tip_out, frames, jac, z, v, delta, null_space=1.0, frames_ready=False, avoidance_cap=0.0,
 ):
     """One DLS step with joint-limit avoidance for one chain (study §2.1–§2.2).
 
@@ -115,7 +115,8 @@ def ik_step_one(  # type: ignore[no-untyped-def]
     scratch space (allocated once per batch by the callers). ``null_space`` scales the limit-avoidance
     motion: 1 is OpenSHC; 0 gives a plain damped-least-squares step (used to polish planning solutions).
     ``frames_ready``: ``frames`` already holds the frames of ``q`` (:func:`ik_step_frames_kernel`). On return
-    ``frames`` holds the frames of ``q_out``.
+    ``frames`` holds the frames of ``q_out``. ``avoidance_cap``: 0 is OpenSHC; c > 0 shortens the two limit-avoidance
+    terms to at most c times what they correct (see below).
     """
     n = d.shape[0]
     w = JOINT_LIMIT_COST_WEIGHT
@@ -169,16 +170,45 @@ def ik_step_one(  # type: ignore[no-untyped-def]
         cost_v += tv * tv
     norm_p = math.sqrt(cost_p)
     norm_v = math.sqrt(cost_v)
+    # Both terms are normalised gradients: OpenSHC gives them a length that does not shrink as what they correct
+    # does. The velocity term keeps (1 − share)·w/(2·max_vel) however slowly the joints move (√Φ_v vanishes with
+    # q̇), so joints moving less than that per cycle (a robot standing) are pushed back further than they came, every
+    # cycle: a two-cycle chatter. The position term's step on a joint of range Δq has the gain share·w²/(Δq²·√Φ_p),
+    # above 2 (the same overshoot) on a narrow range (a "locked" ±0.1 rad joint). ``avoidance_cap`` c > 0 shortens
+    # each to at most c times what it corrects: the velocity term to c·|q̇|·dt, the position term (scaled as a whole,
+    # so where the leg settles is unchanged) to a gain of c (docs/deviations.md).
+    vel_scale = 1.0
+    pos_scale = 1.0
+    if avoidance_cap > 0.0:
+        moved = 0.0
+        pushed = 0.0
+        narrowest = math.inf
+        for k in range(n):
+            vspan = 2.0 * max_vel[k]
+            moved += qd[k] * qd[k]
+            if norm_v > 0.0:
+                g = (w * w) * qd[k] / (vspan * vspan) / norm_v
+                pushed += g * g
+            span = upper[k] - lower[k]
+            if span != 0.0:
+                narrowest = min(narrowest, span)
+        reach = avoidance_cap * math.sqrt(moved) * dt
+        length = (1.0 - POSITION_LIMIT_SHARE) * math.sqrt(pushed)
+        if length > reach:
+            vel_scale = reach / length
+        gain = POSITION_LIMIT_SHARE * (w * w) / (narrowest * narrowest * norm_p) if norm_p > 0.0 else 0.0
+        if gain > avoidance_cap:
+            pos_scale = avoidance_cap / gain
     for k in range(n):
         span = upper[k] - lower[k]
         gp = 0.0
         if span != 0.0 and norm_p > 0.0:
             centre = lower[k] + span / 2.0
-            gp = -(w * w) * (q[k] - centre) / (span * span) / norm_p
+            gp = -(w * w) * (q[k] - centre) / (span * span) / norm_p * pos_scale
         gv = 0.0
         if norm_v > 0.0:
             vspan = 2.0 * max_vel[k]
-            gv = -(w * w) * qd[k] / (vspan * vspan) / norm_v
+            gv = -(w * w) * qd[k] / (vspan * vspan) / norm_v * vel_scale
         v[k] = (POSITION_LIMIT_SHARE * gp + (1.0 - POSITION_LIMIT_SHARE) * gv) * null_space
     # Δq = Z Δs + (I − Z J) v, then velocity and position clamping.
     jv0 = 0.0
@@ -236,7 +266,7 @@ def ik_step_one(  # type: ignore[no-untyped-def]
 def ik_step_kernel(  # type: ignore[no-untyped-def]
     base, d, theta, r, alpha, lower, upper, max_vel,
     q, qd, current_tip, desired_tip, dt, clamp_positions, clamp_velocities,
-    q_out, qd_out, tip_out, flags_out, proximity_out, null_space=1.0,
+    q_out, qd_out, tip_out, flags_out, proximity_out, null_space=1.0, avoidance_cap=0.0,
 ):
     """:func:`ik_step_one` for every chain ``b`` of ``(B, n)`` arrays."""
     chains, n = d.shape
@@ -245,7 +275,7 @@ def ik_step_kernel(  # type: ignore[no-untyped-def]
         flags_out[b], proximity_out[b] = ik_step_one(
             base[b], d[b], theta[b], r[b], alpha[b], lower[b], upper[b], max_vel[b],
             q[b], qd[b], current_tip[b], desired_tip[b], dt, clamp_positions, clamp_velocities,
-            q_out[b], qd_out[b], tip_out[b], frames, jac, z, v, delta, null_space,
+            q_out[b], qd_out[b], tip_out[b], frames, jac, z, v, delta, null_space, False, avoidance_cap,
         )
 
 
@@ -253,7 +283,7 @@ def ik_step_kernel(  # type: ignore[no-untyped-def]
 def ik_step_frames_kernel(  # type: ignore[no-untyped-def]
     base, d, theta, r, alpha, lower, upper, max_vel,
     q, qd, current_tip, desired_tip, dt, clamp_positions, clamp_velocities,
-    q_out, qd_out, tip_out, flags_out, proximity_out, frames, frames_q, null_space=1.0,
+    q_out, qd_out, tip_out, flags_out, proximity_out, frames, frames_q, null_space=1.0, avoidance_cap=0.0,
 ):
     """:func:`ik_step_kernel` keeping each chain's frames: ``frames[b]`` ``(n + 1, 4, 4)`` holds the frames of the
     joints ``frames_q[b]`` (NaN: none yet). A chain whose joints ``q[b]`` are those, bit for bit, starts from them
@@ -272,7 +302,7 @@ def ik_step_frames_kernel(  # type: ignore[no-untyped-def]
         flags_out[b], proximity_out[b] = ik_step_one(
             base[b], d[b], theta[b], r[b], alpha[b], lower[b], upper[b], max_vel[b],
             q[b], qd[b], current_tip[b], desired_tip[b], dt, clamp_positions, clamp_velocities,
-            q_out[b], qd_out[b], tip_out[b], frames[b], jac, z, v, delta, null_space, ready,
+            q_out[b], qd_out[b], tip_out[b], frames[b], jac, z, v, delta, null_space, ready, avoidance_cap,
         )
         for k in range(n):
             frames_q[b, k] = q_out[b, k]

@@ -44,7 +44,11 @@ def initial_joints(recorded: Recorded, comparer: Comparer, robot: Robot) -> np.n
 def replay(recorded: Recorded, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet] | None = None,
            plan: StatePlan | None = None) -> Replay:
     """Run the controller on the recorded inputs, cycle by cycle, and compare its outputs with the recorded ones;
-    ``plan`` replaces the state requests inferred from the data (:func:`~shc_cli.replay.states.infer_states`)."""
+    ``plan`` replaces the state requests inferred from the data (:func:`~shc_cli.replay.states.infer_states`).
+
+    The controller runs OpenSHC's IK step (``ik.limit_avoidance_cap`` 0, whatever the robot file says): the
+    recording's redundant legs carry OpenSHC's every-cycle null-space alternation (docs/deviations.md)."""
+    robot = robot.model_copy(update={"ik": robot.ik.model_copy(update={"limit_avoidance_cap": 0.0})})
     comparer = Comparer(recorded, robot)
     plan = plan or infer_states(recorded, robot)
     inputs = ReplayInputs(recorded, plan)

@@ -178,6 +178,11 @@ class InverseKinematics(Strict):
     ignore_warnings: bool = Field(
         False, description="do not report IK deviation/clamping [OpenSHC: ignore_IK_warnings]"
     )
+    limit_avoidance_cap: Annotated[float, Field(ge=0.0, lt=1.0)] = Field(
+        0.5, description="each null-space limit-avoidance term corrects at most this share of its error per cycle "
+        "(the velocity term: of the last cycle's joint motion; the position term: its gain); 0 = OpenSHC, whose "
+        "fixed-length terms make standing joints alternate every cycle [ratio]"
+    )
 
 
 class XYZ(Strict):
