@@ -14,7 +14,7 @@ from typing import Annotated
 import typer
 
 from shc_cli import __version__
-from shc_cli.errors import ShcError
+from shc_cli.errors import EXIT_SIGNAL, Interrupted, ShcError, Terminated
 
 app = typer.Typer(
     name="shc",
@@ -642,25 +642,59 @@ def _app_for(args: list[str]) -> typer.Typer:
     return alone
 
 
+def _terminated(signum: int, frame: object) -> None:
+    raise Terminated
+
+
+def _interrupt_of(done: SystemExit) -> KeyboardInterrupt | None:
+    """The KeyboardInterrupt behind typer's exit 130, or None for any other exit."""
+    seen: BaseException | None = done if done.code == 130 else None
+    while seen is not None:
+        if isinstance(seen, KeyboardInterrupt):
+            return seen
+        seen = seen.__cause__ or seen.__context__
+    return None
+
+
 def main() -> None:
-    """Console entry point: user errors become one line and exit code 2; no traceback unless --debug."""
+    """Console entry point: user errors become one line and exit code 2; a command stopped by SIGINT (Ctrl-C) or
+    SIGTERM one line saying what was kept and exit 130 or 143 (SIGTERM is raised as :class:`Terminated`, a
+    KeyboardInterrupt, so whatever keeps its work at a Ctrl-C keeps it at a SIGTERM too); no traceback unless
+    --debug."""
+    import signal
+
     from shc_cli.loop.gc_pause import no_collection_at_exit
 
     no_collection_at_exit()  # the interpreter's last garbage collection was 0.17 s of a simulation's command
     debug = "--debug" in sys.argv[1:]
+    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _terminated)
     try:
         _app_for(sys.argv[1:])()
+    except Interrupted as error:
+        if debug:
+            raise
+        typer.echo(f"error: interrupted by {error.signal}: {error}", err=True)
+        sys.exit(EXIT_SIGNAL[error.signal])
     except ShcError as error:
         if debug:
             raise
         for line in str(error).splitlines():
             typer.echo(f"error: {line}", err=True)
         sys.exit(2)
-    except KeyboardInterrupt:  # Ctrl-C outside a run's loop (a run's own signals finish its directory first)
+    except SystemExit as done:  # typer turns a KeyboardInterrupt into a silent exit 130: say it, 143 for SIGTERM
+        stop = _interrupt_of(done)
+        if stop is None or debug:
+            raise
+        name = "SIGTERM" if isinstance(stop, Terminated) else "SIGINT"
+        typer.echo(f"error: interrupted by {name}", err=True)
+        sys.exit(EXIT_SIGNAL[name])
+    except KeyboardInterrupt as error:  # Ctrl-C outside a run's loop (a run's own signals finish its directory first)
         if debug:
             raise
-        typer.echo("error: interrupted", err=True)
-        sys.exit(130)
+        name = "SIGTERM" if isinstance(error, Terminated) else "SIGINT"
+        typer.echo(f"error: interrupted by {name}", err=True)
+        sys.exit(EXIT_SIGNAL[name])
     except Exception as error:  # a bug in shc, not bad input: still one line unless --debug
         if debug:
             raise

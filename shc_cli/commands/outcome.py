@@ -12,6 +12,8 @@ from typing import TYPE_CHECKING
 
 import typer
 
+from shc_cli.errors import EXIT_SIGNAL
+
 if TYPE_CHECKING:
     from shc_cli.loop.summary import RunSummary
 
@@ -22,7 +24,7 @@ EXIT_FELL = 4
 EXIT_DIVERGED = 5
 """``simulate``: the physics blew up (NaN or a runaway body speed); the run
 directory is kept, ``stop_reason: "diverged"``, ``fault`` says what showed it."""
-EXIT_INTERRUPTED = {"SIGINT": 130, "SIGTERM": 143}
+EXIT_INTERRUPTED = EXIT_SIGNAL
 """``plan``/``simulate`` stopped by a signal: 128 + the signal's number, as shells report it."""
 
 

@@ -27,7 +27,7 @@ from pathlib import Path
 from shc_cli.domain.sweeps.checks import check_executor, check_points
 from shc_cli.domain.sweeps.pool import RunPool
 from shc_cli.domain.sweeps.results import WARNINGS, PartialTable, Row, sweep_columns, write_table
-from shc_cli.errors import Issue, ShcError, SpecError, check_choice
+from shc_cli.errors import Interrupted, Issue, SpecError, check_choice, signal_name
 from shc_cli.spec.sweep import Sweep, load_sweep
 
 OnRow = Callable[[int, int, Row | None], None]
@@ -139,9 +139,9 @@ def run_sweep(file: Path, workers: int | None = None, executor: str = "local", s
                 table.append(row)
                 if on_row is not None:
                     on_row(len(rows), len(sweep.points), row)
-        except KeyboardInterrupt:
-            raise ShcError(f"interrupted: {len(rows)} runs finished, their rows are in {partial}; "
-                           "continue with --resume") from None
+        except KeyboardInterrupt as error:
+            raise Interrupted(f"{len(rows)} runs finished, their rows are in {partial}; continue with --resume",
+                              signal_name(error)) from None
     rows.sort(key=lambda r: int(r["index"]))
     write_table(out / "results.csv", columns, rows)
     partial.unlink()
