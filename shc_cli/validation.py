@@ -8,7 +8,9 @@ those imports stay inside the checks that need them (``shc validate`` of a file 
 
 from __future__ import annotations
 
+import itertools
 import math
+import re
 
 import numpy as np
 
@@ -35,6 +37,41 @@ def check_robot(loaded: LoadedRobot) -> list[Issue]:
     if not issues:
         issues = _hardware(loaded, robot)
     return one_per_mistake(issues, loaded.mirrors)
+
+
+OPENSHC_LEG_NAME = re.compile(r"^([A-F])([LR])$")
+"""OpenSHC's leg names: a letter from the front (A) to the rear, then the side (R right, L left): AR front right,
+BR middle right, CR rear right, CL, BL, AL."""
+
+
+def leg_position_warnings(robot: Robot) -> list[str]:
+    """Warnings (not errors: other naming schemes exist) for legs named in OpenSHC's scheme that stand where their
+    name says they do not: an R leg on the left (stance y > 0) or an L leg on the right, or a side's legs not
+    running from A at the front to the rear (a leg behind the next letter's). Legs named otherwise are not
+    checked."""
+    sides: dict[str, list[tuple[str, str, float]]] = {"R": [], "L": []}
+    warnings: list[str] = []
+    for name, leg in robot.legs.items():
+        match = OPENSHC_LEG_NAME.match(name)
+        if match is None:
+            continue
+        letter, side = match.groups()
+        x, y = leg.stance.x, leg.stance.y
+        sides[side].append((letter, name, x))
+        wrong = y > 0 if side == "R" else y < 0
+        if wrong:
+            said, stands = ("right", "left") if side == "R" else ("left", "right")
+            warnings.append(f"leg {name}: OpenSHC's name says {said} side, but it stands on the {stands} (stance "
+                            f"x {x:+.3f}, y {y:+.3f} m); OpenSHC names the legs AR, BR, CR down the right side, front "
+                            "to rear, and AL, BL, CL down the left")
+    for legs in sides.values():
+        legs.sort()
+        for (_, front, front_x), (_, rear, rear_x) in itertools.pairwise(legs):
+            if front_x <= rear_x:
+                warnings.append(f"leg {front}: OpenSHC's name says it is in front of {rear}, but it stands behind "
+                                f"or beside it (stance x {front_x:+.3f} m against {rear_x:+.3f} m); OpenSHC's "
+                                "letters run A (front) to the rear")
+    return warnings
 
 
 def _hardware(loaded: LoadedRobot, robot: Robot) -> list[Issue]:

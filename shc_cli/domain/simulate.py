@@ -58,7 +58,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     o = config or SimulationConfig()
     check_display(o.gui)
     for warning in o.warnings():  # legal but degenerate values (friction 0)
-        event(log, logging.WARNING, "degenerate_option", "%s", warning)
+        event(log, logging.WARNING, "degenerate_option", "warning: %s", warning)
     if o.path is not None and o.input_mode != "timeline":
         raise SpecError([Issue(None, None, "--path", f"--path and --input {o.input_mode} both give the run's input",
                                "drop --input (a path is followed by itself)")])
