@@ -484,11 +484,13 @@ def import_openshc(
     gait: Annotated[Path | None, typer.Argument(help="OpenSHC gait.yaml.")] = None,
     auto_pose: Annotated[Path | None, typer.Argument(help="OpenSHC auto_pose.yaml.")] = None,
     out: Annotated[Path, typer.Option(help="Folder for robots/, gaits/ and poses/.")] = Path("imported"),
+    urdf: Annotated[Path | None, typer.Option(help="The robot's URDF or xacro: the body's and links' masses "
+                                                   "(OpenSHC's parameters have none).", metavar="FILE")] = None,
 ) -> None:
     """Turn OpenSHC YAML parameter files into shc robot, gait and auto-pose TOML files."""
     from shc_cli.commands.importing import import_openshc as run
 
-    run(robot, gait, auto_pose, out)
+    run(robot, gait, auto_pose, out, urdf)
 
 
 @import_app.command("urdf")

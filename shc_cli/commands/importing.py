@@ -10,11 +10,13 @@ import typer
 from shc_cli.errors import Issue, SpecError
 
 
-def import_openshc(robot: Path, gait: Path | None, auto_pose: Path | None, out: Path) -> None:
-    """OpenSHC YAML parameter files → shc robot, gait and auto-pose TOML files under ``out``."""
+def import_openshc(robot: Path, gait: Path | None, auto_pose: Path | None, out: Path, urdf: Path | None = None
+                   ) -> None:
+    """OpenSHC YAML parameter files → shc robot, gait and auto-pose TOML files under ``out`` (masses from the
+    ``urdf`` URDF/xacro)."""
     from shc_cli.interop.openshc import import_openshc as convert
 
-    for path in convert(robot, gait, auto_pose, out):
+    for path in convert(robot, gait, auto_pose, out, urdf):
         typer.echo(f"wrote {path}")
 
 
