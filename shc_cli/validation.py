@@ -74,6 +74,32 @@ def leg_position_warnings(robot: Robot) -> list[str]:
     return warnings
 
 
+def servo_range_problem(robot: Robot, key: str, direction: int | None = None, zero_ticks: int | None = None
+                        ) -> str | None:
+    """Why joint ``key``'s limits do not fit its servo's range of ticks (0 … resolution − 1 of its model: an AX-12A's
+    1024 ticks over 300°), with ``direction`` and ``zero_ticks`` (None: the file's), or None when they fit — one
+    tick of rounding allowed, as the servos' own angle-limit check on the bus. A multi-turn ``generic`` servo has no
+    range. ``shc validate`` and ``shc hw jog`` (before it writes a zero) use this one rule."""
+    from shc_cli.hardware.models import MODELS
+
+    hardware = robot.hardware
+    servo = hardware.servos[key]
+    model = MODELS.get(servo.model or hardware.model)
+    if model is None or model.name == "generic":
+        return None
+    leg, _, joint = key.partition("_")
+    spec = robot.legs[leg].joints[joint]
+    zero = (servo.zero_ticks if zero_ticks is None else zero_ticks)
+    zero = model.centre if zero is None else zero
+    sign = servo.direction if direction is None else direction
+    ends = sorted(round(zero + sign * (angle + spec.offset) * model.ticks_per_radian) for angle in (spec.min, spec.max))
+    last = model.resolution - 1
+    if ends[0] >= -1 and ends[1] <= last + 1:
+        return None
+    return (f"the joint limits {spec.min:.3f}..{spec.max:.3f} rad are ticks {ends[0]}..{ends[1]} with zero_ticks "
+            f"{zero} and direction {sign:+d}, outside the {model.name}'s 0..{last}")
+
+
 def _hardware(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
     """The servo table: every joint mapped once, known models, unique IDs per bus, zero offsets inside a turn."""
     from shc_cli.hardware.models import FAMILY_NAMES, MODELS
@@ -108,6 +134,12 @@ def _hardware(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
                 f"the {model.name}'s {model.range_degrees:g}° range")
             issues.append(loaded.issue(("hardware", "servos", key, "zero_ticks"),
                                        f"zero_ticks {servo.zero_ticks} is outside {span}", f"use 0 … {ticks - 1}"))
+        elif key in joints and model is not None:
+            problem = servo_range_problem(robot, key)
+            if problem is not None:
+                issues.append(loaded.issue(("hardware", "servos", key, "zero_ticks"), problem,
+                                           "narrow the joint limits, or zero the servo nearer the middle of its "
+                                           "range (shc hw jog, answer h with the joint at angle 0)"))
         if model is not None:
             family = families.setdefault(servo.bus, (model.family, key))
             if family[0] != model.family:
