@@ -466,12 +466,14 @@ def export_urdf(
 def export_bag(
     run_dir: Annotated[Path, typer.Argument(help="Run directory from plan or simulate.", metavar="RUN")],
     format: Annotated[str, typer.Option("--format", help="mcap, sqlite3 (ROS 2) or ros1.")] = "mcap",
-    out: Annotated[Path | None, typer.Option(help="Bag path (default: RUN_bag, or RUN.bag for ros1).")] = None,
+    out: Annotated[Path | None, typer.Option(help="Bag folder (mcap, sqlite3) or NAME.bag file (ros1) (default: "
+                                                  "RUN_bag, RUN_bag_sqlite3 or RUN.bag).")] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing bag at --out.")] = False,
 ) -> None:
     """Write a run as a ROS bag: joint states, tf, URDF, IMU, odometry, foot forces, OpenSHC LegState."""
     from shc_cli.commands.export import export_bag as run
 
-    run(run_dir, format, out)
+    run(run_dir, format, out, overwrite)
 
 
 import_app = typer.Typer(help="Import files of other tools.", no_args_is_help=True)
