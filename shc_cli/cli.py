@@ -14,7 +14,7 @@ from typing import Annotated
 import typer
 
 from shc_cli import __version__
-from shc_cli.errors import EXIT_SIGNAL, Interrupted, ShcError, Terminated
+from shc_cli.domain.options import SIMULATE
 
 app = typer.Typer(
     name="shc",
@@ -139,20 +139,19 @@ def simulate(
     robot: RobotArgument = "bullet",
     gait: GaitOption = None,
     velocity: Annotated[str, typer.Option(help=VELOCITY_HELP)] = "1,0,0",
-    duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
+    duration: Annotated[float | None, typer.Option(help=SIMULATE["duration"].cli_help)] = None,
     commands: CommandsOption = None,
     path: PathOption = None,
     terrain: Annotated[
         str, typer.Option(help="flat, ramp:DEG, blocks[:LOW,HIGH[,SIZE]], stairs:RISE,RUN or heightfield:FILE[,SCALE]")
     ] = "flat",
     scenario: Annotated[str, typer.Option(help="WG walk ground, SG stance ground, WA walk air, SA stance air.")] = "WG",
-    physics_rate: Annotated[float, typer.Option(help="Physics steps per second (whole multiple of control).")] = 400.0,
-    friction: Annotated[float, typer.Option(help="Lateral friction of feet and terrain.")] = 0.9,
-    restitution: Annotated[float, typer.Option(help="Restitution of feet and terrain.")] = 0.0,
-    seed: Annotated[int, typer.Option(help="Seed of every random thing (terrain, sensor noise).")] = 0,
-    imu_noise: Annotated[float, typer.Option(help="IMU noise standard deviation (rad/s, m/s²).")] = 0.0,
-    imu_yaw_bias: Annotated[float, typer.Option(help="IMU gyro yaw-rate bias (deg/s): the rate reads it, the "
-                                                     "orientation's yaw drifts by it.")] = 0.0,
+    physics_rate: Annotated[float, typer.Option(help=SIMULATE["physics_rate"].cli_help)] = 400.0,
+    friction: Annotated[float, typer.Option(help=SIMULATE["friction"].cli_help)] = 0.9,
+    restitution: Annotated[float, typer.Option(help=SIMULATE["restitution"].cli_help)] = 0.0,
+    seed: Annotated[int, typer.Option(help=SIMULATE["seed"].cli_help)] = 0,
+    imu_noise: Annotated[float, typer.Option(help=SIMULATE["imu_noise"].cli_help)] = 0.0,
+    imu_yaw_bias: Annotated[float, typer.Option(help=SIMULATE["imu_yaw_bias"].cli_help)] = 0.0,
     start: Annotated[str, typer.Option(help="Spawn pose: unpacked or packed.")] = "unpacked",
     stand: Annotated[
         bool | None,
@@ -190,8 +189,7 @@ def simulate(
                                                             "driven by hand in real time (implies --realtime): stdin "
                                                             "(JSON lines), keyboard, gamepad[:DEVICE].")]
     = "timeline",
-    watchdog: Annotated[float, typer.Option(help="stdin: seconds without a line before the velocity goes to 0.")]
-    = 0.5,
+    watchdog: Annotated[float, typer.Option(help=SIMULATE["watchdog"].cli_help)] = 0.5,
 ) -> None:
     """Run the controller on the robot in physics (MuJoCo; PyBullet with --engine): terrains, servos, power, CoT."""
     from shc_cli.loop.gc_pause import paused
@@ -646,65 +644,14 @@ def _app_for(args: list[str]) -> typer.Typer:
     return alone
 
 
-def _terminated(signum: int, frame: object) -> None:
-    raise Terminated
-
-
-def _interrupt_of(done: SystemExit) -> KeyboardInterrupt | None:
-    """The KeyboardInterrupt behind typer's exit 130, or None for any other exit."""
-    seen: BaseException | None = done if done.code == 130 else None
-    while seen is not None:
-        if isinstance(seen, KeyboardInterrupt):
-            return seen
-        seen = seen.__cause__ or seen.__context__
-    return None
-
-
 def main() -> None:
-    """Console entry point: user errors become one line and exit code 2; a command stopped by SIGINT (Ctrl-C) or
-    SIGTERM one line saying what was kept and exit 130 or 143 (SIGTERM is raised as :class:`Terminated`, a
-    KeyboardInterrupt, so whatever keeps its work at a Ctrl-C keeps it at a SIGTERM too); no traceback unless
-    --debug."""
-    import signal
-
+    """Console entry point: user errors become one line and exit code 2, an interrupted command one line and 130 or
+    143 (:mod:`shc_cli.commands.exits`); no traceback unless --debug."""
+    from shc_cli.commands.exits import run_command
     from shc_cli.loop.gc_pause import no_collection_at_exit
 
     no_collection_at_exit()  # the interpreter's last garbage collection was 0.17 s of a simulation's command
-    debug = "--debug" in sys.argv[1:]
-    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
-        signal.signal(signal.SIGTERM, _terminated)
-    try:
-        _app_for(sys.argv[1:])()
-    except Interrupted as error:
-        if debug:
-            raise
-        typer.echo(f"error: interrupted by {error.signal}: {error}", err=True)
-        sys.exit(EXIT_SIGNAL[error.signal])
-    except ShcError as error:
-        if debug:
-            raise
-        for line in str(error).splitlines():
-            typer.echo(f"error: {line}", err=True)
-        sys.exit(2)
-    except SystemExit as done:  # typer turns a KeyboardInterrupt into a silent exit 130: say it, 143 for SIGTERM
-        stop = _interrupt_of(done)
-        if stop is None or debug:
-            raise
-        name = "SIGTERM" if isinstance(stop, Terminated) else "SIGINT"
-        typer.echo(f"error: interrupted by {name}", err=True)
-        sys.exit(EXIT_SIGNAL[name])
-    except KeyboardInterrupt as error:  # Ctrl-C outside a run's loop (a run's own signals finish its directory first)
-        if debug:
-            raise
-        name = "SIGTERM" if isinstance(error, Terminated) else "SIGINT"
-        typer.echo(f"error: interrupted by {name}", err=True)
-        sys.exit(EXIT_SIGNAL[name])
-    except Exception as error:  # a bug in shc, not bad input: still one line unless --debug
-        if debug:
-            raise
-        typer.echo(f"error: internal error: {type(error).__name__}: {error} (rerun with --debug and report it)",
-                   err=True)
-        sys.exit(1)
+    run_command(_app_for(sys.argv[1:]), debug="--debug" in sys.argv[1:])
 
 
 if __name__ == "__main__":

@@ -35,6 +35,21 @@ def test_the_command_line_has_the_tables_options_and_defaults() -> None:
     assert {name: cli[name] for name in SIMULATE} == {name: option.default for name, option in SIMULATE.items()}
 
 
+def test_the_command_lines_help_of_every_bounded_number_is_the_tables() -> None:
+    import typer.main
+
+    from shc_cli.cli import app
+
+    command = typer.main.get_command(app).commands["simulate"]  # type: ignore[attr-defined]
+    helps = {param.name: getattr(param, "help", None) for param in command.params}
+    bounded = [name for name, option in SIMULATE.items() if option.low is not None and name != "live_port"]
+    assert bounded == ["duration", "physics_rate", "friction", "restitution", "seed", "imu_noise", "imu_yaw_bias",
+                       "watchdog"]
+    assert {name: helps[name] for name in bounded} == {name: SIMULATE[name].cli_help for name in bounded}
+    assert SIMULATE["restitution"].cli_help.endswith("Range: [0, 1].")
+    assert SIMULATE["watchdog"].cli_help.endswith("Range: (0, 3600] s.")
+
+
 def test_the_config_and_the_api_keywords_are_the_table() -> None:
     fields = SimulationConfig.model_fields
     assert list(fields) == list(SIMULATE)  # the same order too (sweep files list them so)

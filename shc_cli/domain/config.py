@@ -278,9 +278,11 @@ class SimulationConfig(BaseModel):
         """What the physics engine needs for ``robot`` (the robot after :meth:`apply_switches`)."""
         from shc_cli.backends.engine import EngineOptions
 
-        return EngineOptions(self.terrain_spec, self.substeps(robot), self.airborne, self.friction, self.restitution,
-                             self.seed, self.imu_noise, self.start, self.gui, self.stand_start(robot), self.engine,
-                             math.radians(self.imu_yaw_bias))
+        return EngineOptions(terrain=self.terrain_spec, substeps=self.substeps(robot), fixed_base=self.airborne,
+                             friction=self.friction, restitution=self.restitution, seed=self.seed,
+                             imu_noise=self.imu_noise, start_pose=self.start, gui=self.gui,
+                             stand=self.stand_start(robot), engine=self.engine,
+                             imu_yaw_bias=math.radians(self.imu_yaw_bias))
 
 
 def parse_posture(text: str) -> dict[str, Any]:

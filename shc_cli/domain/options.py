@@ -46,6 +46,12 @@ class Option:
     example: str = ""
 
     @property
+    def cli_help(self) -> str:
+        """The command line's help: :attr:`help` and, for a bounded number, its range and unit."""
+        bounded = self.low is not None or self.high is not None
+        return f"{self.help} Range: {self.range_text().removeprefix('in ')}." if bounded else self.help
+
+    @property
     def flag(self) -> str:
         """The command-line flag, ``--imu-noise``."""
         return "--" + self.name.replace("_", "-")
