@@ -189,3 +189,16 @@ def test_a_blow_up_stops_the_simulation_named_and_exits_5(capsys: pytest.Capture
     summary = json.loads((out / "summary.json").read_text())
     assert summary["stop_reason"] == "diverged" and summary["fault"].startswith("the physics diverged")
     assert summary["sim_time_s"] < 1.0
+
+
+def test_friction_0_warns_on_the_command_line(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch,
+                                              tmp_path: Path) -> None:
+    from shc_cli.cli import main
+
+    monkeypatch.setattr(sys, "argv", ["shc", "simulate", "--friction", "0", "--duration", "0.5", "--no-plots",
+                                      "--out", str(tmp_path / "ice")])
+    with pytest.raises(SystemExit) as done:
+        main()
+    err = capsys.readouterr().err
+    assert done.value.code == 0, err
+    assert "warning: friction 0: the feet slide freely, so the run's distance and speed are sliding, not walking" in err
