@@ -40,8 +40,8 @@ def _main(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str], r
 @pytest.mark.parametrize(("raised", "code", "line"), [
     (Interrupted("3 runs finished, their rows are in x.csv"), 130, "error: interrupted by SIGINT: 3 runs finished"),
     (Interrupted("kept", "SIGTERM"), 143, "error: interrupted by SIGTERM: kept"),
-    (KeyboardInterrupt(), 130, "error: interrupted by SIGINT"),
-    (Terminated(), 143, "error: interrupted by SIGTERM"),
+    (KeyboardInterrupt(), 130, "error: interrupted by SIGINT; nothing was written"),
+    (Terminated(), 143, "error: interrupted by SIGTERM; nothing was written"),
 ])
 def test_an_interrupted_command_is_one_line_and_128_plus_the_signal(raised: BaseException, code: int, line: str,
                                                                     monkeypatch: pytest.MonkeyPatch,

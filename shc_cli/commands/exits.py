@@ -34,7 +34,8 @@ def _interrupt_of(done: SystemExit) -> KeyboardInterrupt | None:
 
 def _interrupted(stop: KeyboardInterrupt) -> None:
     name = "SIGTERM" if isinstance(stop, Terminated) else "SIGINT"
-    typer.echo(f"error: interrupted by {name}", err=True)
+    typer.echo(f"error: interrupted by {name}; nothing was written (shc writes an output whole or not at all)",
+               err=True)
     sys.exit(EXIT_SIGNAL[name])
 
 
