@@ -486,11 +486,12 @@ def import_openshc(
     out: Annotated[Path, typer.Option(help="Folder for robots/, gaits/ and poses/.")] = Path("imported"),
     urdf: Annotated[Path | None, typer.Option(help="The robot's URDF or xacro: the body's and links' masses "
                                                    "(OpenSHC's parameters have none).", metavar="FILE")] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace existing robot, gait and pose files in --out.")] = False,
 ) -> None:
     """Turn OpenSHC YAML parameter files into shc robot, gait and auto-pose TOML files."""
     from shc_cli.commands.importing import import_openshc as run
 
-    run(robot, gait, auto_pose, out, urdf)
+    run(robot, gait, auto_pose, out, urdf, overwrite)
 
 
 @import_app.command("urdf")

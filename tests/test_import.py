@@ -150,3 +150,21 @@ def test_a_urdf_of_another_robot_is_one_line(tmp_path: Path) -> None:
     assert str(raised.value) == (f"{other}: no joint AR_coxa_joint (or AR_coxa) for OpenSHC's AR coxa (give the URDF "
                                  "or xacro of the same robot)")
     assert not (tmp_path / "robots").exists()
+
+
+def test_an_import_over_existing_files_needs_overwrite(tmp_path: Path) -> None:
+    """The one output rule: a second import into the same folder is refused before anything is written (it replaced
+    the robot file silently), and replaces it with --overwrite."""
+    from shc_cli.errors import OutputError
+    from shc_cli.interop.openshc import import_openshc
+
+    source = GOLDEN / "openshc" / "bullet_insectoid.yaml", GOLDEN / "openshc" / "gait.yaml", None
+    robot_file = import_openshc(*source, tmp_path)[0]
+    robot_file.write_text(robot_file.read_text() + "# edited\n")
+    with pytest.raises(OutputError) as raised:
+        import_openshc(*source, tmp_path)
+    assert str(raised.value) == (f"{robot_file}: already exists (add --overwrite to replace it and 5 more of the "
+                                 "outputs, or choose another --out)")
+    assert robot_file.read_text().endswith("# edited\n")
+    assert import_openshc(*source, tmp_path, overwrite=True)[0] == robot_file
+    assert not robot_file.read_text().endswith("# edited\n")

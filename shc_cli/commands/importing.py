@@ -10,15 +10,15 @@ import typer
 from shc_cli.errors import Issue, SpecError
 
 
-def import_openshc(robot: Path, gait: Path | None, auto_pose: Path | None, out: Path, urdf: Path | None = None
-                   ) -> None:
+def import_openshc(robot: Path, gait: Path | None, auto_pose: Path | None, out: Path, urdf: Path | None = None,
+                   overwrite: bool = False) -> None:
     """OpenSHC YAML parameter files → shc robot, gait and auto-pose TOML files under ``out`` (masses from the
     ``urdf`` URDF/xacro)."""
     from shc_cli.interop.openshc import import_openshc as convert
     from shc_cli.outputs import refuse_file_like
 
     refuse_file_like(out, "robots/, gaits/ and poses/", out.with_suffix(""))
-    for path in convert(robot, gait, auto_pose, out, urdf):
+    for path in convert(robot, gait, auto_pose, out, urdf, overwrite):
         typer.echo(f"wrote {path}")
 
 

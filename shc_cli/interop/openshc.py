@@ -276,13 +276,14 @@ def _subtree(top: str, children: dict[str, list[tuple[str, bool]]]) -> list[str]
 
 
 def import_openshc(robot_yaml: Path, gait_yaml: Path | None, pose_yaml: Path | None, out: Path,
-                   urdf: Path | None = None) -> list[Path]:
+                   urdf: Path | None = None, overwrite: bool = False) -> list[Path]:
     """Write ``out/robots/NAME.toml`` (+ ``out/gaits/*.toml``, ``out/poses/*.toml``); returns the files, each
     checked by loading it back. The robot is named after the YAML file; its ``[hardware.servos]`` is the servo map
     of :mod:`shc_cli.interop.servo_map` (ids numbered, to check). Its masses come from ``urdf`` (the robot's URDF
-    or xacro, :func:`masses_from_urdf`); without it a warning says the robot has shc's placeholder masses."""
+    or xacro, :func:`masses_from_urdf`); without it a warning says the robot has shc's placeholder masses. Files
+    that exist are refused before anything is written, unless ``overwrite`` (the one output rule)."""
     from shc_cli.interop.servo_map import servo_table, with_check_note
-    from shc_cli.outputs import write_text
+    from shc_cli.outputs import refuse_existing, write_text
     from shc_cli.spec.loading import load_robot
     from shc_cli.validation import check_robot
 
@@ -302,15 +303,18 @@ def import_openshc(robot_yaml: Path, gait_yaml: Path | None, pose_yaml: Path | N
     if masses is None:
         header.append("# OpenSHC's parameters carry no masses: body.mass is shc's placeholder 1 kg and the links have "
                       "none (import again with --urdf FILE, or set them).")
+    gaits = gaits_from_openshc(_read_yaml(gait_yaml, "gait_parameters")) if gait_yaml is not None else {}
+    poses = poses_from_openshc(_read_yaml(pose_yaml, "auto_pose_parameters")) if pose_yaml is not None else {}
+    robot_path = out / "robots" / f"{name}.toml"
+    refuse_existing([robot_path, *(out / "gaits" / f"{g}.toml" for g in gaits),
+                     *(out / "poses" / f"{p}.toml" for p in poses)], overwrite)
     if gait_yaml is not None:
-        gaits = gaits_from_openshc(_read_yaml(gait_yaml, "gait_parameters"))
         for gait_name, gait in gaits.items():
             path = out / "gaits" / f"{gait_name}.toml"
             write_text(path, f"# Imported by `shc import openshc` from {gait_yaml.name}.\n{dump_toml(gait)}")
             written.append(path)
         if tree["walker"]["gait"] in gaits:  # the imported gait file, next to the robot's folder
             tree["walker"]["gait"] = f"../gaits/{tree['walker']['gait']}.toml"
-    robot_path = out / "robots" / f"{name}.toml"
     write_text(robot_path, "\n".join(header) + "\n" + dump_toml(tree))
     legs = {leg: list(spec.joints) for leg, spec in load_robot(robot_path).robot.legs.items()}
     tree["hardware"] = servo_table(legs)  # the servo map (OpenSHC keeps it elsewhere): numbered, to check
@@ -326,7 +330,7 @@ def import_openshc(robot_yaml: Path, gait_yaml: Path | None, pose_yaml: Path | N
                     "its URDF or xacro with --urdf FILE, or set body.mass and each joint's mass", robot_path,
                     loaded.robot.total_mass())
     if pose_yaml is not None:
-        for set_name, pose_set in poses_from_openshc(_read_yaml(pose_yaml, "auto_pose_parameters")).items():
+        for set_name, pose_set in poses.items():
             path = out / "poses" / f"{set_name}.toml"
             write_text(path, f"# Imported by `shc import openshc` from {pose_yaml.name}.\n{dump_toml(pose_set)}")
             written.append(path)
