@@ -202,3 +202,19 @@ def test_friction_0_warns_on_the_command_line(capsys: pytest.CaptureFixture[str]
     err = capsys.readouterr().err
     assert done.value.code == 0, err
     assert "warning: friction 0: the feet slide freely, so the run's distance and speed are sliding, not walking" in err
+
+
+def test_a_sweep_point_whose_physics_diverged_is_a_failed_row(monkeypatch: pytest.MonkeyPatch,
+                                                              tmp_path: Path) -> None:
+    """No figure of a blown-up run is a result: its row fails (a study's trial then fails too) instead of ranking
+    its megawatts and runaway speed."""
+    from shc_cli import api
+
+    monkeypatch.setitem(SIMULATE, "restitution", dataclasses.replace(SIMULATE["restitution"], high=10.0))
+    sweep = tmp_path / "boom.toml"
+    sweep.write_text('name = "boom"\nduration = 2.0\n\n[grid]\nrobot = ["bullet"]\nrestitution = [0.0, 5.0]\n')
+    report = api.sweep(sweep, workers=1, out=tmp_path / "out")
+    rows = {float(row["restitution"]): row for row in report.rows}
+    assert rows[0.0]["status"] == "ok" and rows[0.0]["error"] == ""
+    assert rows[5.0]["status"] == "failed"
+    assert str(rows[5.0]["error"]).startswith("the physics diverged at cycle ")

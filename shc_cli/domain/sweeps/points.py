@@ -50,6 +50,9 @@ def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: 
         if stopped is not None:  # Ctrl-C during this run: it is kept (partial), the sweep stops
             raise interrupt(stopped)
         run = open_run(directory)
+        if run.summary.stop_reason == "diverged":  # the physics blew up: no figure of it means anything
+            row.update(status="failed", error=f"{run.summary.fault} (run kept in {directory})")
+            return row
         result = analyze_run(run, Window(skip_s=skip))
         summary = run.summary.model_dump(include=set(RUN_KEYS))  # RunSummary fields
         row.update({key: summary[key] for key in RUN_KEYS})
