@@ -88,7 +88,8 @@ def test_a_fall_is_an_event(tmp_path: Path) -> None:
     backend = SimpleNamespace(world=SimpleNamespace(physics_time=0.0))
     record = PhysicsRecord(robot, backend, airborne=False)
     out = SimpleNamespace(robot_state=RobotState.RUNNING)
-    reading = SimpleNamespace(rpy=np.array([FALL_TILT + 0.1, 0.0, 0.0]), body_height=0.2)
+    reading = SimpleNamespace(rpy=np.array([FALL_TILT + 0.1, 0.0, 0.0]), body_height=0.2, position=np.zeros(3),
+                              linear_velocity=np.zeros(3))
     with recording(tmp_path):
         assert record(7, None, out, reading) == "fell"  # type: ignore[arg-type]
     [entry] = _events(tmp_path)

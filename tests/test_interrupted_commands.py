@@ -143,3 +143,11 @@ def test_an_interrupted_render_says_no_video_was_written(stop_signal: signal.Sig
     assert lines == [f"error: interrupted by {stop_signal.name}: no video written ({video} was not made; the run "
                      f"{run} is unchanged)"]
     assert not video.exists() and not partial.exists()
+
+
+def test_main_puts_the_sigterm_handler_back(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+                                            ) -> None:
+    """In-process callers (the tests, a notebook) keep their own SIGTERM handling after main()."""
+    before = signal.getsignal(signal.SIGTERM)
+    _main(monkeypatch, capsys, Interrupted("kept"))
+    assert signal.getsignal(signal.SIGTERM) is before

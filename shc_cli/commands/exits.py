@@ -40,9 +40,19 @@ def _interrupted(stop: KeyboardInterrupt) -> None:
 
 
 def run_command(command: Callable[[], object], debug: bool) -> None:
-    """Run ``command`` (the typer app) and turn how it ended into the exit code and its one line."""
-    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+    """Run ``command`` (the typer app) and turn how it ended into the exit code and its one line (SIGTERM raises
+    :class:`~shc_cli.errors.Terminated` meanwhile; the previous handler is put back after)."""
+    previous = signal.getsignal(signal.SIGTERM)
+    if previous is signal.SIG_DFL:
         signal.signal(signal.SIGTERM, _terminated)
+    try:
+        _run(command, debug)
+    finally:
+        if previous is signal.SIG_DFL:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _run(command: Callable[[], object], debug: bool) -> None:
     try:
         command()
     except Interrupted as error:
