@@ -151,3 +151,19 @@ def test_main_puts_the_sigterm_handler_back(monkeypatch: pytest.MonkeyPatch, cap
     before = signal.getsignal(signal.SIGTERM)
     _main(monkeypatch, capsys, Interrupted("kept"))
     assert signal.getsignal(signal.SIGTERM) is before
+
+
+@pytest.mark.slow
+def test_a_sigterm_to_a_sweep_with_workers_stops_their_runs_too(tmp_path: Path) -> None:
+    """A SIGTERM reaches only the sweep's own process (a Ctrl-C reaches its workers too): the sweep passes it on, so
+    the runs under way end as partial runs (``stop_reason`` SIGTERM), kept for --resume, and it exits 143."""
+    import json
+
+    sweep, out = tmp_path / "stop.toml", tmp_path / "out"
+    sweep.write_text(SWEEP.replace("duration = 1.0", "duration = 20.0"))
+    done = _signal_when([*SHC, "sweep", str(sweep), "--workers", "2", "--out", str(out)],
+                        lambda: len(list(out.glob("runs/*.partial/log.csv"))) == 2, signal.SIGTERM)
+    assert done.returncode == 143, done.stderr
+    assert "error: interrupted by SIGTERM: " in done.stderr
+    stopped = [json.loads(path.read_text())["stop_reason"] for path in out.glob("runs/*/summary.json")]
+    assert stopped.count("SIGTERM") == 2, stopped

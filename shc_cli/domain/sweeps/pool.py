@@ -9,8 +9,13 @@ from typing import Any
 
 from shc_cli.domain.sweeps import points
 from shc_cli.domain.sweeps.results import METRICS, Row
-from shc_cli.errors import Issue, SpecError, install_hint
+from shc_cli.errors import Interrupted, Issue, SpecError, install_hint, signal_name
 from shc_cli.spec.sweep import Point
+
+
+def _terminated(error: BaseException | None) -> bool:
+    """``error`` is a SIGTERM's (:class:`~shc_cli.errors.Terminated`, or the Interrupted that says what was kept)."""
+    return isinstance(error, (KeyboardInterrupt, Interrupted)) and signal_name(error) == "SIGTERM"
 
 
 class RunPool:
@@ -52,6 +57,9 @@ class RunPool:
                  trace: TracebackType | None) -> None:
         if self._pool is not None:
             interrupted = kind is not None
+            if _terminated(error):  # a SIGTERM reached only this process (a Ctrl-C reaches the workers too)
+                for process in list((getattr(self._pool, "_processes", None) or {}).values()):
+                    process.terminate()  # each finishes its run as a partial one, as at a Ctrl-C, and stops
             self._pool.shutdown(wait=not interrupted, cancel_futures=interrupted)
         if self._client is not None:
             self._client.close()
