@@ -34,6 +34,7 @@ from shc_cli.domain.optimize.evaluate import ATTRIBUTE, evaluate, metric_keys, s
 from shc_cli.domain.optimize.outputs import write_outputs
 from shc_cli.domain.optimize.storage import STORAGE, open_study, prepare_output
 from shc_cli.domain.sweeps.checks import check_executor
+from shc_cli.domain.sweeps.points import clear_stop
 from shc_cli.domain.sweeps.pool import RunPool
 from shc_cli.domain.sweeps.results import Row
 from shc_cli.errors import Interrupted, Issue, SpecError, install_hint, signal_name
@@ -149,6 +150,7 @@ def run_optimize(file: Path, trials: int | None = None, workers: int | None = No
         raise SpecError([Issue(None, None, "--trials", f"{total} is not a positive number of trials", "e.g. 50")])
     out = out or Path("runs") / spec.name
     prepare_output(spec, out, resume, overwrite)
+    clear_stop(out)  # an earlier interrupted study's stop request
     count = workers or os.cpu_count() or 1
     study = open_study(spec, out, resume)
     from optuna.trial import TrialState

@@ -25,6 +25,21 @@ ERROR_LOG = "error.log"
 """File in a failed point's run directory with the traceback of a programming error."""
 
 
+STOP_REQUEST = ".stop-request"
+"""File in a sweep's or study's output directory that asks the runs not yet started to stop at once (written when the
+sweep is interrupted: the worker processes have runs queued; its text is the signal's name)."""
+
+
+def request_stop(out: Path, signal: str) -> None:
+    """Ask the runs under ``out`` not yet started to stop (:data:`STOP_REQUEST`)."""
+    (out / STOP_REQUEST).write_text(signal, encoding="utf-8")
+
+
+def clear_stop(out: Path) -> None:
+    """Forget an earlier interrupted sweep's stop request (a sweep or study starting, or resuming, in ``out``)."""
+    (out / STOP_REQUEST).unlink(missing_ok=True)
+
+
 def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: float = 0.0) -> Row:
     """Simulate one grid point into ``out/runs/<slug>`` (or re-read it if finished) and analyse it; never raises
     but for a Ctrl-C (``KeyboardInterrupt``).
@@ -35,6 +50,9 @@ def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: 
     """
     row: Row = {"index": point.index, "slug": point.slug, **point.values, "status": "ok", "error": ""}
     directory = Path(out) / "runs" / point.slug
+    stop = Path(out) / STOP_REQUEST
+    if stop.exists():  # the sweep was interrupted while this run waited in a worker's queue
+        raise interrupt(stop.read_text(encoding="utf-8").strip())
     try:
         if stopped_by_signal(directory) or _failed_before(directory):  # run it again
             shutil.rmtree(directory)

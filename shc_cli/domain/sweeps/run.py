@@ -24,6 +24,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from shc_cli.domain.sweeps import points
 from shc_cli.domain.sweeps.checks import check_executor, check_points
 from shc_cli.domain.sweeps.pool import RunPool
 from shc_cli.domain.sweeps.results import WARNINGS, PartialTable, Row, sweep_columns, write_table
@@ -123,6 +124,7 @@ def run_sweep(file: Path, workers: int | None = None, executor: str = "local", s
         clear_output(out, overwrite,
                      "add --resume to continue it, --overwrite to run it again, or choose another --out")
     (out / "runs").mkdir(parents=True, exist_ok=True)
+    points.clear_stop(out)
     if sweep.path.resolve() != (out / "sweep.toml").resolve():
         shutil.copyfile(sweep.path, out / "sweep.toml")
     count = workers or os.cpu_count() or 1
