@@ -14,7 +14,7 @@ from typing import Annotated
 import typer
 
 from shc_cli import __version__
-from shc_cli.errors import ShcError
+from shc_cli.domain.options import SIMULATE
 
 app = typer.Typer(
     name="shc",
@@ -139,20 +139,19 @@ def simulate(
     robot: RobotArgument = "bullet",
     gait: GaitOption = None,
     velocity: Annotated[str, typer.Option(help=VELOCITY_HELP)] = "1,0,0",
-    duration: Annotated[float | None, typer.Option(help="Seconds to run after start-up (default 20).")] = None,
+    duration: Annotated[float | None, typer.Option(help=SIMULATE["duration"].cli_help)] = None,
     commands: CommandsOption = None,
     path: PathOption = None,
     terrain: Annotated[
         str, typer.Option(help="flat, ramp:DEG, blocks[:LOW,HIGH[,SIZE]], stairs:RISE,RUN or heightfield:FILE[,SCALE]")
     ] = "flat",
     scenario: Annotated[str, typer.Option(help="WG walk ground, SG stance ground, WA walk air, SA stance air.")] = "WG",
-    physics_rate: Annotated[float, typer.Option(help="Physics steps per second (whole multiple of control).")] = 400.0,
-    friction: Annotated[float, typer.Option(help="Lateral friction of feet and terrain.")] = 0.9,
-    restitution: Annotated[float, typer.Option(help="Restitution of feet and terrain.")] = 0.0,
-    seed: Annotated[int, typer.Option(help="Seed of every random thing (terrain, sensor noise).")] = 0,
-    imu_noise: Annotated[float, typer.Option(help="IMU noise standard deviation (rad/s, m/s²).")] = 0.0,
-    imu_yaw_bias: Annotated[float, typer.Option(help="IMU gyro yaw-rate bias (deg/s): the rate reads it, the "
-                                                     "orientation's yaw drifts by it.")] = 0.0,
+    physics_rate: Annotated[float, typer.Option(help=SIMULATE["physics_rate"].cli_help)] = 400.0,
+    friction: Annotated[float, typer.Option(help=SIMULATE["friction"].cli_help)] = 0.9,
+    restitution: Annotated[float, typer.Option(help=SIMULATE["restitution"].cli_help)] = 0.0,
+    seed: Annotated[int, typer.Option(help=SIMULATE["seed"].cli_help)] = 0,
+    imu_noise: Annotated[float, typer.Option(help=SIMULATE["imu_noise"].cli_help)] = 0.0,
+    imu_yaw_bias: Annotated[float, typer.Option(help=SIMULATE["imu_yaw_bias"].cli_help)] = 0.0,
     start: Annotated[str, typer.Option(help="Spawn pose: unpacked or packed.")] = "unpacked",
     stand: Annotated[
         bool | None,
@@ -190,8 +189,7 @@ def simulate(
                                                             "driven by hand in real time (implies --realtime): stdin "
                                                             "(JSON lines), keyboard, gamepad[:DEVICE].")]
     = "timeline",
-    watchdog: Annotated[float, typer.Option(help="stdin: seconds without a line before the velocity goes to 0.")]
-    = 0.5,
+    watchdog: Annotated[float, typer.Option(help=SIMULATE["watchdog"].cli_help)] = 0.5,
 ) -> None:
     """Run the controller on the robot in physics (MuJoCo; PyBullet with --engine): terrains, servos, power, CoT."""
     from shc_cli.loop.gc_pause import paused
@@ -470,12 +468,14 @@ def export_urdf(
 def export_bag(
     run_dir: Annotated[Path, typer.Argument(help="Run directory from plan or simulate.", metavar="RUN")],
     format: Annotated[str, typer.Option("--format", help="mcap, sqlite3 (ROS 2) or ros1.")] = "mcap",
-    out: Annotated[Path | None, typer.Option(help="Bag path (default: RUN_bag, or RUN.bag for ros1).")] = None,
+    out: Annotated[Path | None, typer.Option(help="Bag folder (mcap, sqlite3) or NAME.bag file (ros1) (default: "
+                                                  "RUN_bag, RUN_bag_sqlite3 or RUN.bag).")] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing bag at --out.")] = False,
 ) -> None:
     """Write a run as a ROS bag: joint states, tf, URDF, IMU, odometry, foot forces, OpenSHC LegState."""
     from shc_cli.commands.export import export_bag as run
 
-    run(run_dir, format, out)
+    run(run_dir, format, out, overwrite)
 
 
 import_app = typer.Typer(help="Import files of other tools.", no_args_is_help=True)
@@ -488,11 +488,14 @@ def import_openshc(
     gait: Annotated[Path | None, typer.Argument(help="OpenSHC gait.yaml.")] = None,
     auto_pose: Annotated[Path | None, typer.Argument(help="OpenSHC auto_pose.yaml.")] = None,
     out: Annotated[Path, typer.Option(help="Folder for robots/, gaits/ and poses/.")] = Path("imported"),
+    urdf: Annotated[Path | None, typer.Option(help="The robot's URDF or xacro: the body's and links' masses "
+                                                   "(OpenSHC's parameters have none).", metavar="FILE")] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace existing robot, gait and pose files in --out.")] = False,
 ) -> None:
     """Turn OpenSHC YAML parameter files into shc robot, gait and auto-pose TOML files."""
     from shc_cli.commands.importing import import_openshc as run
 
-    run(robot, gait, auto_pose, out)
+    run(robot, gait, auto_pose, out, urdf, overwrite)
 
 
 @import_app.command("urdf")
@@ -647,30 +650,13 @@ def _app_for(args: list[str]) -> typer.Typer:
 
 
 def main() -> None:
-    """Console entry point: user errors become one line and exit code 2; no traceback unless --debug."""
+    """Console entry point: user errors become one line and exit code 2, an interrupted command one line and 130 or
+    143 (:mod:`shc_cli.commands.exits`); no traceback unless --debug."""
+    from shc_cli.commands.exits import run_command
     from shc_cli.loop.gc_pause import no_collection_at_exit
 
     no_collection_at_exit()  # the interpreter's last garbage collection was 0.17 s of a simulation's command
-    debug = "--debug" in sys.argv[1:]
-    try:
-        _app_for(sys.argv[1:])()
-    except ShcError as error:
-        if debug:
-            raise
-        for line in str(error).splitlines():
-            typer.echo(f"error: {line}", err=True)
-        sys.exit(2)
-    except KeyboardInterrupt:  # Ctrl-C outside a run's loop (a run's own signals finish its directory first)
-        if debug:
-            raise
-        typer.echo("error: interrupted", err=True)
-        sys.exit(130)
-    except Exception as error:  # a bug in shc, not bad input: still one line unless --debug
-        if debug:
-            raise
-        typer.echo(f"error: internal error: {type(error).__name__}: {error} (rerun with --debug and report it)",
-                   err=True)
-        sys.exit(1)
+    run_command(_app_for(sys.argv[1:]), debug="--debug" in sys.argv[1:])
 
 
 if __name__ == "__main__":

@@ -83,6 +83,45 @@ class BackendError(ShcError):
     """A backend (physics engine, servo bus) cannot do what was asked."""
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where a Ctrl-C raises :class:`KeyboardInterrupt` (so every ``except KeyboardInterrupt``
+    that keeps what is done handles both; :func:`signal_name` tells them apart)."""
+
+
+class Interrupted(ShcError):
+    """A command stopped by SIGINT or SIGTERM; the text says what was kept. The CLI prints ``interrupted by
+    SIGNAL: TEXT`` and exits 130 (SIGINT) or 143 (SIGTERM).
+
+    Attributes:
+        signal: ``"SIGINT"`` or ``"SIGTERM"``.
+    """
+
+    def __init__(self, kept: str, signal: str = "SIGINT") -> None:
+        super().__init__(kept)
+        self.signal = signal
+
+
+EXIT_SIGNAL = {"SIGINT": 130, "SIGTERM": 143}
+"""A command stopped by a signal exits 128 + the signal's number, as shells report it."""
+
+
+def interrupt(name: str) -> KeyboardInterrupt:
+    """The exception a signal named ``name`` raises: :class:`Terminated` for SIGTERM, else a KeyboardInterrupt."""
+    return Terminated() if name == "SIGTERM" else KeyboardInterrupt()
+
+
+def signal_name(error: BaseException) -> str:
+    """``"SIGTERM"`` when ``error`` (or what caused it) is a :class:`Terminated`, else ``"SIGINT"``."""
+    seen: BaseException | None = error
+    while seen is not None:
+        if isinstance(seen, Terminated):
+            return "SIGTERM"
+        if isinstance(seen, Interrupted):
+            return seen.signal
+        seen = seen.__cause__ or seen.__context__
+    return "SIGINT"
+
+
 def spoken(items: Iterable[str]) -> str:
     """``a, b or c``: a list of choices as a sentence says it."""
     words = list(items)

@@ -22,6 +22,20 @@ def refuse_existing(paths: list[Path], overwrite: bool, option: str = "--out") -
                           f"{option})")
 
 
+FILE_SUFFIXES = frozenset({".mcap", ".db3", ".bag", ".toml", ".urdf", ".xacro", ".yaml", ".yml", ".json", ".csv",
+                           ".png", ".mp4", ".gif", ".zip"})
+"""Suffixes that make a path a file's name, not a folder's (``runs/arc.mcap``, ``X/robot.toml``)."""
+
+
+def refuse_file_like(path: Path, holds: str, example: Path, option: str = "--out") -> None:
+    """The other half of the output rule: an ``option`` that names a folder (one holding ``holds``) given a file's
+    name (``runs/arc.mcap``, ``X/robot.toml``) is refused in one line before any work, instead of a folder of that
+    name being made. ``example``: the folder to suggest."""
+    if path.suffix.lower() in FILE_SUFFIXES:
+        raise OutputError(f"{path}: {option} is the folder that will hold {holds}, and this names a file (ends in "
+                          f"{path.suffix}); give a folder, e.g. {option} {example}")
+
+
 def ensure_dir(path: Path) -> Path:
     """Create ``path`` (and parents); a one-line error if that is impossible."""
     try:

@@ -8,7 +8,9 @@ those imports stay inside the checks that need them (``shc validate`` of a file 
 
 from __future__ import annotations
 
+import itertools
 import math
+import re
 
 import numpy as np
 
@@ -35,6 +37,67 @@ def check_robot(loaded: LoadedRobot) -> list[Issue]:
     if not issues:
         issues = _hardware(loaded, robot)
     return one_per_mistake(issues, loaded.mirrors)
+
+
+OPENSHC_LEG_NAME = re.compile(r"^([A-F])([LR])$")
+"""OpenSHC's leg names: a letter from the front (A) to the rear, then the side (R right, L left): AR front right,
+BR middle right, CR rear right, CL, BL, AL."""
+
+
+def leg_position_warnings(robot: Robot) -> list[str]:
+    """Warnings (not errors: other naming schemes exist) for legs named in OpenSHC's scheme that stand where their
+    name says they do not: an R leg on the left (stance y > 0) or an L leg on the right, or a side's legs not
+    running from A at the front to the rear (a leg behind the next letter's). Legs named otherwise are not
+    checked."""
+    sides: dict[str, list[tuple[str, str, float]]] = {"R": [], "L": []}
+    warnings: list[str] = []
+    for name, leg in robot.legs.items():
+        match = OPENSHC_LEG_NAME.match(name)
+        if match is None:
+            continue
+        letter, side = match.groups()
+        x, y = leg.stance.x, leg.stance.y
+        sides[side].append((letter, name, x))
+        wrong = y > 0 if side == "R" else y < 0
+        if wrong:
+            said, stands = ("right", "left") if side == "R" else ("left", "right")
+            warnings.append(f"leg {name}: OpenSHC's name says {said} side, but it stands on the {stands} (stance "
+                            f"x {x:+.3f}, y {y:+.3f} m); OpenSHC names the legs AR, BR, CR down the right side, front "
+                            "to rear, and AL, BL, CL down the left")
+    for legs in sides.values():
+        legs.sort()
+        for (_, front, front_x), (_, rear, rear_x) in itertools.pairwise(legs):
+            if front_x <= rear_x:
+                warnings.append(f"leg {front}: OpenSHC's name says it is in front of {rear}, but it stands behind "
+                                f"or beside it (stance x {front_x:+.3f} m against {rear_x:+.3f} m); OpenSHC's "
+                                "letters run A (front) to the rear")
+    return warnings
+
+
+def servo_range_problem(robot: Robot, key: str, direction: int | None = None, zero_ticks: int | None = None
+                        ) -> str | None:
+    """Why joint ``key``'s limits do not fit its servo's range of ticks (0 … resolution − 1 of its model: an AX-12A's
+    1024 ticks over 300°), with ``direction`` and ``zero_ticks`` (None: the file's), or None when they fit — one
+    tick of rounding allowed, as the servos' own angle-limit check on the bus. A multi-turn ``generic`` servo has no
+    range. ``shc validate`` and ``shc hw jog`` (before it writes a zero) use this one rule."""
+    from shc_cli.hardware.models import MODELS
+
+    hardware = robot.hardware
+    servo = hardware.servos[key]
+    model = MODELS.get(servo.model or hardware.model)
+    if model is None or model.name == "generic":
+        return None
+    leg, _, joint = key.partition("_")
+    spec = robot.legs[leg].joints[joint]
+    zero = (servo.zero_ticks if zero_ticks is None else zero_ticks)
+    zero = model.centre if zero is None else zero
+    sign = servo.direction if direction is None else direction
+    ends = sorted(round(zero + sign * (angle + spec.offset) * model.ticks_per_radian) for angle in (spec.min, spec.max))
+    last = model.resolution - 1
+    if ends[0] >= -1 and ends[1] <= last + 1:
+        return None
+    return (f"the joint limits {spec.min:.3f}..{spec.max:.3f} rad are ticks {ends[0]}..{ends[1]} with zero_ticks "
+            f"{zero} and direction {sign:+d}, outside the {model.name}'s 0..{last}")
 
 
 def _hardware(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
@@ -71,6 +134,12 @@ def _hardware(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
                 f"the {model.name}'s {model.range_degrees:g}° range")
             issues.append(loaded.issue(("hardware", "servos", key, "zero_ticks"),
                                        f"zero_ticks {servo.zero_ticks} is outside {span}", f"use 0 … {ticks - 1}"))
+        elif key in joints and model is not None:
+            problem = servo_range_problem(robot, key)
+            if problem is not None:
+                issues.append(loaded.issue(("hardware", "servos", key, "zero_ticks"), problem,
+                                           "narrow the joint limits, or zero the servo nearer the middle of its "
+                                           "range (shc hw jog, answer h with the joint at angle 0)"))
         if model is not None:
             family = families.setdefault(servo.bus, (model.family, key))
             if family[0] != model.family:

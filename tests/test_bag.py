@@ -265,3 +265,55 @@ def test_a_robot_with_a_servo_map_is_exported_with_its_own_joint_names(tmp_path:
     assert servo_map["j_c1_rf"] == {"key": "AR_c1", "bus": 0, "id": 11, "model": "XM430-W350", "direction": 1,
                                     "zero_ticks": None}
     assert servo_map["j_tibia_lf"]["id"] == 63  # the left front leg is AL, the sixth: ids 61-63
+
+
+def test_one_output_rule_for_export_bag(walked: Path, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """--overwrite replaces a bag (only a bag); each format has its own default name, so sqlite3 after the default
+    mcap does not collide; a file-like --out of a ROS 2 bag (a folder) is refused in one line instead of making a
+    folder runs/arc.mcap/ holding arc.mcap.mcap; a ROS 1 bag is a .bag file."""
+    import shutil
+
+    run_dir = tmp_path / "walk"
+    shutil.copytree(walked, run_dir)
+    assert run(["export", "bag", str(run_dir)], capsys, monkeypatch)[0] == 0
+    assert run(["export", "bag", str(run_dir), "--format", "sqlite3"], capsys, monkeypatch)[0] == 0
+    assert (tmp_path / "walk_bag" / "metadata.yaml").exists()
+    assert (tmp_path / "walk_bag_sqlite3" / "metadata.yaml").exists()
+    code, _, err = run(["export", "bag", str(run_dir)], capsys, monkeypatch)
+    assert code == 2 and err == (f"error: {tmp_path / 'walk_bag'}: already exists (add --overwrite to replace it, or "
+                                 "choose another --out)\n")
+    stamp = (tmp_path / "walk_bag" / "metadata.yaml").stat().st_mtime_ns
+    code, stdout, err = run(["export", "bag", str(run_dir), "--overwrite"], capsys, monkeypatch)
+    assert code == 0 and stdout == f"wrote {tmp_path / 'walk_bag'}\n", err
+    assert (tmp_path / "walk_bag" / "metadata.yaml").stat().st_mtime_ns != stamp
+    assert sorted(p.name for p in (tmp_path / "walk_bag").iterdir()) == ["metadata.yaml", "walk_bag.mcap"]
+    assert not list(tmp_path.glob(".*partial*"))
+    (tmp_path / "notes").mkdir()
+    code, _, err = run(["export", "bag", str(run_dir), "--out", str(tmp_path / "notes"), "--overwrite"], capsys,
+                       monkeypatch)
+    assert code == 2 and "is not a bag, so --overwrite does not replace it" in err
+    for fmt, name in (("mcap", "arc.mcap"), ("sqlite3", "arc.db3")):
+        code, _, err = run(["export", "bag", str(run_dir), "--format", fmt, "--out", str(tmp_path / name)], capsys,
+                           monkeypatch)
+        assert code == 2 and err.count("\n") == 1, err
+        assert err.startswith(f"error: {tmp_path / name}: --out is the folder that will hold a ROS 2 bag")
+        assert f"give a folder, e.g. --out {tmp_path / 'arc'}" in err
+        assert not (tmp_path / name).exists()
+    code, _, err = run(["export", "bag", str(run_dir), "--format", "ros1", "--out", str(tmp_path / "arc.mcap")],
+                       capsys, monkeypatch)
+    assert code == 2 and "--format ros1 writes one .bag file; give --out NAME.bag" in err
+
+
+def test_import_refuses_a_file_like_out(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """`shc import urdf FILE --out X/robot.toml` made a folder named robot.toml (issue 37): one line instead."""
+    from .conftest import GOLDEN, ROOT
+
+    urdf = ROOT / "tests" / "data" / "robots" / "hexapod_olli_io.urdf"
+    out = tmp_path / "X" / "robot.toml"
+    code, _, err = run(["import", "urdf", str(urdf), "--out", str(out)], capsys, monkeypatch)
+    assert code == 2 and err.startswith(f"error: {out}: --out is the folder that will hold robots/NAME.toml"), err
+    assert f"give a folder, e.g. --out {tmp_path / 'X'}" in err and not (tmp_path / "X").exists()
+    code, _, err = run(["import", "openshc", str(GOLDEN / "openshc" / "bullet_insectoid.yaml"), "--out", str(out)],
+                       capsys, monkeypatch)
+    assert code == 2 and "--out is the folder that will hold robots/, gaits/ and poses/" in err
+    assert not (tmp_path / "X").exists()

@@ -259,3 +259,31 @@ def test_the_emulator_process_reads_and_writes_tables_logs_packets_and_injects_f
             bus.fault(1, "melted", True)
         with pytest.raises(RuntimeError, match="outside the table"):
             bus.table(1, 250, 10)
+
+
+def test_jog_refuses_a_zero_that_puts_the_limits_outside_the_servo_and_validate_agrees(tmp_path: Path,
+                                                                                      shc: Shc) -> None:
+    """AR_femur's servo stands at tick 800 when its zero is taken "here": its limits ±1.5 rad (±293 AX ticks) would be
+    ticks 507..1093, beyond the AX-12A's 0..1023 — a file every later hw check, jog and run-hw refuses. Jog keeps the
+    old zero and says so; validate refuses that zero by the same rule."""
+    robot = _robot(tmp_path)
+    before = robot.read_text()
+    with EmulatorProcess({k + 1: "AX-12A" for k in range(18)},
+                         positions={**{k + 1: TIBIA_TICKS for k in range(2, 18, 3)}, 2: 800}) as bus:
+        result = shc("hw", "jog", str(robot), "--port", bus.port, "--joint", "AR_femur", "--answers", "y,h")
+        assert result.returncode == 0, result.stderr
+        again = shc("hw", "check", str(robot), "--port", bus.port)
+    assert robot.read_text() == before  # nothing to write: the direction was right, the zero refused
+    (warning,) = [line for line in result.stderr.splitlines() if line.startswith("warning: AR_femur")]
+    zero = int(warning.split()[3])  # where the servo came back to: 800 within the emulator's lag
+    assert warning.startswith(f"warning: AR_femur: zero_ticks {zero} not written") and 790 <= zero <= 810
+    assert "the joint limits -1.500..1.500 rad are ticks 5" in warning and "outside the AX-12A's 0..1023" in warning
+    assert "kept zero_ticks 512" in warning
+    assert "outside servo" not in again.stderr, again.stderr
+    bad = tmp_path / "bad.toml"
+    bad.write_text(before.replace("AR_femur = { id = 2 }", "AR_femur = { id = 2, zero_ticks = 800 }"))
+    checked = shc("validate", str(bad))
+    assert checked.returncode == 2
+    assert (f"{bad}:" in checked.stderr and "hardware.servos.AR_femur.zero_ticks: the joint limits -1.500..1.500 rad "
+            "are ticks 507..1093 with zero_ticks 800 and direction +1, outside the AX-12A's 0..1023"
+            in checked.stderr), checked.stderr

@@ -99,3 +99,72 @@ def test_bad_yaml_is_one_line(text: str, message: str, tmp_path: Path, capsys, m
     path.write_text(text)
     code, _, err = run(["import", "openshc", str(path), "--out", str(tmp_path / "out")], capsys, monkeypatch)
     assert code == 2 and len(err.strip().splitlines()) == 1 and message in err, err
+
+
+def test_without_a_urdf_the_placeholder_masses_are_warned(tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    """OpenSHC's parameters carry no masses: the robot weighs shc's 1 kg placeholder, which the import says."""
+    import logging
+
+    from shc_cli.interop.openshc import import_openshc
+
+    with caplog.at_level(logging.WARNING):
+        robot_file = import_openshc(GOLDEN / "openshc" / "bullet_insectoid.yaml", None, None, tmp_path)[0]
+    (warning,) = [r.getMessage() for r in caplog.records if r.levelno == logging.WARNING]
+    assert warning.startswith(f"warning: {robot_file}: OpenSHC's parameters carry no masses, so the robot weighs "
+                              "shc's placeholder 1.00 kg") and "--urdf FILE" in warning
+    assert load_robot(robot_file).robot.total_mass() == 1.0
+
+
+def test_masses_come_from_the_xacro_beside_the_parameters(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    """--urdf bullet.xacro: the masses of robots/bullet_openshc.toml, which were copied from it by hand (body 6 kg +
+    6 base motors of 0.2 kg; coxa 0.2, coxat 0.2, femur 0.4, tibia 0.152, tarsus 0.076035 kg); no warning."""
+    import sys
+
+    from shc_cli.cli import main
+
+    monkeypatch.setattr(sys, "argv", ["shc", "import", "openshc", str(GOLDEN / "openshc" / "bullet_insectoid.yaml"),
+                                      "--urdf", str(GOLDEN / "bullet_syropod" / "robot" / "bullet.xacro"),
+                                      "--out", str(tmp_path)])
+    with pytest.raises(SystemExit) as done:
+        main()
+    err = capsys.readouterr().err
+    assert done.value.code == 0, err
+    assert "warning" not in err
+    robot = load_robot(tmp_path / "robots" / "bullet_insectoid.toml").robot
+    ours = load_robot("bullet_openshc").robot
+    assert robot.body.mass == pytest.approx(7.2) == ours.body.mass
+    for leg_id, leg in ours.legs.items():
+        assert {name: j.mass for name, j in robot.legs[leg_id].joints.items()} == {
+            name: j.mass for name, j in leg.joints.items()}
+    assert robot.total_mass() == pytest.approx(ours.total_mass())
+
+
+def test_a_urdf_of_another_robot_is_one_line(tmp_path: Path) -> None:
+    from shc_cli.errors import SpecError
+    from shc_cli.interop.openshc import import_openshc
+
+    other = Path(__file__).parent / "data" / "robots" / "solo12_odri.urdf"
+    with pytest.raises(SpecError) as raised:
+        import_openshc(GOLDEN / "openshc" / "bullet_insectoid.yaml", None, None, tmp_path, urdf=other)
+    assert str(raised.value) == (f"{other}: no joint AR_coxa_joint (or AR_coxa) for OpenSHC's AR coxa (give the URDF "
+                                 "or xacro of the same robot)")
+    assert not (tmp_path / "robots").exists()
+
+
+def test_an_import_over_existing_files_needs_overwrite(tmp_path: Path) -> None:
+    """The one output rule: a second import into the same folder is refused before anything is written (it replaced
+    the robot file silently), and replaces it with --overwrite."""
+    from shc_cli.errors import OutputError
+    from shc_cli.interop.openshc import import_openshc
+
+    source = GOLDEN / "openshc" / "bullet_insectoid.yaml", GOLDEN / "openshc" / "gait.yaml", None
+    robot_file = import_openshc(*source, tmp_path)[0]
+    robot_file.write_text(robot_file.read_text() + "# edited\n")
+    with pytest.raises(OutputError) as raised:
+        import_openshc(*source, tmp_path)
+    assert str(raised.value) == (f"{robot_file}: already exists (add --overwrite to replace it and 5 more of the "
+                                 "outputs, or choose another --out)")
+    assert robot_file.read_text().endswith("# edited\n")
+    assert import_openshc(*source, tmp_path, overwrite=True)[0] == robot_file
+    assert not robot_file.read_text().endswith("# edited\n")

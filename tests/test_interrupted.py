@@ -52,10 +52,10 @@ def _check_readers(run: Path, tmp_path: Path) -> None:
     report = json.loads(analysis.stdout)
     assert report["complete"] is False and report["stop_reason"] in ("SIGINT", "SIGTERM")
     assert "a partial run (stopped by SIG" in analysis.stderr
-    bag = subprocess.run([*SHC, "export", "bag", str(run), "--out", str(tmp_path / "run.mcap")], capture_output=True,
+    bag = subprocess.run([*SHC, "export", "bag", str(run), "--out", str(tmp_path / "run_bag")], capture_output=True,
                          text=True, timeout=120)
     assert bag.returncode == 0, bag.stderr
-    assert "a partial run" in bag.stderr and (tmp_path / "run.mcap").exists()
+    assert "a partial run" in bag.stderr and (tmp_path / "run_bag" / "metadata.yaml").exists()
 
 
 @pytest.mark.slow  # signals sent to shc subprocesses mid-run

@@ -129,8 +129,11 @@ def test_shc_ros_with_mujoco_is_a_gazebo_free_openshc_simulation(ros_env: dict[s
         assert len(samples) == 100 and 9.3 < sum(samples) / len(samples) < 10.3, samples
     finally:
         node.send_signal(signal.SIGINT)
-        _, err = node.communicate(timeout=60)
+        out, err = node.communicate(timeout=60)
     assert node.returncode == 0, err
     summary = json.loads((tmp_path / "sim" / "summary.json").read_text())
     assert summary["engine"] == "mujoco" and not summary["fell"]
     assert summary["distance_m"] > 0.1
+    # the physics session's summary has its cycles too (the line said "None cycles")
+    assert summary["cycles"] == round(summary["sim_time_s"] / 0.01) > 100
+    assert f"bullet / tripod: {summary['cycles']} cycles at " in out, out

@@ -72,10 +72,10 @@ def test_walks_on_the_emulated_bus_and_stops_with_torque_off(tmp_path: Path) -> 
     assert analysis.returncode == 0, analysis.stderr
     report = json.loads(analysis.stdout)
     assert report["scenario"] == "hardware" and report["window_s"] > 2.0  # the RUNNING cycles
-    bag = subprocess.run([*SHC, "export", "bag", str(tmp_path / "run"), "--out", str(tmp_path / "run.mcap")],
+    bag = subprocess.run([*SHC, "export", "bag", str(tmp_path / "run"), "--out", str(tmp_path / "run_bag")],
                          capture_output=True, text=True, timeout=120)
     assert bag.returncode == 0, bag.stderr
-    assert (tmp_path / "run.mcap").exists()
+    assert (tmp_path / "run_bag" / "metadata.yaml").exists()
 
 
 def test_dry_run_never_enables_torque_or_writes_goals(tmp_path: Path) -> None:

@@ -10,11 +10,15 @@ import typer
 from shc_cli.errors import Issue, SpecError
 
 
-def import_openshc(robot: Path, gait: Path | None, auto_pose: Path | None, out: Path) -> None:
-    """OpenSHC YAML parameter files → shc robot, gait and auto-pose TOML files under ``out``."""
+def import_openshc(robot: Path, gait: Path | None, auto_pose: Path | None, out: Path, urdf: Path | None = None,
+                   overwrite: bool = False) -> None:
+    """OpenSHC YAML parameter files → shc robot, gait and auto-pose TOML files under ``out`` (masses from the
+    ``urdf`` URDF/xacro)."""
     from shc_cli.interop.openshc import import_openshc as convert
+    from shc_cli.outputs import refuse_file_like
 
-    for path in convert(robot, gait, auto_pose, out):
+    refuse_file_like(out, "robots/, gaits/ and poses/", out.with_suffix(""))
+    for path in convert(robot, gait, auto_pose, out, urdf, overwrite):
         typer.echo(f"wrote {path}")
 
 
@@ -24,7 +28,10 @@ def import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tip: 
     """A URDF or xacro → an shc robot file with its servo map; ``arguments`` are xacro's ``NAME=VALUE``, ``forward``
     the base_link axis the robot walks along (``+x``, ``+y``, ``-x``, ``-y``; None: the import decides)."""
     from shc_cli.interop.urdf_import import import_urdf as convert
+    from shc_cli.outputs import refuse_file_like
 
+    if out is not None:
+        refuse_file_like(out, "robots/NAME.toml (NAME: --name or the URDF's robot name)", out.parent)
     mappings = {}
     for item in arguments or []:
         key, sep, value = item.partition("=")

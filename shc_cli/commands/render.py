@@ -7,6 +7,8 @@ from pathlib import Path
 
 import typer
 
+from shc_cli.errors import Interrupted, signal_name
+
 
 def run_render(run_path: Path, out: Path, fps: float, size: str, camera: str, speed: float,
                overwrite: bool = False) -> Path:
@@ -21,7 +23,11 @@ def run_render(run_path: Path, out: Path, fps: float, size: str, camera: str, sp
     check_options(out, options)
     refuse_existing([out], overwrite)
     run = read_run(run_path)
-    result = render_run(run, out, options, progress=sys.stderr.isatty())
+    try:
+        result = render_run(run, out, options, progress=sys.stderr.isatty())
+    except KeyboardInterrupt as error:  # the half-made video is removed: nothing is kept
+        raise Interrupted(f"no video written ({out} was not made; the run {run_path} is unchanged)",
+                          signal_name(error)) from None
     typer.echo(f"wrote {result.path}: {result.frames / fps:.1f} s of video ({result.frames} frames at {fps:g} fps, "
                f"{width}x{height}), rendered in {result.draw_s + result.encode_s:.1f} s")
     return result.path

@@ -18,10 +18,10 @@ __all__ = ["run_simulate"]
 
 def run_simulate(config: SimulationConfig, after: Callable[[Path], None] | None = None) -> Path:
     """Simulate, print one line, then ``after(run directory)``; returns the run directory. Exits 130/143 when a
-    signal stopped the run, 4 when it fell and ``fail_on_fall`` is set."""
+    signal stopped the run, 4 when it fell and ``fail_on_fall`` is set, 6 when the physics diverged."""
     from shc_cli.analysis.run_line import simulation_line
     from shc_cli.api import simulate
-    from shc_cli.commands.outcome import EXIT_FELL, exit_if_interrupted, interrupted_note
+    from shc_cli.commands.outcome import EXIT_FELL, exit_if_diverged, exit_if_interrupted, interrupted_note
 
     run = simulate(config=config, progress=_Bar())
     path, summary = run.path, run.summary
@@ -32,6 +32,7 @@ def run_simulate(config: SimulationConfig, after: Callable[[Path], None] | None 
     if after is not None:
         after(path)
     exit_if_interrupted(summary)
+    exit_if_diverged(summary)
     if summary.fell and config.fail_on_fall:
         raise typer.Exit(EXIT_FELL)
     return path

@@ -3,6 +3,8 @@ timeline; :mod:`shc_cli.spec.kinds`, :mod:`shc_cli.domain.file_checks`) and summ
 
 from __future__ import annotations
 
+import logging
+
 import typer
 
 from shc_cli.domain.file_checks import validate_file
@@ -12,10 +14,12 @@ from shc_cli.spec.loading import LoadedGait, LoadedRobot, bundled, load_gait, lo
 from shc_cli.spec.robot import Robot
 from shc_cli.spec.toml_out import dump_toml
 
+log = logging.getLogger(__name__)
+
 
 def run_validate(files: list[str], *, show: bool) -> None:
     """Validate every file; print a summary per robot; raise one SpecError listing every problem."""
-    from shc_cli.validation import check_robot
+    from shc_cli.validation import check_robot, leg_position_warnings
 
     issues: list[Issue] = []
     robots: list[LoadedRobot] = []
@@ -46,6 +50,8 @@ def run_validate(files: list[str], *, show: bool) -> None:
     if issues:
         raise SpecError(issues)
     for loaded in robots:
+        for warning in leg_position_warnings(loaded.robot):
+            log.warning("warning: %s: %s", loaded.path, warning)
         if show:  # the TOML alone on stdout, so `--show > expanded.toml` gives a valid robot file
             typer.echo(f"# {loaded.path}, expanded by shc validate --show")
             typer.echo(dump_toml(loaded.robot.model_dump(mode="json")))

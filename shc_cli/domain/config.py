@@ -11,9 +11,10 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal, TypedDict
 
-from pydantic import BaseModel, ConfigDict, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, ValidationError, field_validator, model_validator
 
 from shc_cli.backends.engine_registry import DEFAULT_ENGINE, ENGINES, EngineName
+from shc_cli.domain.options import SIMULATE, check_bounds, degenerate
 from shc_cli.errors import Issue, SpecError, check_choice
 
 if TYPE_CHECKING:
@@ -32,9 +33,9 @@ Velocity = str | tuple[float, float, float]
 """A velocity input ``"VX,VY,WZ"`` or ``(vx, vy, wz)`` in the robot's input mode (throttle −1..1 or m/s, rad/s)."""
 
 
-MAX_IMU_YAW_BIAS = 90.0
+MAX_IMU_YAW_BIAS = SIMULATE["imu_yaw_bias"].high
 """Largest simulated gyro yaw-rate bias ``--imu-yaw-bias`` accepts [deg/s] (a MEMS gyro's uncalibrated bias is a few
-deg/s; beyond this it would be no gyro)."""
+deg/s; beyond this it would be no gyro): the option table's bound (:mod:`shc_cli.domain.options`)."""
 
 
 def _bad(option: str, problem: str, fix: str) -> SpecError:
@@ -42,7 +43,8 @@ def _bad(option: str, problem: str, fix: str) -> SpecError:
 
 
 class SimulationConfig(BaseModel):
-    """Every option of ``shc simulate`` (the same names, the same defaults), checked on construction.
+    """Every option of ``shc simulate`` (the same names, the same defaults), checked on construction: every number
+    against the bounds of the one option table, :data:`shc_cli.domain.options.SIMULATE` (finite, in range).
 
     Attributes:
         robot: robot file or bundled name.
@@ -142,13 +144,19 @@ class SimulationConfig(BaseModel):
         """This config with some options changed (validated again)."""
         return type(self)(**{**self.model_dump(exclude_unset=True), **changes})
 
-    @field_validator("imu_yaw_bias")
-    @classmethod
-    def _imu_yaw_bias(cls, value: float) -> float:
-        if not abs(value) <= MAX_IMU_YAW_BIAS:
-            raise _bad("--imu-yaw-bias", f"{value!r} is not a yaw-rate bias within ±{MAX_IMU_YAW_BIAS:g} deg/s",
-                       "give degrees per second, e.g. --imu-yaw-bias 0.5")
-        return value
+    @model_validator(mode="after")
+    def _bounds(self) -> SimulationConfig:
+        for name in type(self).model_fields:
+            problem = check_bounds(name, getattr(self, name))
+            if problem is not None:
+                option = SIMULATE[name]
+                raise _bad(option.flag, problem, f"give e.g. {option.flag} {option.example or option.default}")
+        return self
+
+    def warnings(self) -> list[str]:
+        """Warnings for legal but degenerate values (friction 0: the feet slide), from the option table."""
+        return [text for name in type(self).model_fields
+                if (text := degenerate(name, getattr(self, name))) is not None]
 
     @field_validator("input_mode")
     @classmethod
@@ -270,9 +278,11 @@ class SimulationConfig(BaseModel):
         """What the physics engine needs for ``robot`` (the robot after :meth:`apply_switches`)."""
         from shc_cli.backends.engine import EngineOptions
 
-        return EngineOptions(self.terrain_spec, self.substeps(robot), self.airborne, self.friction, self.restitution,
-                             self.seed, self.imu_noise, self.start, self.gui, self.stand_start(robot), self.engine,
-                             math.radians(self.imu_yaw_bias))
+        return EngineOptions(terrain=self.terrain_spec, substeps=self.substeps(robot), fixed_base=self.airborne,
+                             friction=self.friction, restitution=self.restitution, seed=self.seed,
+                             imu_noise=self.imu_noise, start_pose=self.start, gui=self.gui,
+                             stand=self.stand_start(robot), engine=self.engine,
+                             imu_yaw_bias=math.radians(self.imu_yaw_bias))
 
 
 def parse_posture(text: str) -> dict[str, Any]:

@@ -256,8 +256,8 @@ def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, 
 
             def summarise(_: object) -> RunSummary:
                 return record.summary(run.partial, sim.scenario, controller.gait.name, controller).updated(
-                    engine=world.name, engine_version=world.version, engine_warnings=world.warnings,
-                    backend=config.backend, ros_master=node.master_uri, node=node.name,
+                    cycles=record.cycles, engine=world.name, engine_version=world.version,
+                    engine_warnings=world.warnings, backend=config.backend, ros_master=node.master_uri, node=node.name,
                     **session.clock.statistics(), **path_fields())
 
             try:

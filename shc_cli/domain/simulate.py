@@ -46,6 +46,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     from shc_cli.backends.simulated import SimulatedBackend, open_world
     from shc_cli.control.controller import Controller
     from shc_cli.errors import Issue, SpecError
+    from shc_cli.events import event
     from shc_cli.loop.input_choice import commands_file, is_live, open_input
     from shc_cli.loop.path_input import keep_path
     from shc_cli.loop.physics_summary import PhysicsRecord
@@ -56,6 +57,8 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
 
     o = config or SimulationConfig()
     check_display(o.gui)
+    for warning in o.warnings():  # legal but degenerate values (friction 0)
+        event(log, logging.WARNING, "degenerate_option", "warning: %s", warning)
     if o.path is not None and o.input_mode != "timeline":
         raise SpecError([Issue(None, None, "--path", f"--path and --input {o.input_mode} both give the run's input",
                                "drop --input (a path is followed by itself)")])

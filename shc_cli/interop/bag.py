@@ -223,11 +223,40 @@ def _differences(values: np.ndarray, dt: float) -> np.ndarray:
     return out
 
 
-def export_bag(run: RunLog, out: Path, fmt: str) -> Path:
-    """Write ``run`` as a bag at ``out`` (a directory for ROS 2 formats, a ``.bag`` file for ROS 1), atomically."""
+def default_bag_path(run: Path, fmt: str) -> Path:
+    """Where ``shc export bag RUN`` writes a bag of ``fmt`` without ``--out``: ``RUN_bag`` (mcap),
+    ``RUN_bag_sqlite3`` (sqlite3), ``RUN.bag`` (ros1) — one name per format, so exporting a second format does not
+    collide with the first."""
+    suffix = {"ros1": ".bag", "sqlite3": "_bag_sqlite3"}.get(fmt, "_bag")
+    return run.with_name(run.name + suffix)
+
+
+def check_bag_out(out: Path, fmt: str, overwrite: bool) -> None:
+    """The output rule for a bag at ``out`` (one line, before any work): a ROS 2 bag (mcap, sqlite3) is a folder,
+    so ``out`` must not name a file (``runs/arc.mcap``); a ROS 1 bag is a ``.bag`` file; an existing output only
+    with ``overwrite``, and then only a bag (shc replaces nothing else)."""
+    from shc_cli.outputs import refuse_existing, refuse_file_like
+
     check_choice("--format", fmt, FORMATS, "a bag format")
-    if out.exists():
-        raise OutputError(f"{out}: already exists (choose another --out or remove it)")
+    if fmt == "ros1":
+        if out.suffix != ".bag":
+            raise OutputError(f"{out}: --format ros1 writes one .bag file; give --out NAME.bag")
+    else:
+        refuse_file_like(out, f"a ROS 2 bag (metadata.yaml and its .{'mcap' if fmt == 'mcap' else 'db3'} data file)",
+                         out.with_suffix(""))
+    refuse_existing([out], overwrite)
+    if out.exists() and not _is_bag(out):
+        raise OutputError(f"{out}: exists and is not a bag, so --overwrite does not replace it (choose another --out)")
+
+
+def _is_bag(path: Path) -> bool:
+    return (path.is_dir() and (path / "metadata.yaml").is_file()) or (path.is_file() and path.suffix == ".bag")
+
+
+def export_bag(run: RunLog, out: Path, fmt: str, overwrite: bool = False) -> Path:
+    """Write ``run`` as a bag at ``out`` (a directory for ROS 2 formats, a ``.bag`` file for ROS 1), atomically; an
+    existing bag there is replaced (when the new one is complete) only with ``overwrite`` (:func:`check_bag_out`)."""
+    check_bag_out(out, fmt, overwrite)
     # Written under a hidden .partial folder and moved into place when complete; inside it the bag keeps its final
     # name, because rosbags names a ROS 2 bag's data file after its directory.
     staging = out.with_name(f".{out.name}.partial")
@@ -265,7 +294,9 @@ def export_bag(run: RunLog, out: Path, fmt: str) -> Path:
             for row, stamp in enumerate(stamps.tolist()):  # time order, as a recorder writes
                 for connection, data in streams:
                     writer.write(connection, stamp, data[row].tobytes())
-    temporary.rename(out)
+    if out.is_dir():
+        shutil.rmtree(out)  # --overwrite of a bag folder (check_bag_out): the new bag is complete
+    temporary.replace(out)
     staging.rmdir()
     return out
 

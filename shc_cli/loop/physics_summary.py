@@ -10,6 +10,7 @@ and cost of transport are :func:`shc_cli.analysis.metrics.walk_figures` over the
 from __future__ import annotations
 
 import logging
+import math
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -34,6 +35,12 @@ FALL_TILT = 0.8
 """Body tilt above which the robot has fallen [rad] (≈ 46°)."""
 FALL_HEIGHT_SHARE = 0.3
 """The robot has fallen when its body is lower than this share of the body clearance above the terrain."""
+MAX_BODY_SPEED = 20.0
+"""Body speed above which the physics has diverged [m/s] (a walking robot moves well under 2 m/s, one falling
+from its height under 5 m/s: beyond this the simulation is blowing up, e.g. energy gained at each contact)."""
+_MAX_SPEED_SQUARED = MAX_BODY_SPEED * MAX_BODY_SPEED
+DIVERGED = "diverged"
+"""The stop reason of a run whose physics blew up (:meth:`PhysicsRecord.__call__`)."""
 
 
 class PhysicsRecord:
@@ -50,6 +57,8 @@ class PhysicsRecord:
         self.cycles = 0
         self.max_tilt = 0.0
         self.fell = False
+        self.diverged: str | None = None
+        """What showed the physics had blown up (the run stopped, ``stop_reason`` :data:`DIVERGED`), or None."""
         self.low_height = FALL_HEIGHT_SHARE * robot.walker.body_clearance
         self.started = time.perf_counter()
         self.log: RunLog | None = None
@@ -58,6 +67,11 @@ class PhysicsRecord:
 
     def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: Reading) -> str | None:
         self.cycles += 1
+        vx, vy, vz = reading.linear_velocity.tolist()
+        x, y, z = reading.position.tolist()
+        speed_squared = vx * vx + vy * vy + vz * vz
+        if not (speed_squared <= _MAX_SPEED_SQUARED and math.isfinite(x + y + z)):  # NaN fails both
+            return self._blew_up(cycle, reading, speed_squared)
         if out.robot_state == RobotState.RUNNING:
             if self._running_since is None:
                 self._running_since = (time.perf_counter(), self.backend.world.physics_time)
@@ -69,6 +83,13 @@ class PhysicsRecord:
                       self.max_tilt, FALL_TILT, reading.body_height, self.low_height, cycle=cycle, terminal=False)
                 return "fell"
         return None
+
+    def _blew_up(self, cycle: int, reading: Reading, speed_squared: float) -> str:
+        position = ", ".join(f"{v:.3g}" for v in reading.position)
+        self.diverged = (f"the physics diverged at cycle {cycle}: body speed {speed_squared ** 0.5:.3g} m/s (limit "
+                         f"{MAX_BODY_SPEED:g}), position ({position}) m")
+        event(log, logging.WARNING, "diverged", "%s", self.diverged, cycle=cycle, terminal=False)
+        return DIVERGED
 
     def summary(self, directory: Path, scenario: str, gait: str, controller: Controller) -> RunSummary:
         """The summary from the finished log in ``directory`` (the run directory, still ``.partial``); paper eq. 22
@@ -129,6 +150,7 @@ class PhysicsRecord:
             "walked_m": walked,
             "max_tilt_rad": self.max_tilt,
             "fell": self.fell,
+            **({"fault": self.diverged} if self.diverged is not None else {}),
             **final_poses(finished),
         })
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
+from shc_cli.errors import interrupt
 from shc_cli.events import recording
 from shc_cli.loop.gc_pause import collecting
 from shc_cli.loop.run_loop import LoopResult, ReadingT, RunLoop
@@ -73,7 +74,7 @@ def execute(loop: RunLoop[ReadingT], run: RunDirectory, summarise: Callable[[Loo
                     summary.plots_skipped = True
         finished = run.finish(summary)
         if late:  # the run is kept as it ended; the signal still stops what runs it (a sweep, a study)
-            raise KeyboardInterrupt
+            raise interrupt(signals.late or "SIGINT")
         return finished, summary, result
     finally:
         signals.restore()

@@ -15,6 +15,8 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
+from shc_cli.errors import interrupt
+
 
 class StopSignals:
     """The SIGINT/SIGTERM handler of one run.
@@ -44,7 +46,7 @@ class StopSignals:
     def _handle(self, signum: int, frame: Any) -> None:
         name = signal.Signals(signum).name
         if self.finishing:
-            raise KeyboardInterrupt  # a second Ctrl-C while finishing: skip what is left (the plots)
+            raise interrupt(name)  # a second Ctrl-C while finishing: skip what is left (the plots)
         if self.loop_over:
             self.late = self.late or name  # the loop ended on its own: no stop request left to make
             return
@@ -52,7 +54,7 @@ class StopSignals:
             self.on_stop(name)  # on hardware a repeat while stopping changes nothing
             return
         if self.received is not None:
-            raise KeyboardInterrupt  # a second signal before the loop started: give up at once
+            raise interrupt(name)  # a second signal before the loop started: give up at once
         self.received = name
 
     def restore(self) -> None:

@@ -56,6 +56,8 @@ class JogReport:
     """Joint → (start, target, reached) [ticks]."""
     changes: dict[str, dict[str, int]] = field(default_factory=dict)
     """Joint → the servo-map fields written."""
+    refused: dict[str, str] = field(default_factory=dict)
+    """Joint → why the zero it was given was not written (its limits would leave the servo's range)."""
 
 
 WORDS = [("forward", "backward"), ("left", "right"), ("up", "down")]
@@ -150,6 +152,7 @@ def jog(robot: Robot, path: Path, ports: list[str], ask: Callable[[Question], st
     """
     from shc_cli.domain.bringup.check import open_checked
     from shc_cli.domain.bringup.servo_file import write_servos
+    from shc_cli.validation import servo_range_problem
 
     report = JogReport(robot.name, path)
     hints = positive_hints(robot)
@@ -183,7 +186,15 @@ def jog(robot: Robot, path: Path, ports: list[str], ask: Callable[[Question], st
                 from shc_cli.hardware.servo_io import OneServo
 
                 here = OneServo(bus, index).ticks()
-                fields["zero_ticks"] = round(here - direction * slot.offset * bus.ticks_per_radian(index))
+                zero = round(here - direction * slot.offset * bus.ticks_per_radian(index))
+                problem = servo_range_problem(robot, key, direction, zero)
+                if problem is None:
+                    fields["zero_ticks"] = zero
+                else:  # the next hw check/jog/run-hw would refuse the file: keep the zero it had
+                    report.refused[key] = problem
+                    event(log, logging.WARNING, "hw_jog", "warning: %s: zero_ticks %d not written: %s; kept "
+                          "zero_ticks %d (turn the servo horn so that the joint's angle 0 is nearer the servo's "
+                          "middle, or narrow the joint limits, then jog again)", key, zero, problem, slot.zero)
             if fields:
                 report.changes[key] = fields
     except BaseException:

@@ -34,9 +34,10 @@ from shc_cli.domain.optimize.evaluate import ATTRIBUTE, evaluate, metric_keys, s
 from shc_cli.domain.optimize.outputs import write_outputs
 from shc_cli.domain.optimize.storage import STORAGE, open_study, prepare_output
 from shc_cli.domain.sweeps.checks import check_executor
+from shc_cli.domain.sweeps.points import clear_stop
 from shc_cli.domain.sweeps.pool import RunPool
 from shc_cli.domain.sweeps.results import Row
-from shc_cli.errors import Issue, ShcError, SpecError, install_hint
+from shc_cli.errors import Interrupted, Issue, SpecError, install_hint, signal_name
 from shc_cli.spec.study import Dimension, load_study
 
 if TYPE_CHECKING:
@@ -149,6 +150,7 @@ def run_optimize(file: Path, trials: int | None = None, workers: int | None = No
         raise SpecError([Issue(None, None, "--trials", f"{total} is not a positive number of trials", "e.g. 50")])
     out = out or Path("runs") / spec.name
     prepare_output(spec, out, resume, overwrite)
+    clear_stop(out)  # an earlier interrupted study's stop request
     count = workers or os.cpu_count() or 1
     study = open_study(spec, out, resume)
     from optuna.trial import TrialState
@@ -201,11 +203,11 @@ def run_optimize(file: Path, trials: int | None = None, workers: int | None = No
                     ran += 1
                 write_outputs(spec, out, study.get_trials(deepcopy=False), figures=False)
                 coordinator += time.perf_counter() - ended
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as error:
         write_outputs(spec, out, study.get_trials(deepcopy=False), figures=False)
         done = sum(1 for t in study.get_trials(deepcopy=False) if t.state.is_finished())
-        raise ShcError(f"interrupted: {done} trials finished, kept in {out / STORAGE} and {out / 'trials.csv'}; "
-                       "continue with --resume") from None
+        raise Interrupted(f"{done} trials finished, kept in {out / STORAGE} and {out / 'trials.csv'}; continue "
+                          "with --resume", signal_name(error)) from None
     rows_all, front = write_outputs(spec, out, study.get_trials(deepcopy=False), figures=True)
     return StudyReport(spec.name, out, rows_all, front, ran, count, executor, time.perf_counter() - started,
                        coordinator)

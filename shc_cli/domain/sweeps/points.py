@@ -16,13 +16,28 @@ from pathlib import Path
 from shc_cli.domain.sweeps.checks import is_adjustable
 from shc_cli.domain.sweeps.options import option, point_config
 from shc_cli.domain.sweeps.results import METRICS, RUN_KEYS, WARNINGS, Row
-from shc_cli.errors import ShcError, SpecError
+from shc_cli.errors import Interrupted, ShcError, SpecError, interrupt, signal_name
 from shc_cli.spec.sweep import Point, variant_text
 
 log = logging.getLogger(__name__)
 
 ERROR_LOG = "error.log"
 """File in a failed point's run directory with the traceback of a programming error."""
+
+
+STOP_REQUEST = ".stop-request"
+"""File in a sweep's or study's output directory that asks the runs not yet started to stop at once (written when the
+sweep is interrupted: the worker processes have runs queued; its text is the signal's name)."""
+
+
+def request_stop(out: Path, signal: str) -> None:
+    """Ask the runs under ``out`` not yet started to stop (:data:`STOP_REQUEST`)."""
+    (out / STOP_REQUEST).write_text(signal, encoding="utf-8")
+
+
+def clear_stop(out: Path) -> None:
+    """Forget an earlier interrupted sweep's stop request (a sweep or study starting, or resuming, in ``out``)."""
+    (out / STOP_REQUEST).unlink(missing_ok=True)
 
 
 def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: float = 0.0) -> Row:
@@ -35,6 +50,9 @@ def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: 
     """
     row: Row = {"index": point.index, "slug": point.slug, **point.values, "status": "ok", "error": ""}
     directory = Path(out) / "runs" / point.slug
+    stop = Path(out) / STOP_REQUEST
+    if stop.exists():  # the sweep was interrupted while this run waited in a worker's queue
+        raise interrupt(stop.read_text(encoding="utf-8").strip())
     try:
         if stopped_by_signal(directory) or _failed_before(directory):  # run it again
             shutil.rmtree(directory)
@@ -46,9 +64,13 @@ def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: 
         from shc_cli.analysis.metrics import Window, analyze_run
         from shc_cli.loop.opening import open_run
 
-        if stopped_by_signal(directory):  # Ctrl-C during this run: it is kept (partial), the sweep stops
-            raise KeyboardInterrupt
+        stopped = signal_stop(directory)
+        if stopped is not None:  # Ctrl-C during this run: it is kept (partial), the sweep stops
+            raise interrupt(stopped)
         run = open_run(directory)
+        if run.summary.stop_reason == "diverged":  # the physics blew up: no figure of it means anything
+            row.update(status="failed", error=f"{run.summary.fault} (run kept in {directory})")
+            return row
         result = analyze_run(run, Window(skip_s=skip))
         summary = run.summary.model_dump(include=set(RUN_KEYS))  # RunSummary fields
         row.update({key: summary[key] for key in RUN_KEYS})
@@ -56,11 +78,11 @@ def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: 
         row.update({key: result.get(key) for key in metrics})
     except ShcError as error:  # a failing run is a row, not the end of the sweep
         if interrupted(error):
-            raise KeyboardInterrupt from error  # Ctrl-C during the run: stop the sweep, not just this run
+            raise interrupt(signal_name(error)) from error  # Ctrl-C during the run: stop the sweep, not this run
         row.update(status="failed", error=one_line(error))
     except Exception as error:  # a programming error: a row too, with its traceback kept
         if interrupted(error):
-            raise KeyboardInterrupt from error
+            raise interrupt(signal_name(error)) from error
         row.update(status="failed", error=f"{one_line(error)} (traceback in {keep_traceback(directory, error)})")
     return row
 
@@ -90,7 +112,7 @@ def interrupted(error: BaseException) -> bool:
     keeping it as the context."""
     seen: BaseException | None = error
     while seen is not None:
-        if isinstance(seen, KeyboardInterrupt):
+        if isinstance(seen, (KeyboardInterrupt, Interrupted)):
             return True
         seen = seen.__cause__ or seen.__context__
     return False
@@ -98,6 +120,11 @@ def interrupted(error: BaseException) -> bool:
 
 def stopped_by_signal(directory: Path) -> bool:
     """A finished run directory whose summary says it did not play to its end because of a signal."""
+    return signal_stop(directory) is not None
+
+
+def signal_stop(directory: Path) -> str | None:
+    """The signal (``"SIGINT"``, ``"SIGTERM"``) that stopped the finished run in ``directory``, or None."""
     import json
 
     from shc_cli.loop.summary import parse_summary
@@ -105,8 +132,8 @@ def stopped_by_signal(directory: Path) -> bool:
     try:
         summary = parse_summary(json.loads((directory / "summary.json").read_text(encoding="utf-8")))
     except (OSError, ValueError, TypeError):  # pydantic's ValidationError is a ValueError
-        return False
-    return summary.stop_reason in ("SIGINT", "SIGTERM")
+        return None
+    return summary.stop_reason if summary.stop_reason in ("SIGINT", "SIGTERM") else None
 
 
 def one_line(error: BaseException) -> str:

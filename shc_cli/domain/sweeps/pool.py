@@ -9,8 +9,13 @@ from typing import Any
 
 from shc_cli.domain.sweeps import points
 from shc_cli.domain.sweeps.results import METRICS, Row
-from shc_cli.errors import Issue, SpecError, install_hint
+from shc_cli.errors import Interrupted, Issue, SpecError, install_hint, signal_name
 from shc_cli.spec.sweep import Point
+
+
+def _terminated(error: BaseException | None) -> bool:
+    """``error`` is a SIGTERM's (:class:`~shc_cli.errors.Terminated`, or the Interrupted that says what was kept)."""
+    return isinstance(error, (KeyboardInterrupt, Interrupted)) and signal_name(error) == "SIGTERM"
 
 
 class RunPool:
@@ -28,6 +33,7 @@ class RunPool:
         self._pool: Any = None  # concurrent.futures.ProcessPoolExecutor
         self._client: Any = None  # dask.distributed, an untyped library
         self._cluster: Any = None
+        self._out: Path | None = None  # the output directory of the runs (their stop request goes there)
         self._dask: Any = None
 
     def __enter__(self) -> RunPool:
@@ -52,6 +58,11 @@ class RunPool:
                  trace: TracebackType | None) -> None:
         if self._pool is not None:
             interrupted = kind is not None
+            if self._out is not None and isinstance(error, (KeyboardInterrupt, Interrupted)):
+                points.request_stop(self._out, signal_name(error))  # the runs still queued in the workers end at once
+            if _terminated(error):  # a SIGTERM reached only this process (a Ctrl-C reaches the workers too)
+                for process in list((getattr(self._pool, "_processes", None) or {}).values()):
+                    process.terminate()  # each finishes its run as a partial one, as at a Ctrl-C, and stops
             self._pool.shutdown(wait=not interrupted, cancel_futures=interrupted)
         if self._client is not None:
             self._client.close()
@@ -63,6 +74,7 @@ class RunPool:
         """Rows of :func:`~shc_cli.domain.sweeps.points.run_point` as the runs finish (in order with one local
         worker)."""
         run_point = points.run_point
+        self._out = out
         if self._client is not None:
             futures = self._client.map(run_point, batch, out=str(out.resolve()), metrics=metrics, skip=skip,
                                        pure=False)

@@ -24,10 +24,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from shc_cli.domain.sweeps import points
 from shc_cli.domain.sweeps.checks import check_executor, check_points
 from shc_cli.domain.sweeps.pool import RunPool
 from shc_cli.domain.sweeps.results import WARNINGS, PartialTable, Row, sweep_columns, write_table
-from shc_cli.errors import Issue, ShcError, SpecError, check_choice
+from shc_cli.errors import Interrupted, Issue, SpecError, check_choice, signal_name
 from shc_cli.spec.sweep import Sweep, load_sweep
 
 OnRow = Callable[[int, int, Row | None], None]
@@ -123,6 +124,7 @@ def run_sweep(file: Path, workers: int | None = None, executor: str = "local", s
         clear_output(out, overwrite,
                      "add --resume to continue it, --overwrite to run it again, or choose another --out")
     (out / "runs").mkdir(parents=True, exist_ok=True)
+    points.clear_stop(out)
     if sweep.path.resolve() != (out / "sweep.toml").resolve():
         shutil.copyfile(sweep.path, out / "sweep.toml")
     count = workers or os.cpu_count() or 1
@@ -139,9 +141,9 @@ def run_sweep(file: Path, workers: int | None = None, executor: str = "local", s
                 table.append(row)
                 if on_row is not None:
                     on_row(len(rows), len(sweep.points), row)
-        except KeyboardInterrupt:
-            raise ShcError(f"interrupted: {len(rows)} runs finished, their rows are in {partial}; "
-                           "continue with --resume") from None
+        except KeyboardInterrupt as error:
+            raise Interrupted(f"{len(rows)} runs finished, their rows are in {partial}; continue with --resume",
+                              signal_name(error)) from None
     rows.sort(key=lambda r: int(r["index"]))
     write_table(out / "results.csv", columns, rows)
     partial.unlink()
