@@ -108,7 +108,7 @@ def _stalling(base: type) -> type:
     """``base`` whose first read finds nothing and then is not scheduled for 80 ms (a loaded machine, a VM pause):
     the reply arrives meanwhile, unread."""
 
-    class Stalling(base):  # type: ignore[misc, valid-type]
+    class Stalling(base):  # type: ignore[misc]
         stalled = False
 
         def readPort(self, length: int) -> list[int]:

@@ -30,7 +30,7 @@ def test_a_plan_logs_its_state_changes(tmp_path: Path, capsys: pytest.CaptureFix
     assert code == 0
     events = _events(out)
     robot = [e["message"] for e in events if e["event"] == "robot_state"]
-    assert robot[0] == "robot state: PACKED" and robot[-1].endswith("→ RUNNING")  # type: ignore[union-attr]
+    assert robot[0] == "robot state: PACKED" and str(robot[-1]).endswith("→ RUNNING")
     walk = [(e["cycle"], e["message"]) for e in events if e["event"] == "walk_state"]
     assert ("walk state: STOPPED → STARTING" in [m for _, m in walk]) and all(isinstance(c, int) for c, _ in walk)
     summary = json.loads((out / "summary.json").read_text())
@@ -86,7 +86,7 @@ def test_a_fall_is_an_event(tmp_path: Path) -> None:
     robot = load_robot("bullet").robot
     assert robot is not None
     backend = SimpleNamespace(world=SimpleNamespace(physics_time=0.0))
-    record = PhysicsRecord(robot, backend, airborne=False)
+    record = PhysicsRecord(robot, backend, airborne=False)  # type: ignore[arg-type]  # a stand-in backend
     out = SimpleNamespace(robot_state=RobotState.RUNNING)
     reading = SimpleNamespace(rpy=np.array([FALL_TILT + 0.1, 0.0, 0.0]), body_height=0.2)
     with recording(tmp_path):

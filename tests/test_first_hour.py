@@ -36,7 +36,7 @@ def test_a_robot_without_servo_data_says_its_power_is_indicative(tmp_path: Path,
 
 @pytest.mark.parametrize("scenario", ["SA", "WA", "SG"])
 def test_the_standing_and_air_scenarios_print_their_power_without_cot_or_progress(
-        scenario: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+        scenario: str, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     """Walk air is not meant to go anywhere: no NO PROGRESS flag, and no CoT (it printed 'CoT None')."""
     code, stdout, err = run(["simulate", "--scenario", scenario, "--duration", "1", "--out", str(tmp_path / "r"),
                              "--no-plots"], capsys, monkeypatch)

@@ -77,7 +77,7 @@ def test_keys_nudge_and_clamp_the_velocity() -> None:
 def test_stdin_lines_hold_until_changed_and_the_watchdog_zeroes_the_velocity() -> None:
     lines = io.StringIO('{"velocity": [0.5, 0, 0.1], "pose_velocity": [0, 0, 1, 0, 0, 0]}\n{"state": "ready"}\n'
                         '{"state": "flying"}\n{"gait": "wave"}\n')
-    source = StdinInput(lines, watchdog_s=0.2, load_gait=lambda name: load_gait(name).gait)  # type: ignore[arg-type,return-value]
+    source = StdinInput(lines, watchdog_s=0.2, load_gait=lambda name: load_gait(name).gait)
     deadline = time.monotonic() + 5.0
     while not source.finished and time.monotonic() < deadline:
         time.sleep(0.01)
@@ -98,7 +98,7 @@ def test_stdin_lines_hold_until_changed_and_the_watchdog_zeroes_the_velocity() -
 
 
 def test_stdin_parse_validates_before_applying() -> None:
-    source = StdinInput(io.StringIO(""), load_gait=lambda name: load_gait(name).gait)  # type: ignore[arg-type,return-value]
+    source = StdinInput(io.StringIO(""), load_gait=lambda name: load_gait(name).gait)
     held = HeldInput()
     source._parse('{"velocity": [0.5, 0, 0.1], "state": "packed", "gait": "wave"}')(held)
     assert held.velocity == [0.5, 0.0, 0.1] and held.state == RobotState.PACKED

@@ -7,6 +7,7 @@ from __future__ import annotations
 import ast
 import functools
 from pathlib import Path
+from typing import cast
 
 PACKAGE = Path(__file__).parents[1] / "shc_cli"
 
@@ -191,7 +192,7 @@ def _any_annotations(tree: ast.AST) -> list[int]:
         for annotation in filter(None, annotations):
             if any((isinstance(n, ast.Name) and n.id == "Any") or (isinstance(n, ast.Constant) and n.value == "Any")
                    for n in ast.walk(annotation)):
-                lines.append(node.lineno)
+                lines.append(cast(ast.stmt, node).lineno)
     return lines
 
 
