@@ -121,21 +121,38 @@ def _robot(node: RosNode, config: NodeConfig, directory: Path) -> tuple[Robot, G
     import tempfile
 
     from shc_cli.loop.run_inputs import load_inputs
+
+    if config.robot == SERVER:  # the server's robot as shc files, read, then removed (the run keeps robot.toml)
+        with tempfile.TemporaryDirectory(prefix="shc-ros-") as folder:
+            source = str(_robot_from_server(node, config.namespace, Path(folder)))
+            inputs = load_inputs(source, None, "0,0,0", None, None, default_s=1.0)
+    else:
+        inputs = load_inputs(config.robot, None, "0,0,0", None, None, default_s=1.0)
+    return inputs.robot, inputs.gait, inputs.pose_sets, selectable_gaits(inputs.robot)
+
+
+SELECTABLE_GAITS = ("wave", "amble", "ripple", "tripod")
+"""The bundled gaits ``gait_selection`` cycles through (OpenSHC's order), those that fit the robot's legs."""
+
+
+def selectable_gaits(robot: Robot) -> dict[str, Gait]:
+    """The bundled gaits of :data:`SELECTABLE_GAITS` whose offsets name every leg of ``robot``; a gait that does
+    not load is left out with its reason logged (a bug other than bad input is raised, not swallowed)."""
+    from shc_cli.errors import ShcError
     from shc_cli.spec.loading import load_gait
 
-    source = config.robot
-    if source == SERVER:
-        source = str(_robot_from_server(node, config.namespace, Path(tempfile.mkdtemp(prefix="shc-ros-"))))
-    inputs = load_inputs(source, None, "0,0,0", None, None, default_s=1.0)
     gaits: dict[str, Gait] = {}
-    for name in ("wave", "amble", "ripple", "tripod"):
+    for name in SELECTABLE_GAITS:
         try:
             candidate = load_gait(name).gait
-        except Exception:
+        except ShcError as error:
+            log.warning("gait %s is not offered to gait_selection: %s", name, str(error).splitlines()[0])
             continue
-        if candidate is not None and set(candidate.offset_multiplier) >= set(inputs.robot.legs):
+        if candidate is not None and set(candidate.offset_multiplier) >= set(robot.legs):
             gaits[name] = candidate
-    return inputs.robot, inputs.gait, inputs.pose_sets, gaits
+        else:
+            log.debug("gait %s is not offered to gait_selection: it does not name every leg of %s", name, robot.name)
+    return gaits
 
 
 def _robot_from_server(node: RosNode, namespace: str, folder: Path) -> Path:
