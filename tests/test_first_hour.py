@@ -49,7 +49,7 @@ def test_figures_without_walking_say_so(capsys, monkeypatch) -> None:  # type: i
     be measured (it printed 'CoT None', 'mean power 0.0 W' after a Ctrl-C during start-up, and a NO PROGRESS run's
     CoT 137.88)."""
     from shc_cli.analysis.run_line import simulation_line
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
 
     base = {"robot": "r", "gait": "tripod", "scenario": "WG", "engine": "mujoco", "sim_time_s": 3.0,
             "wall_time_s": 1.0, "distance_m": 0.0, "path_speed_mps": 0.0, "displacement_speed_mps": 0.0,

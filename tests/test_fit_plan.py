@@ -77,7 +77,7 @@ def test_every_phase_moves_the_joints(tmp_path: Path) -> None:
 
     path, changes = _timeline(tmp_path)
     run = plan("openshc_default", commands=path, out=tmp_path / "run", plots=False)
-    from shc_cli.loop.runread import read_run
+    from shc_cli.record.runread import read_run
 
     log = read_run(run.path)
     t = log.t - log.t[log.running][0]

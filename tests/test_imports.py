@@ -90,7 +90,7 @@ def test_the_cycle_finder_finds_a_cycle() -> None:
 
 def test_no_import_cycles_in_shc_cli() -> None:
     graph = import_graph()
-    assert {"shc_cli.loop.runread", "shc_cli.interop.bagrun"} <= graph["shc_cli.loop.opening"]
+    assert {"shc_cli.record.runread", "shc_cli.interop.bagrun"} <= graph["shc_cli.domain.stored_run"]
     assert cycles(graph) == []
 
 
@@ -127,7 +127,7 @@ LAYERS: dict[str, int] = {
     "shc_cli.model": 1,
     "shc_cli.control": 2,
     "shc_cli.backends": 3, "shc_cli.hardware": 3,
-    "shc_cli.validation": 4, "shc_cli.loop": 4, "shc_cli.analysis": 4, "shc_cli.interop": 4, "shc_cli.ros": 4,
+    "shc_cli.validation": 4, "shc_cli.record": 4, "shc_cli.loop": 4, "shc_cli.analysis": 4, "shc_cli.interop": 4, "shc_cli.ros": 4,
     "shc_cli.live": 4, "shc_cli.plots": 4, "shc_cli.study_plots": 4,
     "shc_cli.domain": 5, "shc_cli.replay": 5, "shc_cli.view": 5,
     "shc_cli.api": 6,

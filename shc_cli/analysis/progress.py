@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
 
 NO_PROGRESS_SHARE = 0.25
 """A run makes no progress when its body travelled less than this share of the commanded path [ratio]."""

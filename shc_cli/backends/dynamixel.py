@@ -25,7 +25,7 @@ if TYPE_CHECKING:
     from shc_cli.spec.robot import Robot
 
 class Tables(Protocol):
-    """Where ``timing.csv`` goes: a run directory (:class:`shc_cli.loop.runlog.RunDirectory`)."""
+    """Where ``timing.csv`` goes: a run directory (:class:`shc_cli.record.runlog.RunDirectory`)."""
 
     def table(self, name: str, columns: list[str], formats: list[str]) -> tuple[IO[str], str]:
         """A new table: its file and its row format (``cycle``, ``t`` first)."""

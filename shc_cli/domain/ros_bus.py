@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from shc_cli.domain.ros_node import NodeConfig
     from shc_cli.hardware.bus import BusState, ServoBus
     from shc_cli.loop.run_loop import LoopResult
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
     from shc_cli.ros.node import RosNode
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
@@ -55,9 +55,9 @@ def run_on_bus(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose
     from shc_cli.hardware.buses import servo_bus
     from shc_cli.loop.input_sources import STATES
     from shc_cli.loop.run_loop import ControlledStop, Observer, RunLoop
-    from shc_cli.loop.runlog import LogRecorder, RunDirectory
     from shc_cli.loop.session import execute
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.runlog import LogRecorder, RunDirectory
+    from shc_cli.record.summary import RunSummary
 
     c = config
     bus = servo_bus(robot, list(c.ports), c.baud, c.profile_velocity)

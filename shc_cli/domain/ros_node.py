@@ -21,7 +21,7 @@ from shc_cli.domain.live import open_live
 from shc_cli.domain.result import RunResult
 
 if TYPE_CHECKING:
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
     from shc_cli.ros.node import RosNode
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
@@ -99,7 +99,7 @@ def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) 
     Raises:
         ShcError: bad input, or no ROS master (one line), before anything is written.
     """
-    from shc_cli.loop.runlog import default_run_directory
+    from shc_cli.record.runlog import default_run_directory
     from shc_cli.ros.messages import MessageTypes
     from shc_cli.ros.node import RosNode
 
@@ -206,8 +206,8 @@ def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gai
     from shc_cli.domain.ros_session import NodeSession
     from shc_cli.loop.plan_summary import PlanRecord, plan_summary
     from shc_cli.loop.run_loop import Observer, RunLoop
-    from shc_cli.loop.runlog import RunWriter
     from shc_cli.loop.session import execute
+    from shc_cli.record.runlog import RunWriter
 
     controller = Controller(robot, gait, pose_sets=pose_sets)
     writer = RunWriter(directory, robot, config.overwrite)
@@ -250,8 +250,8 @@ def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, 
     from shc_cli.domain.ros_session import NodeSession
     from shc_cli.loop.physics_summary import PhysicsRecord
     from shc_cli.loop.run_loop import Observer, RunLoop
-    from shc_cli.loop.runlog import LogRecorder, RunDirectory
     from shc_cli.loop.session import execute
+    from shc_cli.record.runlog import LogRecorder, RunDirectory
 
     sim = SimulationConfig(robot=config.robot, engine=config.backend)
     with RunDirectory(directory, config.overwrite) as run:

@@ -51,9 +51,9 @@ from shc_cli.control.states import RobotState, WalkState
 from shc_cli.errors import OutputError, check_choice
 from shc_cli.interop import mcap_chunks
 from shc_cli.interop.batch import BatchSerializer
-from shc_cli.loop.runlog import ROBOT_FILE
-from shc_cli.loop.runread import RunLog
 from shc_cli.model.chains import joint_slots
+from shc_cli.record.runlog import ROBOT_FILE
+from shc_cli.record.runread import RunLog
 
 if TYPE_CHECKING:
     from shc_cli.spec.robot import Robot

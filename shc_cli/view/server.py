@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from shc_cli.errors import ShcError
-from shc_cli.loop.runread import RunLog
+from shc_cli.record.runread import RunLog
 from shc_cli.view import meshes, scene
 
 log = logging.getLogger(__name__)
@@ -605,7 +605,7 @@ def serve(target: str, host: str, port: int, follow: bool = False) -> None:
         raise SpecError([Issue(None, None, "view", f"viser is not installed ({error})",
                                install_hint())]) from None
 
-    from shc_cli.loop.opening import open_run as read_run  # directories and bags
+    from shc_cli.domain.stored_run import open_run as read_run  # directories and bags
     from shc_cli.spec.loading import load_robot
 
     data: RunScene | None = None

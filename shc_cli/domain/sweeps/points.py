@@ -44,7 +44,7 @@ def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: 
                 shutil.rmtree(partial)  # a crashed earlier attempt
             simulate_point(point, Path(out), directory)
         from shc_cli.analysis.metrics import Window, analyze_run
-        from shc_cli.loop.opening import open_run
+        from shc_cli.domain.stored_run import open_run
 
         if stopped_by_signal(directory):  # Ctrl-C during this run: it is kept (partial), the sweep stops
             raise KeyboardInterrupt
@@ -100,7 +100,7 @@ def stopped_by_signal(directory: Path) -> bool:
     """A finished run directory whose summary says it did not play to its end because of a signal."""
     import json
 
-    from shc_cli.loop.summary import parse_summary
+    from shc_cli.record.summary import parse_summary
 
     try:
         summary = parse_summary(json.loads((directory / "summary.json").read_text(encoding="utf-8")))

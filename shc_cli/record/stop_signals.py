@@ -1,6 +1,6 @@
 """SIGINT and SIGTERM as a run's stop request, from the moment its run directory exists until it is finished.
 
-A run directory (:class:`~shc_cli.loop.runlog.RunDirectory`) catches both signals as soon as it is created, so a
+A run directory (:class:`~shc_cli.record.runlog.RunDirectory`) catches both signals as soon as it is created, so a
 signal while the physics opens or the controller is built is not lost: the loop, once it starts, stops at its
 first cycle and the run directory is finished like any interrupted run (``summary.json`` with ``"complete":
 false``). :func:`shc_cli.loop.session.execute` routes the signals to the loop while it runs; a repeated signal while

@@ -1,7 +1,7 @@
 """``summary.json``: the typed summary every run directory ends with (``plan``, ``simulate``, ``run-hw``).
 
-:class:`RunSummary` is written by :meth:`shc_cli.loop.runlog.RunDirectory.finish` and read by
-:func:`shc_cli.loop.runread.read_run` (and the bag reader); every tool that reads a run (``analyze``, ``view``,
+:class:`RunSummary` is written by :meth:`shc_cli.record.runlog.RunDirectory.finish` and read by
+:func:`shc_cli.record.runread.read_run` (and the bag reader); every tool that reads a run (``analyze``, ``view``,
 ``render``, ``export bag``, sweeps, studies, the Python API) reads its fields, never string keys. One model holds
 every kind of run: a field a kind of run does not have is absent from its file (``None`` here). Keys keep the
 names they always had; ``shc schema summary`` prints the JSON Schema (docs/reference generates from it).
