@@ -12,7 +12,7 @@ from __future__ import annotations
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+from shc_cli.version import __version__ as __version__
 
 _EXPORTS = {
     "Run": "shc_cli.api", "SweepResult": "shc_cli.api", "analyze": "shc_cli.api", "load_gait": "shc_cli.api",

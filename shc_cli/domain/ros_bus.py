@@ -28,7 +28,7 @@ from shc_cli.events import event
 if TYPE_CHECKING:
     from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Command, CycleOutput
-    from shc_cli.domain.ros_node import NodeConfig
+    from shc_cli.domain.ros_config import NodeConfig
     from shc_cli.hardware.bus import BusState, ServoBus
     from shc_cli.loop.run_loop import LoopResult
     from shc_cli.record.summary import RunSummary

@@ -42,7 +42,6 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     Raises:
         ShcError: bad input (one line), before anything is written.
     """
-    from shc_cli import __version__
     from shc_cli.backends.simulated import SimulatedBackend, open_world
     from shc_cli.control.controller import Controller
     from shc_cli.errors import Issue, SpecError
@@ -53,6 +52,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     from shc_cli.loop.run_loop import Observer, RunLoop, StartUp
     from shc_cli.loop.session import execute
     from shc_cli.record.runlog import LogRecorder, RunDirectory, default_run_directory
+    from shc_cli.version import __version__
 
     o = config or SimulationConfig()
     check_display(o.gui)
