@@ -14,7 +14,7 @@ import logging
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from shc_cli.domain.live import open_live
 from shc_cli.domain.result import RunResult
@@ -26,6 +26,7 @@ from shc_cli.domain.ros_config import NodeConfig as NodeConfig
 if TYPE_CHECKING:
     from shc_cli.record.summary import RunSummary
     from shc_cli.ros.node import RosNode
+    from shc_cli.spec.autopose import AutoPoseSet
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
 
@@ -56,7 +57,8 @@ def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) 
         node.close()
 
 
-def _robot(node: RosNode, config: NodeConfig, directory: Path) -> tuple[Robot, Gait, Any, dict[str, Gait]]:
+def _robot(node: RosNode, config: NodeConfig,
+           directory: Path) -> tuple[Robot, Gait, dict[str, AutoPoseSet], dict[str, Gait]]:
     """The robot, its gait and auto-pose sets, and the gaits ``gait_selection`` can choose."""
     import tempfile
 
@@ -127,8 +129,8 @@ def _robot_from_server(node: RosNode, namespace: str, folder: Path) -> Path:
     return path
 
 
-def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: Any, gaits: dict[str, Gait],
-         directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
+def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
+         gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     if config.backend == "none":
         return _run_outputs_only(node, config, robot, gait, pose_sets, gaits, directory, on_ready)
     if config.backend == "bus":
@@ -138,7 +140,7 @@ def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets:
     return _run_simulated(node, config, robot, gait, pose_sets, gaits, directory, on_ready)
 
 
-def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: Any,
+def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
                       gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     """Backend none: the controller's targets are taken as reached (OpenSHC with a hardware node of the user's)."""
     from shc_cli.backends.kinematic import KinematicBackend
@@ -178,7 +180,7 @@ def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gai
     return RunResult(path, summary)
 
 
-def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: Any,
+def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
                    gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     """A physics engine: the robot simulated in real time, its measured joints, IMU, foot forces and power published
     (``/joint_states``, ``/imu/data``, ``/<LEG>/foot_force``, ``/shc/power``) — OpenSHC's Gazebo set-up without
