@@ -153,7 +153,7 @@ def read_tables(path: Path, robot: Robot, summary: RunSummary | None = None) -> 
     return _plan_run(path, summary, robot)
 
 
-def checked_summary(file: Path, data: Any) -> RunSummary:
+def checked_summary(file: Path, data: object) -> RunSummary:
     """The :class:`RunSummary` of a ``summary.json``'s JSON data; one line naming the first bad field if it is not
     one (keys this version does not know are left out)."""
     from pydantic import ValidationError

@@ -223,7 +223,7 @@ class RunSummary(BaseModel):
                                                            "complete and stop_reason are written.")
     plots_skipped: bool | None = Field(None, description="A second signal stopped the plots.")
 
-    def updated(self, **fields: Any) -> RunSummary:
+    def updated(self, **fields: object) -> RunSummary:
         """This summary with ``fields`` set (validated; the fields set so far keep their values)."""
         return RunSummary.model_validate({**self.model_dump(exclude_unset=True), **fields})
 
@@ -239,7 +239,7 @@ def summary_schema() -> dict[str, Any]:
     return RunSummary.model_json_schema()
 
 
-def parse_summary(data: Any) -> RunSummary:
+def parse_summary(data: object) -> RunSummary:
     """A summary read from JSON: keys this version does not know are left out (runs from other versions stay
     readable); raises :class:`pydantic.ValidationError` on a wrong type."""
     if not isinstance(data, dict):
