@@ -32,7 +32,7 @@ def sweep_columns(grid: list[str]) -> list[str]:
     return ["index", "slug", *grid, "status", "error", *RUN_KEYS, WARNINGS, *METRICS]
 
 
-def cell(value: Any) -> str:
+def cell(value: object) -> str:
     """A value as a table cell."""
     if value is None:
         return ""
