@@ -13,6 +13,7 @@ from __future__ import annotations
 import signal
 import threading
 from collections.abc import Callable
+from types import FrameType
 from typing import Any
 
 
@@ -41,7 +42,7 @@ class StopSignals:
         if threading.current_thread() is threading.main_thread() and not self._previous:
             self._previous = {sig: signal.signal(sig, self._handle) for sig in (signal.SIGINT, signal.SIGTERM)}
 
-    def _handle(self, signum: int, frame: Any) -> None:
+    def _handle(self, signum: int, frame: FrameType | None) -> None:
         name = signal.Signals(signum).name
         if self.finishing:
             raise KeyboardInterrupt  # a second Ctrl-C while finishing: skip what is left (the plots)

@@ -28,13 +28,16 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from shc_cli.errors import ShcError
 from shc_cli.record.runread import RunLog
 from shc_cli.view import meshes, scene
+
+if TYPE_CHECKING:
+    from shc_cli.analysis.workspace import WorkspaceReport
 
 log = logging.getLogger(__name__)
 
@@ -107,7 +110,7 @@ class RobotDrawing:
         self.body.wxyz = pose.body_quaternion[index]
 
 
-def _default_tips(report: Any) -> np.ndarray:
+def _default_tips(report: WorkspaceReport) -> np.ndarray:
     """Tip positions of a workspace report's default joints in base_link, ``(L, 3)`` [m]."""
     return np.asarray(scene.shapes(report.robot).chains.tips(report.default_joints))
 
@@ -239,7 +242,7 @@ class RobotPage:
         self._redraw()
         state.feet = self._pose().feet[0].copy()
 
-    def _draw_workspaces(self, report: Any) -> None:
+    def _draw_workspaces(self, report: WorkspaceReport) -> None:
         for node in self.workspace_nodes:
             node.remove()
         api = self.client.scene
