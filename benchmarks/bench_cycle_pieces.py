@@ -49,7 +49,7 @@ def child(out: Path) -> None:
     """Walk, keep the loop's objects, time the pieces; print them as JSON."""
     from shc_cli.cli import main as shc
     from shc_cli.loop.run_loop import RunLoop
-    from shc_cli.loop.runlog import LogRecorder
+    from shc_cli.record.runlog import LogRecorder
 
     kept: dict[str, Any] = {}
     run, record = RunLoop.run, LogRecorder.record

@@ -17,7 +17,7 @@ import time
 from pathlib import Path
 
 from shc_cli.interop.bag import export_bag
-from shc_cli.loop.runread import read_run
+from shc_cli.record.runread import read_run
 
 
 def main() -> None:

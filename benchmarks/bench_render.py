@@ -31,7 +31,7 @@ def _cpu() -> float:
 
 
 def _mujoco_frames(run_dir: Path, frames: int) -> tuple[list[float], float]:
-    from shc_cli.loop.runread import read_run
+    from shc_cli.record.runread import read_run
     from shc_cli.view import scene
     from shc_cli.view.render import Renderer
 
@@ -59,7 +59,7 @@ def _tiny_frames(run_dir: Path, frames: int) -> tuple[list[float], float]:
     from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
     from shc_cli.backends.pybullet_.urdf import robot_urdf
     from shc_cli.backends.terrain import parse_terrain
-    from shc_cli.loop.runread import read_run
+    from shc_cli.record.runread import read_run
 
     run = read_run(run_dir)
     client = p.connect(p.DIRECT)

@@ -2,10 +2,10 @@
 
     .venv/bin/python docs/run_outputs.py > docs/run-outputs.md
 
-``summary.json``'s keys, types and meanings come from its model, :class:`shc_cli.loop.summary.RunSummary` (the JSON
+``summary.json``'s keys, types and meanings come from its model, :class:`shc_cli.record.summary.RunSummary` (the JSON
 Schema ``shc schema summary`` prints). The column names come from the writers themselves
-(:class:`shc_cli.loop.runlog.RunWriter` for ``plan``,
-:func:`shc_cli.loop.runlog.log_columns` for ``simulate`` and ``run-hw``), run on a bundled robot and folded into
+(:class:`shc_cli.record.runlog.RunWriter` for ``plan``,
+:func:`shc_cli.record.runlog.log_columns` for ``simulate`` and ``run-hw``), run on a bundled robot and folded into
 patterns (``<LEG>_<joint>_cmd``). :data:`MEANING` says what each pattern holds; a column without a meaning, or a
 meaning no column uses, stops the script, so a new column cannot reach the page undocumented.
 ``tests/test_docs_reference.py`` checks the committed page equals this script's output.
@@ -111,7 +111,7 @@ def patterns(columns: list[str], legs: list[str], joints: list[str]) -> list[str
 
 def tables() -> dict[str, list[str]]:
     """Every table a run writes, by file name: its column patterns."""
-    from shc_cli.loop.runlog import RunWriter, log_columns
+    from shc_cli.record.runlog import RunWriter, log_columns
     from shc_cli.spec.loading import load_robot
 
     robot = load_robot(ROBOT).robot
@@ -163,7 +163,7 @@ def value_type(field: dict[str, Any]) -> str:
 
 def summary_rows() -> list[str]:
     """One Markdown row per ``summary.json`` key: name, type, meaning (from RunSummary's JSON Schema)."""
-    from shc_cli.loop.summary import summary_schema
+    from shc_cli.record.summary import summary_schema
 
     properties: dict[str, dict[str, Any]] = summary_schema()["properties"]
     rows = []

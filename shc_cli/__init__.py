@@ -12,14 +12,14 @@ from __future__ import annotations
 from importlib import import_module
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+from shc_cli.version import __version__ as __version__
 
 _EXPORTS = {
     "Run": "shc_cli.api", "SweepResult": "shc_cli.api", "analyze": "shc_cli.api", "load_gait": "shc_cli.api",
     "load_robot": "shc_cli.api", "open_run": "shc_cli.api", "plan": "shc_cli.api", "simulate": "shc_cli.api",
     "sweep": "shc_cli.api", "optimize": "shc_cli.api", "fit": "shc_cli.api", "StudyResult": "shc_cli.api",
     "SimulationConfig": "shc_cli.domain.config",
-    "RunLog": "shc_cli.loop.runread", "RunSummary": "shc_cli.loop.summary",
+    "RunLog": "shc_cli.record.runread", "RunSummary": "shc_cli.record.summary",
     "Controller": "shc_cli.control.controller", "Command": "shc_cli.control.controller",
     "RobotState": "shc_cli.control.controller",
     "ShcError": "shc_cli.errors", "SpecError": "shc_cli.errors",
@@ -48,8 +48,8 @@ if TYPE_CHECKING:
     from shc_cli.control.controller import Command, Controller, RobotState
     from shc_cli.domain.config import SimulationConfig
     from shc_cli.errors import ShcError, SpecError
-    from shc_cli.loop.runread import RunLog
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.runread import RunLog
+    from shc_cli.record.summary import RunSummary
 
 
 def __getattr__(name: str) -> Any:

@@ -27,8 +27,8 @@ if TYPE_CHECKING:
     from shc_cli.domain.simulate import OnProgress
     from shc_cli.domain.sweeps.run import OnRow, SweepReport
     from shc_cli.hardware.scan import Found, Protocol
-    from shc_cli.loop.runread import RunLog
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.runread import RunLog
+    from shc_cli.record.summary import RunSummary
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
 
@@ -43,7 +43,7 @@ class Run:
 
     Attributes:
         path: the run directory.
-        summary: its ``summary.json`` (:class:`~shc_cli.loop.summary.RunSummary`: e.g. ``summary.cot``,
+        summary: its ``summary.json`` (:class:`~shc_cli.record.summary.RunSummary`: e.g. ``summary.cot``,
             ``summary.mean_speed_mps``).
     """
 
@@ -53,10 +53,10 @@ class Run:
 
     @property
     def log(self) -> RunLog:
-        """The log as arrays (:class:`~shc_cli.loop.runread.RunLog`: ``t``, ``position``, ``joints``, ``power``, …),
+        """The log as arrays (:class:`~shc_cli.record.runread.RunLog`: ``t``, ``position``, ``joints``, ``power``, …),
         read on first use."""
         if self._log is None:
-            from shc_cli.loop.opening import open_run as read
+            from shc_cli.domain.stored_run import open_run as read
 
             self._log = read(self.path)
         return self._log
@@ -175,7 +175,7 @@ def analyze(run: Run | Path | str, *, skip: float = 0.0, steady: bool = False) -
 
 def open_run(path: Path | str) -> RunLog:
     """Any run (a directory or a bag from ``shc export bag``) as arrays."""
-    from shc_cli.loop.opening import open_run as read
+    from shc_cli.domain.stored_run import open_run as read
 
     return read(path)
 

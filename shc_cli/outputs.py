@@ -14,7 +14,7 @@ from shc_cli.errors import OutputError
 def refuse_existing(paths: list[Path], overwrite: bool, option: str = "--out") -> None:
     """The one rule of every output: a file an shc command would write that already exists is refused before any
     work (one line: add --overwrite, or choose another ``option``), unless ``overwrite``. Run directories, sweeps and
-    studies follow the same rule through :class:`shc_cli.loop.runlog.RunDirectory` and ``clear_output``."""
+    studies follow the same rule through :class:`shc_cli.record.runlog.RunDirectory` and ``clear_output``."""
     existing = [path for path in paths if path.exists()]
     if existing and not overwrite:
         what = "it" if len(existing) == 1 else f"it and {len(existing) - 1} more of the outputs"

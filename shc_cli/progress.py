@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import os
 import sys
-from typing import Any
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from rich.progress import Progress
 
 
 class ProgressBar:
@@ -19,7 +22,7 @@ class ProgressBar:
         from rich.progress import Progress
 
         self.label, self.total = label, total
-        self.bar: Any = Progress(transient=True)
+        self.bar: Progress = Progress(transient=True)
         self.task = self.bar.add_task(label, total=total)
         self.bar.start()
 

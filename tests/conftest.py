@@ -109,7 +109,7 @@ def summary_problems(root: Path) -> list[str]:
 
     import jsonschema
 
-    from shc_cli.loop.summary import summary_schema
+    from shc_cli.record.summary import summary_schema
 
     validator = jsonschema.Draft202012Validator(summary_schema())
     problems = []

@@ -21,8 +21,8 @@ from shc_cli.analysis.metrics import (
     support_polygon,
     window_mask,
 )
-from shc_cli.loop.runread import RunLog, read_run
-from shc_cli.loop.summary import RunSummary
+from shc_cli.record.runread import RunLog, read_run
+from shc_cli.record.summary import RunSummary
 
 from .test_cli import run
 

@@ -11,7 +11,7 @@ import pytest
 
 from shc_cli.interop.bag import Messages, _serialize_as, _topics, typestore_for
 from shc_cli.interop.batch import BatchSerializer
-from shc_cli.loop.runread import RunLog, read_run
+from shc_cli.record.runread import RunLog, read_run
 
 from .test_cli import run
 

@@ -1,4 +1,4 @@
-"""The compiled ``log.csv`` formatter writes exactly what Python's ``%`` writes (shc_cli/loop/csv_kernels.py).
+"""The compiled ``log.csv`` formatter writes exactly what Python's ``%`` writes (shc_cli/record/csv_kernels.py).
 
 Every value the kernel formats is compared with CPython's own ``'%.6g' % x`` / ``'%.4f' % x`` (its correctly rounded
 ``dtoa``): random floats of every magnitude and random bit patterns, decimal-looking and dyadic numbers (ties),
@@ -17,8 +17,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from shc_cli.loop import csv_kernels
-from shc_cli.loop.csv_rows import RowBlock
+from shc_cli.record import csv_kernels
+from shc_cli.record.csv_rows import RowBlock
 
 BUFFER = np.zeros(64, dtype=np.uint8)
 

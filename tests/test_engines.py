@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from shc_cli.backends.engine import EngineOptions, rpy_from_matrix
-from shc_cli.backends.engine_registry import ENGINES, open_engine
+from shc_cli.backends.engine_registry import ENGINES, EngineName, open_engine
+from shc_cli.backends.mujoco_.world import MujocoWorld
 from shc_cli.backends.terrain import FEATURE_END_X, HALF_WIDTH, LANDING_END_X, Terrain, parse_terrain
 from shc_cli.errors import BackendError
 from shc_cli.model import body as model
@@ -53,7 +54,7 @@ def foot_frames(world, robot) -> np.ndarray:  # type: ignore[no-untyped-def]
 
 @pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("name", ROBOTS)
-def test_feet_follow_the_dh_chains_in_both_engines(engine: str, name: str) -> None:
+def test_feet_follow_the_dh_chains_in_both_engines(engine: EngineName, name: str) -> None:
     """At random joint angles within the limits each engine's foot frame is the DH tip (1e-6 m, 1e-6 rad)."""
     robot = robot_named(name)
     chains = Chains.from_robot(robot)
@@ -76,6 +77,7 @@ def test_mjcf_masses_are_the_urdf_masses(name: str) -> None:
     robot = robot_named(name)
     chains = Chains.from_robot(robot)
     world = open_engine(robot, EngineOptions(parse_terrain("flat"), 4, engine="mujoco"), chains.default_joints())
+    assert isinstance(world, MujocoWorld)
     assert float(world.model.body_mass.sum()) == pytest.approx(model.body_mass(robot), abs=1e-9)
 
 
@@ -100,6 +102,7 @@ def test_mujoco_rays_hit_height_at(text: str, field_csv: Path) -> None:
     robot = robot_named("bullet")
     chains = Chains.from_robot(robot)
     world = open_engine(robot, EngineOptions(spec, 4, True, seed=5, engine="mujoco"), chains.default_joints())
+    assert isinstance(world, MujocoWorld)
     terrain = world.terrain
     rng = np.random.default_rng(1)
     if spec.kind == "heightfield":
@@ -137,7 +140,7 @@ def test_unknown_engine_is_one_line() -> None:
 
 @pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.slow  # long simulations
-def test_standing_readings_agree_between_engines(engine: str) -> None:
+def test_standing_readings_agree_between_engines(engine: EngineName) -> None:
     """Standing still in the default stance: the feet carry the weight, the IMU reads +g up, the body is level at
     the standing height — the same in both engines (OpenSHC's Bullet: stiff position motors, no servo sag)."""
     from shc_cli.control.startup import plan_direct_startup
@@ -186,6 +189,7 @@ def test_mujoco_dynamixel_servo_is_the_servo_models_torque() -> None:
     chains = Chains.from_robot(robot)
     joints = chains.default_joints()
     world = open_engine(robot, EngineOptions(parse_terrain("flat"), 1, True, engine="mujoco"), joints)
+    assert isinstance(world, MujocoWorld)
     try:
         assert world.xml.count('<motor ') == len(world.qvel_index)
         goals = joints + 0.5  # every servo pushes towards +0.5 rad while the joints move the other way at 3 rad/s

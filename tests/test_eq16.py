@@ -22,4 +22,5 @@ def test_eq16_can_disagree_with_the_walk(tmp_path: Path) -> None:
     walker's velocity divided and multiplied by f/β, agreed with itself whatever happened)."""
     summary = plan("bullet_openshc", "tripod", "0.5,0,0.5", 6.0, None, tmp_path / "turn", False).summary
     assert summary.eq16_speed_mps == pytest.approx(0.5 * 0.231884058, rel=1e-6)
+    assert summary.achieved_mean_speed_mps is not None and summary.eq16_speed_mps is not None
     assert abs(summary.achieved_mean_speed_mps / summary.eq16_speed_mps - 1.0) > 0.05

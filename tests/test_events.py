@@ -121,8 +121,8 @@ def test_view_playback_tells_a_closed_tab_from_a_bug(closed: bool, caplog: pytes
     page = RunPage.__new__(RunPage)
     page.alive, page.playing = True, True
     page.data = SimpleNamespace(run=SimpleNamespace(t=np.array([0.0, 1.0]), path=Path("run")))  # type: ignore[assignment]
-    page.speed = SimpleNamespace(value=1.0)
-    page.timeline = _Value(ConnectionClosedOK(None, None) if closed else ValueError("a bug"))
+    page.speed = SimpleNamespace(value=1.0)  # type: ignore[assignment]
+    page.timeline = _Value(ConnectionClosedOK(None, None) if closed else ValueError("a bug"))  # type: ignore[assignment]
     with caplog.at_level(logging.ERROR, logger="shc_cli.view.server"):
         page._play()  # returns once it stops
     assert not page.alive

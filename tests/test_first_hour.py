@@ -36,7 +36,7 @@ def test_a_robot_without_servo_data_says_its_power_is_indicative(tmp_path: Path,
 
 @pytest.mark.parametrize("scenario", ["SA", "WA", "SG"])
 def test_the_standing_and_air_scenarios_print_their_power_without_cot_or_progress(
-        scenario: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+        scenario: str, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     """Walk air is not meant to go anywhere: no NO PROGRESS flag, and no CoT (it printed 'CoT None')."""
     code, stdout, err = run(["simulate", "--scenario", scenario, "--duration", "1", "--out", str(tmp_path / "r"),
                              "--no-plots"], capsys, monkeypatch)
@@ -49,7 +49,7 @@ def test_figures_without_walking_say_so(capsys, monkeypatch) -> None:  # type: i
     be measured (it printed 'CoT None', 'mean power 0.0 W' after a Ctrl-C during start-up, and a NO PROGRESS run's
     CoT 137.88)."""
     from shc_cli.analysis.run_line import simulation_line
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
 
     base = {"robot": "r", "gait": "tripod", "scenario": "WG", "engine": "mujoco", "sim_time_s": 3.0,
             "wall_time_s": 1.0, "distance_m": 0.0, "path_speed_mps": 0.0, "displacement_speed_mps": 0.0,

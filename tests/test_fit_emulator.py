@@ -15,6 +15,7 @@ import os
 import sys
 import threading
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -23,7 +24,8 @@ from shc_cli.spec.robot import Servo
 JOINTS = [f"{leg}_{joint}" for leg in ("AR", "BR", "CR", "CL", "BL", "AL") for joint in ("coxa", "femur", "tibia")]
 START = {"position_p_gain": 800.0, "coulomb_friction": 0.1, "viscous_friction": 0.02, "armature": 0.003}
 """The robot file's values: the fit's start (the XM430-W350's factory gain; friction and rotor guessed)."""
-TRUTH = {"position_p_gain": 560.0, "coulomb_friction": 0.15, "viscous_friction": 0.03, "armature": 0.0045}
+TRUTH: dict[str, Any] = {"position_p_gain": 560.0, "coulomb_friction": 0.15, "viscous_friction": 0.03,
+                         "armature": 0.0045}
 """The emulated servos' (−30 %, +50 %, +50 %, +50 % of the start)."""
 
 

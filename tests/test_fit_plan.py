@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import itertools
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -14,7 +15,7 @@ from shc_cli.spec.loading import load_robot
 from shc_cli.spec.timeline import load_timeline
 
 
-def _timeline(tmp_path: Path, robot: str = "openshc_default") -> tuple[Path, list[tuple[float, dict[str, object]]]]:
+def _timeline(tmp_path: Path, robot: str = "openshc_default") -> tuple[Path, list[tuple[float, dict[str, Any]]]]:
     path = write_plan(robot, tmp_path / "plan.toml")
     dt = load_robot(robot).robot.time_delta
     return path, [(cycle * dt, change) for cycle, change in load_timeline(path, dt).changes]
@@ -24,10 +25,10 @@ def test_the_plan_is_a_plan_script_with_every_phase(tmp_path: Path) -> None:
     path, changes = _timeline(tmp_path)
     text = path.read_text()
     assert text.startswith("# shc fit excitation for openshc_default")
-    frequencies = [change["parameters"]["step_frequency"] for _, change in changes  # type: ignore[index]
+    frequencies = [change["parameters"]["step_frequency"] for _, change in changes
                    if "parameters" in change]
     assert frequencies == [0.5, 1.0, 1.5, 1.0]  # 0.5, 1 and 1.5 × the default 1 Hz, then the default again
-    posed = {int(np.flatnonzero(change["pose_velocity"])[0]) for _, change in changes  # type: ignore[arg-type]
+    posed = {int(np.flatnonzero(change["pose_velocity"])[0]) for _, change in changes
              if any(change.get("pose_velocity", (0,)))}
     assert posed == set(range(6))  # every body axis swayed
     assert changes[0] == (0.0, {"velocity": (0.0, 0.0, 0.0)})  # stands first
@@ -76,7 +77,7 @@ def test_every_phase_moves_the_joints(tmp_path: Path) -> None:
 
     path, changes = _timeline(tmp_path)
     run = plan("openshc_default", commands=path, out=tmp_path / "run", plots=False)
-    from shc_cli.loop.runread import read_run
+    from shc_cli.record.runread import read_run
 
     log = read_run(run.path)
     t = log.t - log.t[log.running][0]

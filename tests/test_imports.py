@@ -1,12 +1,15 @@
-"""No import circles in ``shc_cli``: every module's imports (top-level and inside functions, not the
-``TYPE_CHECKING`` ones) form a graph without cycles, so "open a run", the bag reader and the analysis build on each
-other in one direction."""
+"""No import circles in ``shc_cli`` and every import pointing down the layers: every module's imports (top-level,
+inside functions and the ``TYPE_CHECKING`` ones) form a graph without cycles, and each package has a layer of its
+own, so the run record, the analysis, the bag reader and the run loop build on each other in one direction."""
 
 from __future__ import annotations
 
 import ast
 import functools
 from pathlib import Path
+from typing import cast
+
+import pytest
 
 PACKAGE = Path(__file__).parents[1] / "shc_cli"
 
@@ -26,13 +29,14 @@ def _type_checking_lines(tree: ast.AST) -> set[int]:
 
 
 @functools.cache  # parsed once per test process (≈ 0.7 s), not once per test that reads it
-def import_graph() -> dict[str, set[str]]:
-    """Module → the ``shc_cli`` modules it imports (a package's ``__init__`` counts as the package); read-only."""
+def import_graph(type_level: bool = True) -> dict[str, set[str]]:
+    """Module → the ``shc_cli`` modules it imports (a package's ``__init__`` counts as the package); read-only.
+    ``type_level``: with the imports under ``if TYPE_CHECKING:`` (a circle of type names is a circle too)."""
     files = {_module(path): path for path in PACKAGE.rglob("*.py")}
     graph: dict[str, set[str]] = {}
     for name, path in files.items():
         tree = ast.parse(path.read_text(encoding="utf-8"))
-        skip = _type_checking_lines(tree)
+        skip = set() if type_level else _type_checking_lines(tree)
         targets: set[str] = set()
         for node in ast.walk(tree):
             if getattr(node, "lineno", 0) in skip:
@@ -89,7 +93,9 @@ def test_the_cycle_finder_finds_a_cycle() -> None:
 
 def test_no_import_cycles_in_shc_cli() -> None:
     graph = import_graph()
-    assert {"shc_cli.loop.runread", "shc_cli.interop.bagrun"} <= graph["shc_cli.loop.opening"]
+    assert {"shc_cli.record.runread", "shc_cli.interop.bagrun"} <= graph["shc_cli.domain.stored_run"]
+    assert "shc_cli.domain.ros_config" in graph["shc_cli.domain.ros_session"]  # a TYPE_CHECKING import counts
+    assert "shc_cli.domain.ros_config" not in import_graph(type_level=False)["shc_cli.domain.ros_session"]
     assert cycles(graph) == []
 
 
@@ -125,18 +131,33 @@ LAYERS: dict[str, int] = {
     "shc_cli.spec": 0,
     "shc_cli.model": 1,
     "shc_cli.control": 2,
-    "shc_cli.backends": 3, "shc_cli.hardware": 3,
-    "shc_cli.validation": 4, "shc_cli.loop": 4, "shc_cli.analysis": 4, "shc_cli.interop": 4, "shc_cli.ros": 4,
-    "shc_cli.live": 4, "shc_cli.plots": 4, "shc_cli.study_plots": 4,
-    "shc_cli.domain": 5, "shc_cli.replay": 5, "shc_cli.view": 5,
-    "shc_cli.api": 6,
-    "shc_cli.commands": 7,
-    "shc_cli.cli": 8,
+    "shc_cli.hardware": 3,
+    "shc_cli.backends": 4,
+    "shc_cli.hardware.emulator": 5, "shc_cli.hardware.emulator_protocol1": 5, "shc_cli.hardware.emulator_process": 5,
+    "shc_cli.record": 6,
+    "shc_cli.validation": 7,
+    "shc_cli.analysis": 8,
+    "shc_cli.plots": 9,
+    "shc_cli.interop": 10,
+    "shc_cli.loop": 11,
+    "shc_cli.ros": 12,
+    "shc_cli.live": 13,
+    "shc_cli.replay": 14,
+    "shc_cli.domain": 15,
+    "shc_cli.view": 16,
+    "shc_cli.api": 17,
+    "shc_cli": 18,
+    "shc_cli.commands": 19,
+    "shc_cli.cli": 20,
 }
-"""The layers, lowest first (a module may import its own layer and those below): spec ← model ← control ←
-backends/hardware ← loop (validation of robot and gait files, run loop, run log, analysis, interop, plots) ←
-domain (runs, sweeps, optimize, replay, view) ← api ← commands ← cli."""
-ANYWHERE = {"shc_cli", "shc_cli.errors", "shc_cli.events", "shc_cli.outputs", "shc_cli.progress"}
+"""The layers, lowest first (a module may import its own package and the layers below; the longest prefix names a
+module's layer): robot and gait files ← kinematics ← the controller ← servo buses ← backends (engines, servo
+models, the Dynamixel backend) ← the emulated servo buses (they run the backends' servo physics; a package of
+their own once the bus work settles) ← the run record (log format, readers, row kernels, summary models) ←
+validation ← analysis ← plots ← interop (bags, OpenSHC files, URDF import) ← the run loop ← ROS 1 ← the live
+stream ← replay ← domain (runs, sweeps, optimize, opening a stored run) ← view ← api ← the package's lazy facade
+(``import shc_cli``) ← commands ← cli."""
+ANYWHERE = {"shc_cli.version", "shc_cli.errors", "shc_cli.events", "shc_cli.outputs", "shc_cli.progress"}
 """Helpers every layer may import: the version, the one exception tree, logging (events), file writing, the progress
 bar."""
 KNOWN_UPWARD: set[tuple[str, str]] = set()
@@ -147,20 +168,36 @@ def layer(module: str) -> int:
     """The layer of a module (-1: a helper every layer may import)."""
     if module in ANYWHERE:
         return -1
-    for prefix, rank in LAYERS.items():
-        if module == prefix or module.startswith(prefix + "."):
-            return rank
-    raise AssertionError(f"{module} is in no layer: add it to LAYERS")
+    prefixes = [prefix for prefix in LAYERS  # "shc_cli" is the package's __init__ alone, not all of shc_cli
+                if module == prefix or (prefix != "shc_cli" and module.startswith(prefix + "."))]
+    if not prefixes:
+        raise AssertionError(f"{module} is in no layer: add it to LAYERS")
+    return LAYERS[max(prefixes, key=len)]
+
+
+def test_every_layer_is_one_package_and_exists() -> None:
+    """No two packages share a rank (a shared rank hid circles between them), and every entry names a module."""
+    modules = set(import_graph())
+    assert set(LAYERS) | ANYWHERE <= modules
+    emulators = {name for name in LAYERS if name.startswith("shc_cli.hardware.emulator")}
+    ranks = [rank for name, rank in LAYERS.items() if name not in emulators]
+    assert len(ranks) == len(set(ranks))
+    assert {LAYERS[name] for name in emulators} == {LAYERS["shc_cli.backends"] + 1}
 
 
 def test_the_layer_rule_catches_an_upward_import() -> None:
     assert layer("shc_cli.spec.robot") < layer("shc_cli.control.controller") < layer("shc_cli.domain.simulate")
     assert layer("shc_cli.api") < layer("shc_cli.commands.simulate") < layer("shc_cli.cli")
-    assert layer("shc_cli.errors") == -1
+    assert layer("shc_cli.record.runread") < layer("shc_cli.analysis.metrics") < layer("shc_cli.loop.physics_summary")
+    assert layer("shc_cli.hardware.bus") < layer("shc_cli.backends.dynamixel") < layer("shc_cli.hardware.emulator")
+    assert layer("shc_cli.errors") == -1 and layer("shc_cli") > layer("shc_cli.api")
+    with pytest.raises(AssertionError, match="in no layer"):
+        layer("shc_cli.new_package.module")
 
 
 def test_nothing_imports_upward() -> None:
-    """Every import (also inside functions) points to the module's own layer or below."""
+    """Every import (also inside functions and under ``TYPE_CHECKING``) points to the module's own layer or
+    below."""
     upward = {(name, target) for name, targets in import_graph().items() for target in targets
               if layer(target) > layer(name)}
     assert upward - KNOWN_UPWARD == set()
@@ -191,7 +228,7 @@ def _any_annotations(tree: ast.AST) -> list[int]:
         for annotation in filter(None, annotations):
             if any((isinstance(n, ast.Name) and n.id == "Any") or (isinstance(n, ast.Constant) and n.value == "Any")
                    for n in ast.walk(annotation)):
-                lines.append(node.lineno)
+                lines.append(cast(ast.stmt, node).lineno)
     return lines
 
 

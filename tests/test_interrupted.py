@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from shc_cli.loop.runread import read_run
+from shc_cli.record.runread import read_run
 
 SHC = [sys.executable, "-m", "shc_cli.cli"]
 

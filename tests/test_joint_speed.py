@@ -17,8 +17,8 @@ from hypothesis import strategies as st
 from shc_cli.analysis.run_line import speed_note
 from shc_cli.control.controller import Command, Controller, RobotState
 from shc_cli.control.speed_guard import SpeedGuard
-from shc_cli.loop.summary import RunSummary
 from shc_cli.model.chains import Chains
+from shc_cli.record.summary import RunSummary
 from shc_cli.spec.loading import bundled, load_gait, load_robot
 from shc_cli.spec.robot import Robot
 

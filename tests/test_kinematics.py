@@ -13,7 +13,7 @@ from shc_cli.spec.loading import load_robot
 from shc_cli.spec.robot import Robot
 
 ROBOTS = ["bullet", "bullet_mammalian", "openshc_default", "athena", "quadruped", "octopod"]
-CHAINS = {name: Chains.from_robot(load_robot(name).robot) for name in ROBOTS}  # type: ignore[arg-type]
+CHAINS = {name: Chains.from_robot(load_robot(name).robot) for name in ROBOTS}
 
 
 def test_bullet_tips_at_zero_joints_match_the_study(bullet: Robot) -> None:
@@ -155,7 +155,7 @@ def test_deviation_beyond_five_millimetres_fails_the_step() -> None:
 
 def test_padding_short_legs_changes_nothing() -> None:
     """A 3-DOF leg padded to 5 joints (as in a mixed robot) moves exactly as the unpadded leg."""
-    robot: Robot = load_robot("openshc_default").robot  # type: ignore[assignment]
+    robot: Robot = load_robot("openshc_default").robot
     plain = Chains.from_robot(robot)
     def pad(values: np.ndarray) -> np.ndarray:
         return np.pad(values, ((0, 0), (0, 2)))

@@ -12,6 +12,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -32,7 +33,7 @@ def _client_ready() -> None:
     subprocess.run(["npm", "ci", "--no-audit", "--no-fund", "--silent"], cwd=CLIENT, check=True, timeout=300)
 
 
-def _live_run(args: list[str], topics: list[str]) -> list[dict[str, object]]:
+def _live_run(args: list[str], topics: list[str]) -> list[dict[str, Any]]:
     """Run ``shc ARGS --live --live-port 0``, attach the Node client to the printed URL, return its messages."""
     _client_ready()
     sim = subprocess.Popen([*SHC, *args, "--live", "--live-port", "0"], cwd=ROOT, stdout=subprocess.PIPE,
@@ -54,7 +55,7 @@ def _live_run(args: list[str], topics: list[str]) -> list[dict[str, object]]:
     return [json.loads(line) for line in client.stdout.splitlines()]
 
 
-def _check_joints(joints: list[dict[str, object]], table: Path, suffix: str) -> None:
+def _check_joints(joints: list[dict[str, Any]], table: Path, suffix: str) -> None:
     """Every streamed /desired_joint_states equals the run's own table at its cycle (header.seq), and the client got
     every cycle from its first on."""
     with table.open(encoding="utf-8", newline="") as handle:

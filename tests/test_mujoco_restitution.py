@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import logging
 from pathlib import Path
+from typing import Literal
 
 import pytest
 
@@ -31,7 +32,7 @@ def test_a_mujoco_run_with_restitution_says_it_is_not_applied(tmp_path: Path,
     assert any("MuJoCo applies no restitution" in r.getMessage() for r in caplog.records)
 
 
-def _posture_change(engine: str, tmp: Path, restitution: float = 0.5) -> dict[str, float]:
+def _posture_change(engine: Literal["mujoco", "pybullet"], tmp: Path, restitution: float = 0.5) -> dict[str, float]:
     """Relative change (posture control against simple control) of the torso height's IQR and the median roll and
     pitch rates on the 10° ramp, the paper's set-up."""
     figures = {}
@@ -43,9 +44,12 @@ def _posture_change(engine: str, tmp: Path, restitution: float = 0.5) -> dict[st
             for key in ("height_iqr_m", "roll_rate_median_rps", "pitch_rate_median_rps")}
 
 
+Engine = Literal["mujoco", "pybullet"]
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("engine", ["mujoco", "pybullet"])
-def test_athena_posture_control_on_the_ramp_in_both_engines(engine: str, tmp_path: Path) -> None:
+def test_athena_posture_control_on_the_ramp_in_both_engines(engine: Engine, tmp_path: Path) -> None:
     """Issue 38's acceptance: height IQR ≤ −40 %, roll-rate median ≤ −20 %, pitch-rate median < 0 (the paper:
     −36 % roll, −11.9 % pitch). Measured: MuJoCo −54 %, −28 %, −9 %."""
     change = _posture_change(engine, tmp_path)

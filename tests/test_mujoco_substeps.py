@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from shc_cli.backends.engine import EngineOptions
+from shc_cli.backends.mujoco_.world import MujocoWorld
 from shc_cli.backends.simulated import open_world
 from shc_cli.backends.terrain import parse_terrain
 from shc_cli.spec.loading import load_robot
@@ -24,6 +25,7 @@ def _world(name: str, control: str | None = None, python: bool = False):  # type
     if control is not None:
         robot = robot.model_copy(update={"servo": robot.servo.model_copy(update={"control": control})})
     world = open_world(robot, EngineOptions(parse_terrain("flat"), 4, False, engine="mujoco"))
+    assert isinstance(world, MujocoWorld)
     assert world._pointers is not None  # this MuJoCo's library is callable: the kernel runs
     if python:
         world._pointers = None

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from shc_cli.analysis.progress import cycle_path_length, progress_fields, progress_note
-from shc_cli.loop.summary import RunSummary
+from shc_cli.record.summary import RunSummary
 
 from .test_cli import run
 

@@ -27,7 +27,9 @@ from .conftest import GOLDEN
 def _limit_cost_minimum(chains: Chains, leg: int, tip: np.ndarray, start: np.ndarray) -> np.ndarray:
     """Joint angles [rad] minimising the limit cost of leg ``leg`` among those that put its tip at ``tip`` [m]."""
     one = chains.take(np.array([leg]))
-    return vertical_load.best_posture(one, tip, vertical_load.limit_cost(one.lower[0], one.upper[0]), start[None])
+    best: np.ndarray = vertical_load.best_posture(one, tip, vertical_load.limit_cost(one.lower[0], one.upper[0]),
+                                                  start[None])
+    return best
 
 
 def _distance_to_minimum(chains: Chains, q: np.ndarray) -> np.ndarray:

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shc_cli.loop.runread import read_run
+from shc_cli.record.runread import read_run
 
 from .test_run_hw import _bus, _run_hw
 

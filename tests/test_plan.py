@@ -201,7 +201,7 @@ def test_plan_script_rejects_an_unknown_leg(tmp_path: Path, capsys, monkeypatch)
 
 
 def test_a_gait_switch_names_every_gait_and_a_short_run_measures_no_stance_speed(
-        tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     """A plan script that switches gait titles the run with both gaits in order (it said the last one); a run
     without a MOVING cycle says its stance-feet speed cannot be measured (it printed 0.0000 m/s, eq. 16: 0.0000)."""
     script = tmp_path / "plan.toml"

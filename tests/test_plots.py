@@ -64,7 +64,8 @@ def _runs(flags: np.ndarray, t: np.ndarray, dt: float) -> list[tuple[float, floa
 
 
 def test_plan_plots_have_titles_black_swing_and_legends_off_the_curves(tmp_path: Path, figures: dict[str, Any],
-                                                                       capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+                                                                       capsys: pytest.CaptureFixture[str],
+                                                                       monkeypatch: pytest.MonkeyPatch) -> None:
     out = tmp_path / "plan"
     code, _, err = run(["plan", "bullet", "--gait", "wave", "--duration", "4", "--out", str(out)], capsys,
                        monkeypatch)
@@ -82,7 +83,7 @@ def test_plan_plots_have_titles_black_swing_and_legends_off_the_curves(tmp_path:
     figure = figures["joints.png"]
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    renderer = FigureCanvasAgg(figure).get_renderer()
+    renderer = FigureCanvasAgg(figure).get_renderer()  # type: ignore[no-untyped-call]
     for axis in figure.axes:
         legend = axis.get_legend()
         assert legend is not None
@@ -109,8 +110,9 @@ def test_measured_contacts_use_the_same_convention(tmp_path: Path, figures: dict
         assert "bullet / tripod" in _titles(figures[name]), name
 
 
-def test_analyze_plots_are_titled_with_robot_and_gait(tmp_path: Path, figures: dict[str, Any], capsys,
-                                                      monkeypatch) -> None:  # type: ignore[no-untyped-def]
+def test_analyze_plots_are_titled_with_robot_and_gait(tmp_path: Path, figures: dict[str, Any],
+                                                      capsys: pytest.CaptureFixture[str],
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     from shc_cli.plots import plot_cot
 
     results = [{"run": f"r{f}", "robot": "bullet", "gait": "tripod", "step_frequency_hz": f, "cot": 3.0 / f,

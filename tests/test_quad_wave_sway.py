@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from shc_cli.analysis.metrics import feet_and_com
-from shc_cli.loop.runread import read_run
+from shc_cli.record.runread import read_run
 from shc_cli.spec.loading import data_dir
 from shc_cli.spec.sway import quad_wave_sway_toml, sway_amplitude
 

@@ -83,13 +83,14 @@ def test_render_mp4_has_every_frame_the_robot_and_motion(plan_run: Path, tmp_pat
 
 @needs_gl
 def test_render_gif_speed_and_top_camera(plan_run: Path, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    from PIL import Image
+    from PIL import GifImagePlugin, Image
 
     out = tmp_path / "walk.gif"
     code, _, err = run(["render", str(plan_run), "--out", str(out), "--fps", str(FPS), "--size", "240x160",
                         "--camera", "top", "--speed", "2"], capsys, monkeypatch)
     assert (code, err) == (0, ""), err
     with Image.open(out) as gif:
+        assert isinstance(gif, GifImagePlugin.GifImageFile)
         assert gif.n_frames == math.floor(_logged_span(plan_run) * FPS / 2 + 1e-9) + 1
         assert gif.size == (240, 160)
         assert gif.info["duration"] == 200
@@ -128,9 +129,10 @@ main()
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, env=env,
                           timeout=600)
     assert done.returncode == 0, done.stderr
-    from PIL import Image
+    from PIL import GifImagePlugin, Image
 
     with Image.open(tmp_path / "run.gif") as gif:
+        assert isinstance(gif, GifImagePlugin.GifImageFile)
         gif.seek(gif.n_frames - 1)
         assert _link_pixels(np.asarray(gif.convert("RGB"))) > 20
 
@@ -157,7 +159,8 @@ def test_render_reads_a_bag_as_the_run(plan_run: Path, tmp_path: Path, capsys, m
     code, _, err = run(["render", str(bag), "--out", str(out), "--fps", "2", "--size", "64x48"], capsys,
                             monkeypatch)
     assert (code, err) == (0, ""), err
-    from PIL import Image
+    from PIL import GifImagePlugin, Image
 
     with Image.open(out) as gif:
+        assert isinstance(gif, GifImagePlugin.GifImageFile)
         assert gif.n_frames == math.floor(_logged_span(plan_run) * 2 + 1e-9) + 1

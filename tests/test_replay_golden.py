@@ -113,7 +113,8 @@ def test_mammalian_requesting_running_by_time_to_start_walks_into_another_postur
 @pytest.mark.parametrize(("name", "robot", "cycles"), [("insectoid", "bullet_openshc", 7939),
                                                        ("mammalian_excerpt", "bullet_mammalian", 1100)])
 def test_cli_replay_agrees_within_a_milliradian_and_a_tenth_of_a_millimetre(
-        name: str, robot: str, cycles: int, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+        name: str, robot: str, cycles: int, capsys: pytest.CaptureFixture[str],
+        monkeypatch: pytest.MonkeyPatch) -> None:
     code, out, err = run(["replay", str(RUNS / name), "--robot", robot, "--json", "--tolerance-joints", "0.001"],
                          capsys, monkeypatch)
     assert (code, err) == (0, "")

@@ -11,6 +11,7 @@ from __future__ import annotations
 import gzip
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -59,10 +60,11 @@ def bags(head: Recorded, tmp_path_factory: pytest.TempPathFactory) -> dict[str, 
             "mcap": write_openshc_bag(head, folder / "insectoid_mcap", ros1=False)}
 
 
-def replay_json(source: Path, capsys, monkeypatch, *extra: str) -> dict:  # type: ignore[no-untyped-def]
+def replay_json(source: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch,
+                *extra: str) -> dict[str, Any]:
     code, out, err = run(["replay", str(source), "--robot", "bullet_openshc", "--json", *extra], capsys, monkeypatch)
     assert (code, err) == (0, ""), err
-    report: dict = json.loads(out)
+    report: dict[str, Any] = json.loads(out)
     return report
 
 
@@ -78,7 +80,8 @@ def test_our_legstate_is_openshcs() -> None:
 
 @pytest.mark.parametrize("fmt", ["ros1", "mcap"])
 def test_a_bag_replays_to_exactly_the_csv_figures(fmt: str, bags: dict[str, Path], csv_prefix: Path,
-                                                  capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+                                                  capsys: pytest.CaptureFixture[str],
+                                                  monkeypatch: pytest.MonkeyPatch) -> None:
     from_csv = replay_json(csv_prefix, capsys, monkeypatch)
     from_bag = replay_json(bags[fmt], capsys, monkeypatch)
     assert from_bag["kind"] == ("ROS 1 bag" if fmt == "ros1" else "ROS 2 bag")
@@ -92,7 +95,8 @@ def test_a_bag_replays_to_exactly_the_csv_figures(fmt: str, bags: dict[str, Path
 
 
 def test_a_bag_with_only_the_joints_and_inputs_compares_the_joints(head: Recorded, tmp_path: Path,
-                                                                   capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+                                                                   capsys: pytest.CaptureFixture[str],
+                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
     bag = write_openshc_bag(head, tmp_path / "joints.bag", ros1=True,
                             topics={"/desired_joint_states", "/syropod_remote/desired_velocity"},
                             more_inputs=("/syropod_remote/gait_selection",))
@@ -108,7 +112,8 @@ def test_a_bag_with_only_the_joints_and_inputs_compares_the_joints(head: Recorde
 
 
 def test_out_writes_the_per_cycle_differences_and_a_plot(csv_prefix: Path, tmp_path: Path,
-                                                         capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+                                                         capsys: pytest.CaptureFixture[str],
+                                                         monkeypatch: pytest.MonkeyPatch) -> None:
     code, out, _ = run(["replay", str(csv_prefix), "--robot", "bullet_openshc", "--out", str(tmp_path / "d")],
                        capsys, monkeypatch)
     assert code == 0
@@ -174,7 +179,8 @@ def _one_line_exit_2(argv: list[str], capsys, monkeypatch) -> str:  # type: igno
 
 
 def test_a_bag_without_the_joint_topic_is_one_line(head: Recorded, tmp_path: Path,
-                                                   capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+                                                   capsys: pytest.CaptureFixture[str],
+                                                   monkeypatch: pytest.MonkeyPatch) -> None:
     bag = write_openshc_bag(head.head(20), tmp_path / "no_joints", ros1=False,
                             topics={"/shc/velocity", "/syropod_remote/desired_velocity"})
     err = _one_line_exit_2(["replay", str(bag), "--robot", "bullet_openshc"], capsys, monkeypatch)
@@ -182,7 +188,8 @@ def test_a_bag_without_the_joint_topic_is_one_line(head: Recorded, tmp_path: Pat
 
 
 def test_a_bag_without_the_velocity_input_is_one_line(head: Recorded, tmp_path: Path,
-                                                      capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+                                                      capsys: pytest.CaptureFixture[str],
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     bag = write_openshc_bag(head.head(20), tmp_path / "no_input.bag", ros1=True, topics={"/desired_joint_states"})
     err = _one_line_exit_2(["replay", str(bag), "--robot", "bullet_openshc"], capsys, monkeypatch)
     assert "no /syropod_remote/desired_velocity in the bag" in err
@@ -190,14 +197,15 @@ def test_a_bag_without_the_velocity_input_is_one_line(head: Recorded, tmp_path: 
 
 @pytest.mark.parametrize("ros1", [True, False])
 def test_an_empty_bag_is_one_line(ros1: bool, head: Recorded, tmp_path: Path,
-                                  capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+                                  capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     bag = write_openshc_bag(head.head(0), tmp_path / ("empty.bag" if ros1 else "empty"), ros1=ros1)
     err = _one_line_exit_2(["replay", str(bag), "--robot", "bullet_openshc"], capsys, monkeypatch)
     assert "the bag is empty" in err
 
 
 def test_another_robots_joints_are_one_line(head: Recorded, tmp_path: Path,
-                                            capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+                                            capsys: pytest.CaptureFixture[str],
+                                            monkeypatch: pytest.MonkeyPatch) -> None:
     bag = write_openshc_bag(head.head(20), tmp_path / "insectoid", ros1=False)
     err = _one_line_exit_2(["replay", str(bag), "--robot", "quadruped"], capsys, monkeypatch)
     assert "are not those of robot 'quadruped'" in err and "--robot" in err
@@ -206,7 +214,8 @@ def test_another_robots_joints_are_one_line(head: Recorded, tmp_path: Path,
 
 
 def test_unusable_paths_and_files_are_one_line(csv_prefix: Path, tmp_path: Path,
-                                               capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+                                               capsys: pytest.CaptureFixture[str],
+                                               monkeypatch: pytest.MonkeyPatch) -> None:
     err = _one_line_exit_2(["replay", str(tmp_path / "nothing"), "--robot", "bullet_openshc"], capsys, monkeypatch)
     assert "no such bag" in err
     (tmp_path / "notes.txt").write_text("hello\n")

@@ -28,7 +28,7 @@ def record(robot: Robot, gait: Gait, joints: np.ndarray | None, velocity: np.nda
     the replay does: the run stands in for a recording of OpenSHC."""
     openshc = robot.model_copy(update={"ik": robot.ik.model_copy(update={"limit_avoidance_cap": 0.0})})
     controller = Controller(openshc, gait, joints=joints)
-    outputs = [controller.step(Command(velocity=tuple(v), state_request=r))  # type: ignore[arg-type]
+    outputs = [controller.step(Command(velocity=tuple(v), state_request=r))
                for v, r in zip(velocity, requests, strict=True)]
     n = len(outputs)
     seen = np.vstack([velocity[1:], velocity[-1:]])
@@ -74,7 +74,7 @@ def test_the_start_up_sequence_and_a_later_shut_down_replay_exactly(sequence_rob
     n, walk, down = 3000, (1200, 1500), 2200  # RUNNING from 1153, READY again at ~2745
     velocity = np.zeros((n, 3))
     velocity[walk[0]:walk[1]] = (1.0, 0.0, 0.0)
-    requests: list[RobotState | None] = [RobotState.RUNNING] * down + [RobotState.READY] * (n - down)
+    requests: list[RobotState | None] = [*[RobotState.RUNNING] * down, *[RobotState.READY] * (n - down)]
     remote = np.array([2.0] * down + [1.0] * (n - down))  # the remote's request acting in each cycle
     packed, _ = joint_configurations(sequence_robot)
     recorded, outputs = record(sequence_robot, tripod, packed[-1].copy(), velocity, requests, remote)

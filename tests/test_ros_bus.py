@@ -18,7 +18,7 @@ import pytest
 
 from shc_cli.hardware import protocol2 as p2
 from shc_cli.hardware.emulator_process import EmulatorProcess
-from shc_cli.loop.runread import read_run
+from shc_cli.record.runread import read_run
 from shc_cli.spec.loading import load_robot
 from tests.ros_master import ros, ros_env
 
@@ -88,6 +88,7 @@ def test_the_node_walks_the_servos_and_shuts_down_on_ctrl_c(ros_env: dict[str, s
     assert 50.0 < summary["rate_hz"] <= 101.0, summary  # a late cycle restarts the deadline (run-hw): slower if loaded
     log = read_run(run)
     assert (log.walk_state == "MOVING").any() and log.command[:, 0].max() == 1.0  # the remote's 0.5, 1.0 …
+    assert log.states is not None
     states = [s for i, s in enumerate(log.states[:, 0]) if i == 0 or s != log.states[i - 1, 0]]
     assert states[-2:] == ["READY", "PACKED"] and "RUNNING" in states  # walked, stopped, shut down, packed
     commanded, measured_log = log.commanded, log.joints

@@ -17,7 +17,7 @@ import pytest
 
 from shc_cli.hardware import protocol2 as p2
 from shc_cli.hardware.emulator_process import EmulatorProcess, promptly
-from shc_cli.loop.runread import read_run
+from shc_cli.record.runread import read_run
 from shc_cli.spec.loading import load_robot
 from tests.run_waits import wait_running
 

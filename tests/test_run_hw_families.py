@@ -26,7 +26,7 @@ import pytest
 
 from shc_cli.hardware import protocol1 as p1
 from shc_cli.hardware.emulator_process import EmulatorProcess, Heard, promptly
-from shc_cli.loop.runread import read_run
+from shc_cli.record.runread import read_run
 from tests.run_waits import StderrLines, wait_running_on_stderr
 
 from .test_cli import run

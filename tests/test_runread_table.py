@@ -1,4 +1,4 @@
-"""The run-directory table reader (``shc_cli.loop.runread._table``): mixed text and number columns in one pass of
+"""The run-directory table reader (``shc_cli.record.runread._table``): mixed text and number columns in one pass of
 numpy's parser, and one-line errors for a bad table."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from shc_cli.errors import SpecError
-from shc_cli.loop.runread import _table
+from shc_cli.record.runread import _table
 
 
 def test_text_and_number_columns_come_back_as_written(tmp_path: Path) -> None:

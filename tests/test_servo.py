@@ -3,17 +3,20 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
+from shc_cli.backends.engine_registry import EngineName
 from shc_cli.backends.servo import ServoModel
 from shc_cli.spec.loading import load_robot
 from shc_cli.spec.robot import Servo
 
 from .conftest import ROOT
 
-MX106 = {"control": "dynamixel", "stall_torque": 8.4, "no_load_speed": 4.71, "torque_constant": 1.62,
+MX106: dict[str, Any] = {"control": "dynamixel", "stall_torque": 8.4, "no_load_speed": 4.71, "torque_constant": 1.62,
          "winding_resistance": 2.31, "supply_voltage": 12.0, "position_p_gain": 850.0, "idle_power": 0.89}
 
 
@@ -134,7 +137,7 @@ def test_the_integral_stops_growing_at_the_pwm_limit() -> None:
 
 
 @pytest.mark.parametrize("engine", ["pybullet", "mujoco"])
-def test_integral_action_removes_the_sag_a_p_servo_leaves(engine: str) -> None:
+def test_integral_action_removes_the_sag_a_p_servo_leaves(engine: EngineName) -> None:
     """A leg held in the air under gravity: with P only the loaded joints sit a load/stiffness error off their goals;
     with an I gain the same servo settles on them (both engines run the same torque law)."""
     from shc_cli.backends.engine import EngineOptions
@@ -186,7 +189,7 @@ def test_the_suggested_rate_is_the_lowest_stable_multiple_of_the_control_rate() 
 
 
 def test_a_light_robot_with_a_stiff_servo_law_is_warned_and_the_suggested_rate_walks(
-        tmp_path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     """The quadruped (links of 30–90 g) with the MX-106 firmware law and no rotor inertia: PyBullet's explicit
     servo torque diverges at 400 Hz (the robot is thrown off the floor). The run says so before the user wonders
     why, in the summary and on the terminal, with the rate that fixes it; at that rate it walks, with no note."""

@@ -9,12 +9,14 @@ from typing import Any
 
 import pytest
 
+from shc_cli.backends.engine_registry import EngineName
+
 from .test_cli import run
 
 TIMING = {"wall_time_s", "physics_time_s", "running_wall_time_s", "running_physics_time_s"}
 REQUIRED = {"sim_time_s", "wall_time_s", "physics_time_s", "distance_m", "mean_speed_mps", "mean_power_w", "cot",
             "fell", "seed", "terrain", "engine", "engine_version"}
-ENGINES = ["pybullet", "mujoco"]
+ENGINES: list[EngineName] = ["pybullet", "mujoco"]
 
 
 def _simulate(tmp_path: Path, name: str, args: list[str], capsys, monkeypatch) -> tuple[int, str, Path]:  # type: ignore[no-untyped-def]
@@ -128,6 +130,7 @@ def test_readings_are_those_after_the_last_physics_step(substeps: int) -> None:
     import numpy as np
 
     from shc_cli.backends.engine import EngineOptions
+    from shc_cli.backends.pybullet_.world import World
     from shc_cli.backends.simulated import open_world
     from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.controller import Command, Controller, RobotState
@@ -135,6 +138,7 @@ def test_readings_are_those_after_the_last_physics_step(substeps: int) -> None:
 
     robot, gait, _ = load_checked("bullet_openshc", "tripod")
     world = open_world(robot, EngineOptions(parse_terrain("flat"), substeps, engine="pybullet"))
+    assert isinstance(world, World)
     controller = Controller(robot, gait, joints=world.read().joints)
     try:
         for _ in range(5):
@@ -156,6 +160,7 @@ def test_mean_joint_speed_from_the_displacement_equals_the_mean_of_every_physics
 
     from shc_cli.backends.engine import EngineOptions
     from shc_cli.backends.power import servo_power
+    from shc_cli.backends.pybullet_.world import World
     from shc_cli.backends.simulated import open_world
     from shc_cli.backends.terrain import parse_terrain
     from shc_cli.control.controller import Command, Controller, RobotState
@@ -163,6 +168,7 @@ def test_mean_joint_speed_from_the_displacement_equals_the_mean_of_every_physics
 
     robot, gait, _ = load_checked("bullet_openshc", "tripod")  # the position motor's power model
     world = open_world(robot, EngineOptions(parse_terrain("flat"), 4, engine="pybullet"))
+    assert isinstance(world, World)
     controller = Controller(robot, gait, joints=world.read().joints)
     recorded: list[list[tuple[float, float]]] = []
 
@@ -198,7 +204,7 @@ def test_mean_joint_speed_from_the_displacement_equals_the_mean_of_every_physics
 
 
 @pytest.mark.parametrize("engine", ENGINES)
-def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(engine: str, tmp_path: Path) -> None:
+def test_a_compliant_servo_sags_in_inverse_proportion_to_its_stiffness(engine: EngineName, tmp_path: Path) -> None:
     """``[servo] control = "pd"``: ATHENA standing on flat ground settles (no oscillation) lower than with the stiff
     position motor, and its femurs' steady errors halve when the stiffness doubles (a proportional servo)."""
     import numpy as np
@@ -248,7 +254,7 @@ def simulate_variant(tmp_path: Path, robot_text: str, args: list[str], out: str,
 
 
 def test_a_robot_that_falls_in_its_first_running_cycle_has_no_speed_and_no_cot(
-        tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     """ATHENA with an MX-106-like explicit servo law and no rotor inertia is thrown off the floor during start-up
     (tests/test_servo.py) and the fall check ends the run in its first RUNNING cycle: one cycle's displacement is no
     walking speed (it was 7 m/s and a CoT of 0.07, which a sweep's CoT plot would take for the best run)."""

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from shc_cli.loop.runread import read_run
+from shc_cli.record.runread import read_run
 from tests.run_waits import wait_running
 
 pytestmark = pytest.mark.slow  # real-time simulations in subprocesses

@@ -1,4 +1,4 @@
-"""A run's SIGINT/SIGTERM handler (shc_cli/loop/stop_signals.py): a signal between the loop's own end and the finished
+"""A run's SIGINT/SIGTERM handler (shc_cli/record/stop_signals.py): a signal between the loop's own end and the finished
 run directory is kept, not lost (an optimize study interrupted then went on: the run's summary said it had ended
 on its own and the study never saw the Ctrl-C)."""
 
@@ -9,7 +9,7 @@ import signal
 
 import pytest
 
-from shc_cli.loop.stop_signals import StopSignals
+from shc_cli.record.stop_signals import StopSignals
 
 
 def test_a_signal_after_the_loop_ended_is_kept_and_interrupts_nothing_until_asked() -> None:

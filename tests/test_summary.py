@@ -1,4 +1,4 @@
-"""``summary.json`` has one schema (:class:`shc_cli.loop.summary.RunSummary`, ``shc schema summary``): what plan
+"""``summary.json`` has one schema (:class:`shc_cli.record.summary.RunSummary`, ``shc schema summary``): what plan
 writes follows it, a bad field is caught by the check the whole test session runs (conftest), and a run whose
 summary has a field of the wrong type is refused in one line."""
 
@@ -11,7 +11,7 @@ import pytest
 from typer.testing import CliRunner
 
 from shc_cli.cli import app
-from shc_cli.loop.summary import RunSummary, summary_schema
+from shc_cli.record.summary import RunSummary, summary_schema
 
 from .conftest import summary_problems
 
@@ -59,7 +59,7 @@ def test_a_bad_summary_is_one_line(plan_dir: Path, tmp_path: Path, text: str, me
     import shutil
 
     from shc_cli.errors import SpecError
-    from shc_cli.loop.runread import read_run
+    from shc_cli.record.runread import read_run
 
     run = tmp_path / "run"
     shutil.copytree(plan_dir, run)
@@ -73,7 +73,7 @@ def test_a_bad_summary_is_one_line(plan_dir: Path, tmp_path: Path, text: str, me
 def test_unknown_keys_of_other_versions_are_left_out(plan_dir: Path, tmp_path: Path) -> None:
     import shutil
 
-    from shc_cli.loop.runread import read_run
+    from shc_cli.record.runread import read_run
 
     run = tmp_path / "run"
     shutil.copytree(plan_dir, run)

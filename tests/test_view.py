@@ -105,7 +105,8 @@ def _robot_pixels(image: np.ndarray) -> int:
 
 def _robot_centre(image: np.ndarray) -> np.ndarray:
     """Mean (row, column) of the robot's pixels."""
-    return np.argwhere(_robot_mask(image)).mean(axis=0)
+    centre: np.ndarray = np.argwhere(_robot_mask(image)).mean(axis=0)
+    return centre
 
 
 def _settle(page: Any, seconds: float = 2.5) -> np.ndarray:

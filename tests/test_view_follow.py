@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from shc_cli.errors import ShcError
-from shc_cli.loop.runread import read_run
+from shc_cli.record.runread import read_run
 from shc_cli.view.follow import Follower, run_paths, snapshot
 
 

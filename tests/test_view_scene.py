@@ -7,8 +7,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
-from shc_cli.loop.summary import RunSummary
 from shc_cli.model.chains import Chains
+from shc_cli.record.summary import RunSummary
 from shc_cli.spec.robot import Robot
 from shc_cli.view import scene
 from shc_cli.view.render import frame_rows, scene_xml
@@ -115,7 +115,7 @@ def _synthetic_run(robot: Robot, rows: int = 400) -> object:
     """A run that walks a circle: forward 0.2 m/s while turning 0.5 rad/s, legs in the default joints."""
     from pathlib import Path
 
-    from shc_cli.loop.runread import RunLog
+    from shc_cli.record.runread import RunLog
 
     dt = robot.time_delta
     t = np.arange(rows) * dt

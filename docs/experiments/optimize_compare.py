@@ -27,7 +27,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 from shc_cli.analysis.metrics import analyze_run
-from shc_cli.loop.runread import read_run
+from shc_cli.record.runread import read_run
 
 IMG = Path(__file__).parent / "img"
 OBJECTIVES = ("cot", "mean_speed_mps", "stability_margin_median_m")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from shc_cli.loop.runread import RunLog
+from shc_cli.record.runread import RunLog
 
 TOLERANCE = 1e-3
 """[rad]: a commanded joint this close to a limit counts as clamped."""

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from shc_cli.analysis.cot import cost_of_transport
-from shc_cli.loop.runread import RunLog
+from shc_cli.record.runread import RunLog
 from shc_cli.spec.metric_names import ANALYZE_KEYS
 
 

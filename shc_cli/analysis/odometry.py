@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from shc_cli.loop.runread import RunLog
+    from shc_cli.record.runread import RunLog
 
 
 @dataclass(frozen=True)

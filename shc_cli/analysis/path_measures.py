@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from shc_cli.loop.runread import RunLog
+from shc_cli.record.runread import RunLog
 
 PATH_KEYS = ("cross_track_rms_m", "waypoints_reached", "waypoints_total", "time_to_goal_s")
 """The path measures every ``shc analyze`` result has (``None`` for a run without a path)."""

@@ -11,7 +11,9 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from shc_cli.loop.summary import RunSummary
+    from numpy.typing import ArrayLike
+
+    from shc_cli.record.summary import RunSummary
 
 NO_PROGRESS_SHARE = 0.25
 """A run makes no progress when its body travelled less than this share of the commanded path [ratio]."""
@@ -19,7 +21,7 @@ MIN_COMMANDED_DISTANCE_M = 0.05
 """Below this commanded path length [m] (standing, turning on the spot, a short run) the flag stays off."""
 
 
-def cycle_path_length(xy: Any, period: int) -> float:
+def cycle_path_length(xy: ArrayLike, period: int) -> float:
     """Length [m] of a horizontal body path ``xy`` ``(N, 2)`` [m] sampled once per gait cycle (``period`` rows;
     its last point included): it follows a curved path but not the body's sway within a step, which on a robot
     pushing against an obstacle can add up to more than the whole commanded path."""

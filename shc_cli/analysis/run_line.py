@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 from shc_cli.analysis.progress import progress_note
 
 if TYPE_CHECKING:
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
 
 NOT_MEASURED = "not enough walking to measure"
 """What the line says for a figure the run cannot give."""

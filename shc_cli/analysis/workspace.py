@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -63,10 +62,10 @@ class WorkspaceReport:
         our reading of the paper's Table II "stride length"."""
         return self.walkspace[0] + self.walkspace[180]
 
-    def to_json(self) -> dict[str, Any]:
+    def to_json(self) -> dict[str, object]:
         """The ``--json`` document: radii in m, speeds in m/s and rad/s, keyed by bearing in degrees."""
         by_bearing = self.limits.bearings
-        document: dict[str, Any] = {
+        document: dict[str, object] = {
             "robot": self.robot.name,
             "gait": self.gait.name,
             "step_frequency": self.step_frequency,

@@ -11,7 +11,7 @@
     backend.fault()                     # a reason to stop at once (servo fault), or None
 
 A backend that measures the ``log.csv`` quantities also gives :meth:`MeasuringBackend.measured`: the data, as a
-:class:`Measured`; the loop's recorder (:class:`shc_cli.loop.runlog.LogRecorder`) formats it. The kinematic backend
+:class:`Measured`; the loop's recorder (:class:`shc_cli.record.runlog.LogRecorder`) formats it. The kinematic backend
 measures nothing and its runs are logged as the controller's own tables (``joints.csv``, ``tips.csv``, ``body.csv``).
 """
 
@@ -113,7 +113,7 @@ class Backend(Protocol[ReadingT_co]):
 
 class MeasuringBackend(Backend[ReadingT], Protocol[ReadingT]):
     """A backend whose reading fills the measured columns of ``log.csv`` (the type of
-    :class:`~shc_cli.loop.runlog.LogRecorder`'s backend)."""
+    :class:`~shc_cli.record.runlog.LogRecorder`'s backend)."""
 
     def measured(self, reading: ReadingT) -> Measured:
         """What ``reading`` measured."""

@@ -34,7 +34,7 @@ log = logging.getLogger(__name__)
 
 
 class Tables(Protocol):
-    """Where ``timing.csv`` goes: a run directory (:class:`shc_cli.loop.runlog.RunDirectory`)."""
+    """Where ``timing.csv`` goes: a run directory (:class:`shc_cli.record.runlog.RunDirectory`)."""
 
     def table(self, name: str, columns: list[str], formats: list[str]) -> tuple[IO[str], str]:
         """A new table: its file and its row format (``cycle``, ``t`` first)."""

@@ -17,14 +17,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Literal, Protocol
 
 import numpy as np
 
 if TYPE_CHECKING:
-    from shc_cli.backends.engine_registry import EngineName
     from shc_cli.backends.terrain import Terrain, TerrainSpec
     from shc_cli.spec.robot import Robot
+
+EngineName = Literal["mujoco", "pybullet"]
+"""A physics engine's name, as ``--engine`` takes it (the list and the openers: :mod:`.engine_registry`)."""
 
 SPAWN_GAP = 0.01
 """Height of the lowest foot above the ground when the robot is spawned [m]."""

@@ -7,18 +7,17 @@ imports an engine (no import circle); ``pybullet`` and ``mujoco`` are imported o
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Literal, get_args
+from typing import TYPE_CHECKING, get_args
 
 from shc_cli.backends.engine import AIR_LIFT as AIR_LIFT
 from shc_cli.backends.engine import Engine, EngineOptions
+from shc_cli.backends.engine import EngineName as EngineName
 
 if TYPE_CHECKING:
     import numpy as np
 
     from shc_cli.spec.robot import Robot
 
-EngineName = Literal["mujoco", "pybullet"]
-"""A physics engine's name, as ``--engine`` takes it."""
 ENGINES: tuple[EngineName, ...] = get_args(EngineName)
 """The physics engines ``--engine`` takes; the first is the default."""
 DEFAULT_ENGINE: EngineName = ENGINES[0]

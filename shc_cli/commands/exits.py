@@ -4,7 +4,7 @@ kept (:class:`~shc_cli.errors.Interrupted`), a bug 1; no traceback unless ``--de
 
 SIGTERM is raised as :class:`~shc_cli.errors.Terminated`, a KeyboardInterrupt, so whatever keeps its work at a
 Ctrl-C (a sweep's rows, a study's trials, a render's clean-up) keeps it at a SIGTERM too; a run's own handlers
-(:mod:`shc_cli.loop.stop_signals`) take both signals while it runs.
+(:mod:`shc_cli.record.stop_signals`) take both signals while it runs.
 """
 
 from __future__ import annotations

@@ -15,7 +15,7 @@ import typer
 from shc_cli.errors import EXIT_SIGNAL
 
 if TYPE_CHECKING:
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
 
 EXIT_FAULT = 3
 """``run-hw``: a servo fault ended the run."""

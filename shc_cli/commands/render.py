@@ -14,7 +14,7 @@ def run_render(run_path: Path, out: Path, fps: float, size: str, camera: str, sp
                overwrite: bool = False) -> Path:
     """Read the run, render it, print one line; returns the video's path (an existing ``out`` is refused unless
     ``overwrite``)."""
-    from shc_cli.loop.opening import open_run as read_run  # directories and bags
+    from shc_cli.domain.stored_run import open_run as read_run  # directories and bags
     from shc_cli.outputs import refuse_existing
     from shc_cli.view.render import RenderOptions, check_options, parse_size, render_run
 

@@ -12,7 +12,7 @@ from shc_cli.errors import NotFoundError
 
 def print_schema(kind: str) -> None:
     """Print the JSON Schema of ``kind``: ``robot``, ``gait`` or ``summary``."""
-    from shc_cli.loop.summary import summary_schema
+    from shc_cli.record.summary import summary_schema
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.loading import robot_file_schema
 

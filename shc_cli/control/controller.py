@@ -251,7 +251,7 @@ class Controller(LegManipulation):
         self.dt = robot.time_delta
         chains = Chains.from_robot(robot)
         start = chains.default_joints() if joints is None else np.array(joints, dtype=float)
-        self.model = Model(chains, start.copy(), np.zeros_like(start), robot.ik.limit_avoidance_cap)
+        self.model: Model = Model(chains, start.copy(), np.zeros_like(start), robot.ik.limit_avoidance_cap)
         self.rest_joints = start.copy()
         """Where a direct shut-down takes the joints (the initial joints) [rad]."""
         self.default_joints = chains.default_joints()

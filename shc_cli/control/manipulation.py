@@ -8,7 +8,8 @@ controller's, declared below.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
@@ -18,13 +19,37 @@ from shc_cli.control.states import LegMode, WalkState
 from shc_cli.model.ik import IK_TOLERANCE
 
 if TYPE_CHECKING:
-    from shc_cli.control.controller import Command, Model
     from shc_cli.control.pose import PoseController
     from shc_cli.control.walk import WalkController
+    from shc_cli.model.chains import Chains, FloatArray
     from shc_cli.spec.robot import Robot
 
 MAX_MANUAL_LEGS = 2
 """At most this many legs can be manipulated at once (OpenSHC)."""
+
+
+class ManipulationCommand(Protocol):
+    """What the manipulation reads of the controller's :class:`~shc_cli.control.controller.Command` (a protocol, so
+    this part of the controller does not import the controller)."""
+
+    @property
+    def leg_toggle(self) -> str | None: ...
+    @property
+    def tip_velocity(self) -> Mapping[str, tuple[float, float, float]]: ...
+    @property
+    def tip_position(self) -> Mapping[str, tuple[float, float, float]]: ...
+
+
+class ManipulatedModel(Protocol):
+    """What the manipulation reads and writes of the controller's :class:`~shc_cli.control.controller.Model`."""
+
+    chains: Chains
+    joints: FloatArray
+    tips: FloatArray
+
+    def step_ik(self, targets: FloatArray, dt: float, clamp_positions: bool, clamp_velocities: bool,
+                active: np.ndarray | None = None) -> tuple[int, int]: ...
+
 _WALKING_LEG = int(LegMode.WALKING)
 
 
@@ -33,7 +58,7 @@ class LegManipulation:
 
     robot: Robot
     dt: float
-    model: Model
+    model: ManipulatedModel
     walker: WalkController | None
     poser: PoseController
     poser_tips: np.ndarray
@@ -50,7 +75,7 @@ class LegManipulation:
     def _stop_walking(self) -> None:
         raise NotImplementedError  # the controller's
 
-    def _receive_manipulation(self, command: Command) -> None:
+    def _receive_manipulation(self, command: ManipulationCommand) -> None:
         legs = list(self.stance)
         if command.leg_toggle is not None and self.pending_toggle is None:
             if command.leg_toggle not in legs:

@@ -47,7 +47,7 @@ if TYPE_CHECKING:
     from shc_cli.hardware.bus import BusState, ServoBus
     from shc_cli.live.foxglove_server import FoxgloveTransport
     from shc_cli.loop.run_loop import LoopResult
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
     from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
@@ -198,9 +198,9 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
     from shc_cli.loop.path_input import keep_path
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import ControlledStop, Observer, RunLoop, StartUp
-    from shc_cli.loop.runlog import LogRecorder, RunDirectory, default_run_directory
     from shc_cli.loop.session import execute
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.runlog import LogRecorder, RunDirectory, default_run_directory
+    from shc_cli.record.summary import RunSummary
 
     c = config
     if c.path is not None and c.input_mode != "timeline":

@@ -11,7 +11,7 @@ from shc_cli.domain.live import open_live, wall_clock
 from shc_cli.domain.result import RunResult
 
 if TYPE_CHECKING:
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
 
 
 def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0", duration: float | None = None,
@@ -40,8 +40,8 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
     from shc_cli.loop.plan_summary import PlanRecord, plan_summary
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import Observer, RunLoop, StartUp
-    from shc_cli.loop.runlog import RunWriter, default_run_directory
     from shc_cli.loop.session import execute
+    from shc_cli.record.runlog import RunWriter, default_run_directory
 
     inputs = load_inputs(robot, gait, velocity, duration, commands, default_s=10.0, check_fit=True, path=path)
     model = inputs.robot

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ import logging
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -28,19 +28,20 @@ from shc_cli.events import event
 if TYPE_CHECKING:
     from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Command, CycleOutput
-    from shc_cli.domain.ros_node import NodeConfig
+    from shc_cli.domain.ros_config import NodeConfig
     from shc_cli.hardware.bus import BusState, ServoBus
     from shc_cli.loop.run_loop import LoopResult
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
     from shc_cli.ros.node import RosNode
+    from shc_cli.spec.autopose import AutoPoseSet
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
 
 
-def run_on_bus(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: Any, gaits: dict[str, Gait],
-               directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
+def run_on_bus(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
+               gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     """Run the node on the servos until a stop; returns the finished run directory (``summary.fault`` names a
     servo fault).
 
@@ -55,9 +56,9 @@ def run_on_bus(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose
     from shc_cli.hardware.buses import servo_bus
     from shc_cli.loop.input_sources import STATES
     from shc_cli.loop.run_loop import ControlledStop, Observer, RunLoop
-    from shc_cli.loop.runlog import LogRecorder, RunDirectory
     from shc_cli.loop.session import execute
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.runlog import LogRecorder, RunDirectory
+    from shc_cli.record.summary import RunSummary
 
     c = config
     bus = servo_bus(robot, list(c.ports), c.baud, c.profile_velocity)

@@ -13,83 +13,24 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING
 
 from shc_cli.domain.live import open_live
 from shc_cli.domain.result import RunResult
+from shc_cli.domain.ros_config import BACKENDS as BACKENDS
+from shc_cli.domain.ros_config import SERVER
+from shc_cli.domain.ros_config import NodeBackend as NodeBackend
+from shc_cli.domain.ros_config import NodeConfig as NodeConfig
 
 if TYPE_CHECKING:
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
     from shc_cli.ros.node import RosNode
+    from shc_cli.spec.autopose import AutoPoseSet
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
-
-NodeBackend = Literal["none", "mujoco", "pybullet", "bus"]
-BACKENDS = ("none", "mujoco", "pybullet", "bus")
-SERVER = "server"
-"""The robot name that reads the robot from the parameter server (``/syropod/parameters`` …)."""
-
-
-@dataclass(frozen=True)
-class NodeConfig:
-    """Options of ``shc ros``.
-
-    Attributes:
-        robot: robot file or bundled name, or ``"server"``: OpenSHC's parameters from the parameter server.
-        backend: ``none`` (outputs only) or a physics engine.
-        name: the node's name.
-        master_uri: the ROS master (None: ``$ROS_MASTER_URI``).
-        duration: stop after this many seconds of wall time (None: until Ctrl-C / SIGTERM / rosnode kill).
-        out: the run directory (None: ``runs/<timestamp>-ros``).
-        individual: publish the per-joint command topics (default: as the robot's parameters say, else on).
-        combined: publish ``/desired_joint_states``.
-        overwrite: replace an existing run directory.
-        namespace: the parameter tree read for ``robot = "server"``.
-        live: also stream the session on a Foxglove WebSocket server on 127.0.0.1:``live_port``.
-        path: a path file to walk once the robot runs (more paths and goals arrive on ``<name>/path`` and
-            ``/move_base_simple/goal``: :mod:`shc_cli.ros.path_remote`).
-        ports, baud, dry_run, stop_state, on_fault, on_stop, profile_velocity: backend ``bus``: the servo buses and
-            their safety, as ``run-hw``'s options (:class:`~shc_cli.domain.hardware.HardwareConfig`).
-    """
-
-    robot: str = "bullet"
-    backend: NodeBackend = "none"
-    name: str = "/shc"
-    master_uri: str | None = None
-    duration: float | None = None
-    out: Path | None = None
-    individual: bool = True
-    combined: bool = True
-    overwrite: bool = False
-    namespace: str = "/syropod"
-    live: bool = False
-    live_port: int = 8765
-    path: Path | None = None
-    ports: tuple[str, ...] = ()
-    baud: int | None = None
-    dry_run: bool = False
-    stop_state: str = "packed"
-    on_fault: str = "torque-off"
-    on_stop: str = "torque-off"
-    profile_velocity: bool = False
-
-    def __post_init__(self) -> None:
-        from shc_cli.errors import Issue, SpecError, check_choice
-        from shc_cli.loop.input_sources import STATES
-
-        check_choice("--backend", self.backend, BACKENDS, "a backend")
-        for option, value in (("--on-fault", self.on_fault), ("--on-stop", self.on_stop)):
-            check_choice(option, value, ("hold", "torque-off"), "hold or torque-off")
-        check_choice("--stop-state", self.stop_state, tuple(STATES), "a robot state")
-        if (self.backend == "bus") != bool(self.ports):
-            problem = ("the bus backend needs its serial ports" if self.ports == () else
-                       f"--port is for the bus backend, not '{self.backend}'")
-            raise SpecError([Issue(None, None, "--port", problem, "give --backend bus with --port DEV (once per "
-                                   "bus, bus 0 first)")])
 
 
 def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) -> RunResult:
@@ -99,7 +40,7 @@ def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) 
     Raises:
         ShcError: bad input, or no ROS master (one line), before anything is written.
     """
-    from shc_cli.loop.runlog import default_run_directory
+    from shc_cli.record.runlog import default_run_directory
     from shc_cli.ros.messages import MessageTypes
     from shc_cli.ros.node import RosNode
 
@@ -116,26 +57,44 @@ def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) 
         node.close()
 
 
-def _robot(node: RosNode, config: NodeConfig, directory: Path) -> tuple[Robot, Gait, Any, dict[str, Gait]]:
+def _robot(node: RosNode, config: NodeConfig,
+           directory: Path) -> tuple[Robot, Gait, dict[str, AutoPoseSet], dict[str, Gait]]:
     """The robot, its gait and auto-pose sets, and the gaits ``gait_selection`` can choose."""
     import tempfile
 
     from shc_cli.loop.run_inputs import load_inputs
+
+    if config.robot == SERVER:  # the server's robot as shc files, read, then removed (the run keeps robot.toml)
+        with tempfile.TemporaryDirectory(prefix="shc-ros-") as folder:
+            source = str(_robot_from_server(node, config.namespace, Path(folder)))
+            inputs = load_inputs(source, None, "0,0,0", None, None, default_s=1.0)
+    else:
+        inputs = load_inputs(config.robot, None, "0,0,0", None, None, default_s=1.0)
+    return inputs.robot, inputs.gait, inputs.pose_sets, selectable_gaits(inputs.robot)
+
+
+SELECTABLE_GAITS = ("wave", "amble", "ripple", "tripod")
+"""The bundled gaits ``gait_selection`` cycles through (OpenSHC's order), those that fit the robot's legs."""
+
+
+def selectable_gaits(robot: Robot) -> dict[str, Gait]:
+    """The bundled gaits of :data:`SELECTABLE_GAITS` whose offsets name every leg of ``robot``; a gait that does
+    not load is left out with its reason logged (a bug other than bad input is raised, not swallowed)."""
+    from shc_cli.errors import ShcError
     from shc_cli.spec.loading import load_gait
 
-    source = config.robot
-    if source == SERVER:
-        source = str(_robot_from_server(node, config.namespace, Path(tempfile.mkdtemp(prefix="shc-ros-"))))
-    inputs = load_inputs(source, None, "0,0,0", None, None, default_s=1.0)
     gaits: dict[str, Gait] = {}
-    for name in ("wave", "amble", "ripple", "tripod"):
+    for name in SELECTABLE_GAITS:
         try:
             candidate = load_gait(name).gait
-        except Exception:
+        except ShcError as error:
+            log.warning("gait %s is not offered to gait_selection: %s", name, str(error).splitlines()[0])
             continue
-        if candidate is not None and set(candidate.offset_multiplier) >= set(inputs.robot.legs):
+        if candidate is not None and set(candidate.offset_multiplier) >= set(robot.legs):
             gaits[name] = candidate
-    return inputs.robot, inputs.gait, inputs.pose_sets, gaits
+        else:
+            log.debug("gait %s is not offered to gait_selection: it does not name every leg of %s", name, robot.name)
+    return gaits
 
 
 def _robot_from_server(node: RosNode, namespace: str, folder: Path) -> Path:
@@ -170,8 +129,8 @@ def _robot_from_server(node: RosNode, namespace: str, folder: Path) -> Path:
     return path
 
 
-def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: Any, gaits: dict[str, Gait],
-         directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
+def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
+         gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     if config.backend == "none":
         return _run_outputs_only(node, config, robot, gait, pose_sets, gaits, directory, on_ready)
     if config.backend == "bus":
@@ -181,7 +140,7 @@ def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets:
     return _run_simulated(node, config, robot, gait, pose_sets, gaits, directory, on_ready)
 
 
-def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: Any,
+def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
                       gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     """Backend none: the controller's targets are taken as reached (OpenSHC with a hardware node of the user's)."""
     from shc_cli.backends.kinematic import KinematicBackend
@@ -189,8 +148,8 @@ def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gai
     from shc_cli.domain.ros_session import NodeSession
     from shc_cli.loop.plan_summary import PlanRecord, plan_summary
     from shc_cli.loop.run_loop import Observer, RunLoop
-    from shc_cli.loop.runlog import RunWriter
     from shc_cli.loop.session import execute
+    from shc_cli.record.runlog import RunWriter
 
     controller = Controller(robot, gait, pose_sets=pose_sets)
     writer = RunWriter(directory, robot, config.overwrite)
@@ -221,7 +180,7 @@ def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gai
     return RunResult(path, summary)
 
 
-def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: Any,
+def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
                    gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     """A physics engine: the robot simulated in real time, its measured joints, IMU, foot forces and power published
     (``/joint_states``, ``/imu/data``, ``/<LEG>/foot_force``, ``/shc/power``) — OpenSHC's Gazebo set-up without
@@ -233,8 +192,8 @@ def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, 
     from shc_cli.domain.ros_session import NodeSession
     from shc_cli.loop.physics_summary import PhysicsRecord
     from shc_cli.loop.run_loop import Observer, RunLoop
-    from shc_cli.loop.runlog import LogRecorder, RunDirectory
     from shc_cli.loop.session import execute
+    from shc_cli.record.runlog import LogRecorder, RunDirectory
 
     sim = SimulationConfig(robot=config.robot, engine=config.backend)
     with RunDirectory(directory, config.overwrite) as run:

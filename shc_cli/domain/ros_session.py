@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from shc_cli.control.controller import Controller
-    from shc_cli.domain.ros_node import NodeConfig
+    from shc_cli.domain.ros_config import NodeConfig
     from shc_cli.ros.node import RosNode
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot

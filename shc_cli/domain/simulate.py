@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from shc_cli.backends.engine import Reading
     from shc_cli.control.controller import Command, CycleOutput
     from shc_cli.loop.run_loop import LoopResult
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
 
 
 log = logging.getLogger(__name__)
@@ -42,7 +42,6 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     Raises:
         ShcError: bad input (one line), before anything is written.
     """
-    from shc_cli import __version__
     from shc_cli.backends.simulated import SimulatedBackend, open_world
     from shc_cli.control.controller import Controller
     from shc_cli.errors import Issue, SpecError
@@ -52,8 +51,9 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     from shc_cli.loop.physics_summary import PhysicsRecord
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import Observer, RunLoop, StartUp
-    from shc_cli.loop.runlog import LogRecorder, RunDirectory, default_run_directory
     from shc_cli.loop.session import execute
+    from shc_cli.record.runlog import LogRecorder, RunDirectory, default_run_directory
+    from shc_cli.version import __version__
 
     o = config or SimulationConfig()
     check_display(o.gui)

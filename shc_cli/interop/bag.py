@@ -51,11 +51,12 @@ from shc_cli.control.states import RobotState, WalkState
 from shc_cli.errors import OutputError, check_choice
 from shc_cli.interop import mcap_chunks
 from shc_cli.interop.batch import BatchSerializer
-from shc_cli.loop.runlog import ROBOT_FILE
-from shc_cli.loop.runread import RunLog
 from shc_cli.model.chains import joint_slots
+from shc_cli.record.runlog import ROBOT_FILE
+from shc_cli.record.runread import RunLog
 
 if TYPE_CHECKING:
+    from shc_cli.model.chains import Chains
     from shc_cli.spec.robot import Robot
 
 FORMATS = ("mcap", "sqlite3", "ros1")
@@ -465,7 +466,7 @@ def _topics(run: RunLog, m: Messages) -> list[Topic]:
     return topics
 
 
-def _leg_states(run: RunLog, m: Messages, chains: Any, legs: list[str], measured: np.ndarray,
+def _leg_states(run: RunLog, m: Messages, chains: Chains, legs: list[str], measured: np.ndarray,
                 commanded: np.ndarray, efforts: np.ndarray, leg_of_slot: np.ndarray, actual: np.ndarray) -> list[Topic]:
     """One LegState topic per leg (``/shc/LEG/state``)."""
     T = m.T

@@ -1,7 +1,7 @@
 """Reading a bag written by ``shc export bag`` back as the run it was written from (a :class:`RunLog`).
 
-Between the bag format (:mod:`shc_cli.interop.bag`) and the run reader (:mod:`shc_cli.loop.runread`); opened through
-:func:`shc_cli.loop.opening.open_run`.
+Between the bag format (:mod:`shc_cli.interop.bag`) and the run reader (:mod:`shc_cli.record.runread`); opened through
+:func:`shc_cli.domain.stored_run.open_run`.
 """
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-from shc_cli.loop.runread import RunLog, bad_run, checked_summary
 from shc_cli.model.chains import joint_slots
+from shc_cli.record.runread import RunLog, bad_run, checked_summary
 
 
 def read_bag_run(path: Path) -> RunLog:

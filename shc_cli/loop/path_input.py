@@ -154,7 +154,7 @@ class PathInput:
         return name
 
     def summary(self) -> dict[str, object]:
-        """The run summary's path fields (:class:`~shc_cli.loop.summary.RunSummary`)."""
+        """The run summary's path fields (:class:`~shc_cli.record.summary.RunSummary`)."""
         options = self.follower.options
         waypoints = [{
             "x": r.waypoint.x, "y": r.waypoint.y, "yaw": r.waypoint.yaw, "reached": r.reached,

@@ -20,13 +20,13 @@ import numpy as np
 from shc_cli.backends.engine import tilt
 from shc_cli.control.controller import RobotState
 from shc_cli.events import event
-from shc_cli.loop.summary import RunSummary
+from shc_cli.record.summary import RunSummary
 
 if TYPE_CHECKING:
     from shc_cli.backends.engine import Reading
     from shc_cli.backends.simulated import SimulatedBackend
     from shc_cli.control.controller import Command, Controller, CycleOutput
-    from shc_cli.loop.runread import RunLog
+    from shc_cli.record.runread import RunLog
     from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
@@ -95,7 +95,7 @@ class PhysicsRecord:
         """The summary from the finished log in ``directory`` (the run directory, still ``.partial``); paper eq. 22
         cost of transport over the RUNNING window: mean power / (m·g·v) (WG only)."""
         from shc_cli.analysis.metrics import walk_figures
-        from shc_cli.loop.runread import read_tables
+        from shc_cli.record.runread import read_tables
 
         world = self.backend.world
         now = time.perf_counter()  # the timings are the run's, not the reading of its log
@@ -157,7 +157,7 @@ class PhysicsRecord:
     def plot_series(self, directory: Path) -> dict[str, Any]:
         """What :func:`shc_cli.plots.plot_simulation` draws, from the finished log in ``directory`` (the one
         :meth:`summary` read, or read now: a second signal may have cut the summary short)."""
-        from shc_cli.loop.runread import read_tables
+        from shc_cli.record.runread import read_tables
 
         log = self.log if self.log is not None else read_tables(directory, self.robot)
         return {"t": log.t, "position": log.position, "power": log.power, "contact": log.contact,

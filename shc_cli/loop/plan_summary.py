@@ -17,7 +17,7 @@ import numpy as np
 
 from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
 from shc_cli.control.walk import WalkState
-from shc_cli.loop.summary import RunSummary
+from shc_cli.record.summary import RunSummary
 from shc_cli.spec.robot import Robot
 
 
@@ -80,7 +80,7 @@ def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, secon
     from shc_cli.analysis.metrics import walk_figures
     from shc_cli.analysis.progress import progress_fields
     from shc_cli.loop.physics_summary import window_progress
-    from shc_cli.loop.runread import read_tables
+    from shc_cli.record.runread import read_tables
 
     if outputs:
         log = read_tables(directory, robot)

@@ -19,8 +19,8 @@ from shc_cli.errors import interrupt
 from shc_cli.events import recording
 from shc_cli.loop.gc_pause import collecting
 from shc_cli.loop.run_loop import LoopResult, ReadingT, RunLoop
-from shc_cli.loop.runlog import RunDirectory
-from shc_cli.loop.summary import RunSummary
+from shc_cli.record.runlog import RunDirectory
+from shc_cli.record.summary import RunSummary
 
 
 def execute(loop: RunLoop[ReadingT], run: RunDirectory, summarise: Callable[[LoopResult], RunSummary],

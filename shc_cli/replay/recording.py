@@ -51,7 +51,7 @@ def read_table(path: Path) -> Table:
 
     For recordings made by other programs (user input, so every bad cell is reported as ``file:line column``),
     hence the row-by-row Python parse. shc's own run tables, with text columns and no gzip, go through the faster
-    C-parser reader :func:`shc_cli.loop.runread._table` instead."""
+    C-parser reader :func:`shc_cli.record.runread._table` instead."""
     opener = gzip.open if path.suffix == ".gz" else open
     try:
         with opener(path, "rt", encoding="utf-8") as handle:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import tomllib
 from pathlib import Path
-from typing import Any, Literal
+from typing import Literal
 
 from shc_cli.spec.loading import bundled
 from shc_cli.spec.robot import Robot
@@ -57,9 +57,9 @@ def file_kind(name: str) -> Kind:
     return "robot"
 
 
-def field_at(robot: Robot, dotted: str) -> Any:
+def field_at(robot: Robot, dotted: str) -> object:
     """The robot's value at a dotted robot-file path (tables and leg/joint maps alike), or ``None``."""
-    node: Any = robot
+    node: object = robot
     for part in dotted.split("."):
         node = node.get(part) if isinstance(node, dict) else getattr(node, part, None)
         if node is None:

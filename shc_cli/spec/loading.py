@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from pydantic import BaseModel, ValidationError
+from pydantic_core import ErrorDetails
 
 from shc_cli.errors import Issue, NotFoundError, SpecError
 from shc_cli.spec.gait import Gait
@@ -345,7 +346,7 @@ def _did_you_mean(model: type[BaseModel], loc: KeyPath) -> str | None:
 _UNIT_HINT = "write a plain number in SI units (m, rad, s, kg) without a unit"
 
 
-def _describe(error: dict[str, Any], model: type[BaseModel]) -> tuple[str, str]:
+def _describe(error: ErrorDetails, model: type[BaseModel]) -> tuple[str, str]:
     """(problem, fix) for one pydantic error, in words a robot builder understands."""
     kind, loc, given = error["type"], error["loc"], error.get("input")
     name = str(loc[-1]) if loc else ""
@@ -402,7 +403,7 @@ def _validate(model: type[ModelT], data: dict[str, Any], located: Located,
     try:
         return model.model_validate(data)
     except ValidationError as error:
-        errors: list[dict[str, Any]] = [dict(item) for item in error.errors()]
+        errors: list[ErrorDetails] = error.errors()
         # A misspelt required key is one mistake: its "did you mean" already names the missing field.
         suggested: set[KeyPath] = set()
         for item in errors:

@@ -186,7 +186,7 @@ def _load_toml(path: Path) -> Path2D:
         loaded = PathFile.model_validate(unwrap(data))
     except ValidationError as error:
         item = error.errors()[0]
-        problem, fix = _describe(dict(item), PathFile)
+        problem, fix = _describe(item, PathFile)
         raise SpecError([located.issue(tuple(item["loc"]), problem, fix)]) from None
     if not loaded.waypoint:
         raise SpecError([Issue(path, None, "waypoint", "no waypoints", "add [[waypoint]] tables with x = …, y = …")])

@@ -143,13 +143,13 @@ def _issue(document: Document, where: tuple[str, ...], problem: str, fix: str) -
     return SpecError([Issue(document.path, document.line(where), ".".join(where), problem, fix)])
 
 
-def _number(document: Document, where: tuple[str, ...], value: Any) -> float:
+def _number(document: Document, where: tuple[str, ...], value: object) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise _issue(document, where, f"{value!r} is not a finite number", "give a plain number")
     return float(value)
 
 
-def _dimension(document: Document, key: str, spec: Any) -> Dimension:
+def _dimension(document: Document, key: str, spec: object) -> Dimension:
     where = ("space", key)
     line = document.line(where)
     if key in NOT_SEARCHED:
@@ -205,7 +205,7 @@ def _dimension(document: Document, key: str, spec: Any) -> Dimension:
     return Dimension(key, "int" if integer else "float", low, high, step, log, line=line)
 
 
-def _constraint(document: Document, key: str, spec: Any) -> Constraint:
+def _constraint(document: Document, key: str, spec: object) -> Constraint:
     where = ("constraints", key)
     line = document.line(where)
     if key == "fell":

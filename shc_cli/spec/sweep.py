@@ -84,13 +84,13 @@ def is_option(key: str) -> bool:
     return "." not in key
 
 
-def slug_value(value: Any) -> str:
+def slug_value(value: object) -> str:
     """A value as part of a run's directory name."""
     text = f"{value:g}" if isinstance(value, float) else str(value)
     return re.sub(r"[^A-Za-z0-9._+-]", "_", Path(text).stem if text.endswith(".toml") else text)
 
 
-def check_value(document: Document, where: tuple[str, ...], key: str, value: Any) -> None:
+def check_value(document: Document, where: tuple[str, ...], key: str, value: object) -> None:
     """A plain value (one finite number, string or boolean); ``duration`` and ``stride_percent`` numbers in their
     ranges. The simulation options' own types and values are checked against ``shc simulate``'s before any run
     (:mod:`shc_cli.domain.sweeps.options`)."""

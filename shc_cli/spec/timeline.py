@@ -192,7 +192,7 @@ def _load_script(path: Path, time_delta: float) -> Timeline:
     except ValidationError as error:
         issues = []
         for item in error.errors():
-            problem, fix = _describe(dict(item), PlanScript)
+            problem, fix = _describe(item, PlanScript)
             issues.append(located.issue(tuple(item["loc"]), problem, fix))
         raise SpecError(issues[:1]) from None
     changes: list[tuple[int, dict[str, object]]] = []

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import json
-from typing import Any
+from collections.abc import Mapping
+from typing import TypeGuard
 
 
-def _value(value: Any) -> str:
+def _value(value: object) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, (int, float)):
@@ -28,7 +29,7 @@ def _key(key: str) -> str:
     return key if bare else json.dumps(key)
 
 
-def dump_toml(data: dict[str, Any], _prefix: str = "") -> str:
+def dump_toml(data: Mapping[str, object], _prefix: str = "") -> str:
     """TOML text of ``data``; ``None`` values are left out, small tables are written inline."""
     scalars = [(k, v) for k, v in data.items() if v is not None and not _is_table(v)]
     tables = [(k, v) for k, v in data.items() if _is_table(v)]
@@ -45,6 +46,6 @@ def dump_toml(data: dict[str, Any], _prefix: str = "") -> str:
     return "\n".join(line for line in lines).rstrip() + ("\n" if not _prefix else "")
 
 
-def _is_table(value: Any) -> bool:
+def _is_table(value: object) -> TypeGuard[dict[str, object]]:
     """Tables of tables (e.g. legs, joints) get headers; flat tables of scalars are written inline."""
     return isinstance(value, dict) and any(isinstance(v, dict) for v in value.values())

@@ -4,7 +4,7 @@ A run (``plan``, ``simulate``, ``run-hw``, ``shc ros``) writes its tables into `
 ``log.csv`` (or ``joints.csv``, ``body.csv``, ``tips.csv`` for a kinematic run) flushed every 100–200 cycles, and its
 ``robot.toml`` at the start — and renames the directory to ``RUN`` when it is finished. The follower reads what is
 on disk every :data:`POLL_S`: the complete lines of each table (a row being written is left for the next read; the
-tables of a kinematic run are cut to the same length), as a :class:`~shc_cli.loop.runread.RunLog` of the run's own
+tables of a kinematic run are cut to the same length), as a :class:`~shc_cli.record.runread.RunLog` of the run's own
 robot, with no summary yet (so the terrain is drawn flat until the run has finished). When ``RUN`` appears, the
 finished run is read once more, with its summary, and the following ends. Reading the whole log each time keeps
 this simple and costs O(rows) per poll: tens of milliseconds for a few minutes of a run.
@@ -21,8 +21,8 @@ from collections.abc import Callable
 from pathlib import Path
 
 from shc_cli.errors import NotFoundError
-from shc_cli.loop.runlog import PARTIAL_SUFFIX
-from shc_cli.loop.runread import RunLog
+from shc_cli.record.runlog import PARTIAL_SUFFIX
+from shc_cli.record.runread import RunLog
 
 log = logging.getLogger(__name__)
 
@@ -46,7 +46,7 @@ def snapshot(partial: Path) -> RunLog | None:
     """What a run in progress has written so far, or None (no robot file or no complete row yet, or the directory
     has just been renamed)."""
     from shc_cli.errors import ShcError
-    from shc_cli.loop.runread import read_tables
+    from shc_cli.record.runread import read_tables
     from shc_cli.spec.loading import load_robot
 
     try:
@@ -92,7 +92,7 @@ class Follower:
 
     def first(self, timeout_s: float = 600.0) -> RunLog:
         """The run as it is now, waiting (up to ``timeout_s``) for its first rows (:meth:`start` follows it on)."""
-        from shc_cli.loop.opening import open_run
+        from shc_cli.domain.stored_run import open_run
 
         deadline = time.monotonic() + timeout_s
         while True:
@@ -113,7 +113,7 @@ class Follower:
             self._thread.start()
 
     def _run(self) -> None:
-        from shc_cli.loop.opening import open_run
+        from shc_cli.domain.stored_run import open_run
 
         while not self._stop.wait(POLL_S):
             try:

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from shc_cli.errors import Issue, SpecError, install_hint
-from shc_cli.loop.runread import RunLog
+from shc_cli.record.runread import RunLog
 from shc_cli.view import scene
 
 CAMERAS = ("follow", "fixed", "top")

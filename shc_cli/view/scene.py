@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from shc_cli.analysis.metrics import rotation_rpy
-from shc_cli.loop.summary import RunSummary
 from shc_cli.model.chains import Chains, FloatArray
+from shc_cli.record.summary import RunSummary
 from shc_cli.spec.robot import Robot
 
 BODY_RGB = (0.35, 0.38, 0.42)

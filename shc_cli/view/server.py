@@ -28,13 +28,18 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from shc_cli.errors import ShcError
-from shc_cli.loop.runread import RunLog
+from shc_cli.record.runread import RunLog
 from shc_cli.view import meshes, scene
+
+if TYPE_CHECKING:
+    import viser
+
+    from shc_cli.analysis.workspace import WorkspaceReport
 
 log = logging.getLogger(__name__)
 
@@ -60,7 +65,7 @@ class RobotDrawing:
     """The model's shapes as scene nodes of one client: instanced link cylinders, joint and foot spheres, a body
     box; :meth:`show` moves them to one frame of a :class:`~shc_cli.view.scene.Poses`."""
 
-    def __init__(self, api: Any, shape: scene.Shapes, name: str = "/robot") -> None:
+    def __init__(self, api: viser.SceneApi, shape: scene.Shapes, name: str = "/robot") -> None:
         self.shape = shape
         real = np.argwhere(shape.link_real)
         self.rows, self.cols = real[:, 0], real[:, 1]
@@ -107,7 +112,7 @@ class RobotDrawing:
         self.body.wxyz = pose.body_quaternion[index]
 
 
-def _default_tips(report: Any) -> np.ndarray:
+def _default_tips(report: WorkspaceReport) -> np.ndarray:
     """Tip positions of a workspace report's default joints in base_link, ``(L, 3)`` [m]."""
     return np.asarray(scene.shapes(report.robot).chains.tips(report.default_joints))
 
@@ -117,7 +122,7 @@ def _outline_segments(points: np.ndarray) -> np.ndarray:
     return np.stack([points[:-1], points[1:]], axis=1).astype(np.float32)
 
 
-def _setup_scene(client: Any, target: np.ndarray, distance: float) -> None:
+def _setup_scene(client: viser.ClientHandle, target: np.ndarray, distance: float) -> None:
     """Ground grid, lights without the network HDRI, and the camera looking at ``target`` from ``distance`` [m]."""
     api = client.scene
     client.camera.up_direction = (0.0, 0.0, 1.0)
@@ -150,7 +155,7 @@ class _RobotState:
 class RobotPage:
     """One browser tab looking at a robot file."""
 
-    def __init__(self, client: Any, target: str) -> None:
+    def __init__(self, client: viser.ClientHandle, target: str) -> None:
         from shc_cli.spec.loading import load_robot
 
         self.client = client
@@ -195,7 +200,7 @@ class RobotPage:
                                                 step=0.001, initial_value=float(np.clip(0.0, joint.min, joint.max)))
                         self.sliders.append((i, k, slider))
                         slider.on_update(lambda _event: self._joints_changed())
-        self.workspace_nodes: list[Any] = []
+        self.workspace_nodes: list[viser.SceneNodeHandle] = []
         self.clearance.on_update(lambda _event: self._stance_changed())
         self.stance.on_update(lambda _event: self._stance_changed())
         reset.on_click(lambda _event: self._stance_changed())
@@ -228,7 +233,7 @@ class RobotPage:
         state.updating = True  # the pose sliders go back to 0 without moving the legs
         try:
             for control in self.pose_inputs:
-                control.value = 0.0
+                control.value = 0.0  # type: ignore[misc]  # viser hides the value setter
         finally:
             state.updating = False
         state.robot, state.clearance = robot, robot.walker.body_clearance
@@ -239,7 +244,7 @@ class RobotPage:
         self._redraw()
         state.feet = self._pose().feet[0].copy()
 
-    def _draw_workspaces(self, report: Any) -> None:
+    def _draw_workspaces(self, report: WorkspaceReport) -> None:
         for node in self.workspace_nodes:
             node.remove()
         api = self.client.scene
@@ -402,7 +407,7 @@ class RunPage:
     """One browser tab replaying a run; ``live``: a run in progress, which :meth:`refresh` extends as it is written
     (``shc view RUN --follow``: :mod:`shc_cli.view.follow`)."""
 
-    def __init__(self, client: Any, data: RunScene, live: bool = False) -> None:
+    def __init__(self, client: viser.ClientHandle, data: RunScene, live: bool = False) -> None:
         self.client = client
         self.data = data
         self.live = live
@@ -466,13 +471,13 @@ class RunPage:
             self._paths()
             self.header.content = self._header(finished)
         if self.newest is not None and self.newest.value and not self.playing:
-            self.timeline.value = float(data.run.t[-1])  # its update callback draws the row
+            self.timeline.value = float(data.run.t[-1])  # type: ignore[misc]  # viser hides the setter; its update callback draws the row
         else:
             self._show(force_plot=True)
         if finished and self.newest is not None:
             self.newest.visible = False
 
-    def _terrain(self, api: Any) -> None:
+    def _terrain(self, api: viser.SceneApi) -> None:
         if self.data.terrain.mesh is not None:
             vertices, faces = self.data.terrain.mesh
             api.add_mesh_simple("/heightfield", vertices.astype(np.float32), faces, color=_rgb(scene.TERRAIN_RGB),
@@ -491,7 +496,7 @@ class RunPage:
         if value == "Play":
             run = self.data.run
             if self.timeline.value >= run.t[-1] - run.dt / 2:
-                self.timeline.value = float(run.t[0])
+                self.timeline.value = float(run.t[0])  # type: ignore[misc]  # viser hides the value setter
             self.playing = True
         else:
             self.playing = False
@@ -507,7 +512,7 @@ class RunPage:
             try:
                 step = float(self.speed.value) * period
                 value = min(float(self.timeline.value) + step, float(run.t[-1]))
-                self.timeline.value = value
+                self.timeline.value = value  # type: ignore[misc]  # viser hides the value setter
                 if value >= run.t[-1]:
                     self.playing = False
             except disconnect_errors():  # the tab went away before its disconnect callback stopped this thread
@@ -605,7 +610,7 @@ def serve(target: str, host: str, port: int, follow: bool = False) -> None:
         raise SpecError([Issue(None, None, "view", f"viser is not installed ({error})",
                                install_hint())]) from None
 
-    from shc_cli.loop.opening import open_run as read_run  # directories and bags
+    from shc_cli.domain.stored_run import open_run as read_run  # directories and bags
     from shc_cli.spec.loading import load_robot
 
     data: RunScene | None = None
@@ -625,9 +630,9 @@ def serve(target: str, host: str, port: int, follow: bool = False) -> None:
     quiet_closed_connections()  # a closed tab's last draw is not worth a warning
     with contextlib.redirect_stdout(io.StringIO()):  # viser's own banner: shc prints one line instead
         server = viser.ViserServer(host=host, port=port, label="shc view", verbose=False)
-    pages: dict[int, Any] = {}
+    pages: dict[int, RunPage | RobotPage] = {}
 
-    def connect(client: Any) -> None:
+    def connect(client: viser.ClientHandle) -> None:
         live = follower is not None and not follower.finished
         pages[client.client_id] = RunPage(client, data, live) if data is not None else RobotPage(client, target)
 
@@ -640,7 +645,7 @@ def serve(target: str, host: str, port: int, follow: bool = False) -> None:
                 with contextlib.suppress(*disconnect_errors()):
                     page.refresh(data, finished)
 
-    def disconnect(client: Any) -> None:
+    def disconnect(client: viser.ClientHandle) -> None:
         page = pages.pop(client.client_id, None)
         if isinstance(page, RunPage):
             page.close()
@@ -677,7 +682,7 @@ STOP_WAIT_S = 0.5
 """How long Ctrl-C waits for viser's server to stop [s] before ``shc view`` leaves anyway."""
 
 
-def stop_within(server: Any, seconds: float) -> None:
+def stop_within(server: viser.ViserServer, seconds: float) -> None:
     """Stop ``server`` in a daemon thread, waiting at most ``seconds``, and silence its late warnings.
 
     viser's ``stop`` joins its event-loop thread for up to 6 s, and pages still being built or redrawn in its worker

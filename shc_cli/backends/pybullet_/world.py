@@ -314,7 +314,7 @@ class World:
             linear_velocity=linear_v, angular_velocity=angular_v,
         )
 
-    def _ray_height(self, position: Any) -> float:
+    def _ray_height(self, position: np.ndarray | tuple[float, float, float]) -> float:
         """Body-origin height above the terrain, from a ray cast down that passes through the robot itself."""
         x, y, z = position
         start = z - 0.001

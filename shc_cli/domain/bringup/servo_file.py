@@ -19,7 +19,7 @@ from shc_cli.errors import Issue, SpecError
 SECTION = re.compile(r"^\s*\[([^\]]+)\]\s*(#.*)?$")
 
 
-def _value(value: Any) -> str:
+def _value(value: object) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     if isinstance(value, int | float):

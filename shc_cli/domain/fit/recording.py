@@ -1,6 +1,6 @@
 """A run's recorded joint commands and what its servos measured, as the fit needs them.
 
-Two kinds of run directory have ``log.csv`` (:mod:`shc_cli.loop.runlog`): ``run-hw`` (and a servo emulator's bus)
+Two kinds of run directory have ``log.csv`` (:mod:`shc_cli.record.runlog`): ``run-hw`` (and a servo emulator's bus)
 logs each servo's present current [A] in the ``_torque`` column — a servo does not measure its torque — and lists
 what it does not measure in the summary's ``unmeasured`` (the per-servo and total power, unless a supply meter
 filled ``power_w``); ``simulate`` logs the output torque [N·m] and the total power [W]. Velocities are not logged:
@@ -96,8 +96,8 @@ def load_recording(path: Path, robot: Robot, hardware_scenario: str = "WG") -> R
         SpecError: one line: not a run with ``log.csv`` (a plan), no current or torque column, a robot whose body
             or legs differ from ``robot`` (only ``[servo]`` may differ).
     """
-    from shc_cli.loop.opening import open_run
-    from shc_cli.loop.runlog import joint_columns
+    from shc_cli.domain.stored_run import open_run
+    from shc_cli.record.runlog import joint_columns
 
     log = open_run(Path(path))
     if log.kind != "simulate" or log.commanded is None or log.efforts is None:

@@ -109,7 +109,7 @@ def goal_ticks(recording: Recording) -> np.ndarray:
     import math
 
     from shc_cli.hardware.models import MODELS
-    from shc_cli.loop.runlog import joint_columns
+    from shc_cli.record.runlog import joint_columns
 
     hardware = recording.robot.hardware
     per_radian = []

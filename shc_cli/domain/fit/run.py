@@ -155,7 +155,7 @@ def _fit_group(problem: Problem, group: str, config: FitConfig, robot: Robot, fo
                                              encoding="utf-8")
     outputs.write_json(folder / outputs.FIT_FILE, outputs.fit_json(problem.parameters, solution, before, after))
     if config.plots:
-        from shc_cli.loop.runlog import joint_columns
+        from shc_cli.record.runlog import joint_columns
 
         names = joint_columns(robot)
         for index, recording in enumerate(problem.recordings):

@@ -40,8 +40,8 @@ def bus_log(source: Path, out: Path, seed: int = 0, position_noise_ticks: float 
     """
     from shc_cli.backends.servo import ServoModel
     from shc_cli.domain.fit.recording import speeds
-    from shc_cli.loop.runlog import joint_columns
-    from shc_cli.loop.runread import read_run
+    from shc_cli.record.runlog import joint_columns
+    from shc_cli.record.runread import read_run
 
     run = read_run(source)
     if run.kind != "simulate" or run.efforts is None or run.summary.unmeasured is not None:

@@ -33,7 +33,7 @@ def prepare_output(spec: Study, out: Path, resume: bool, overwrite: bool) -> Non
             raise OutputError(f"{out}: was started with a different study file ({copy}); resume it with that "
                               "file or choose another --out")
     else:
-        from shc_cli.loop.runlog import clear_output
+        from shc_cli.record.runlog import clear_output
 
         clear_output(out, overwrite,
                      "add --resume to continue it, --overwrite to start it again, or choose another --out")

@@ -56,7 +56,7 @@ def _names(key: str) -> str:
     return " or ".join(kind.__name__ for kind in kinds(key))
 
 
-def check_option(path: Path, line: int | None, field: str, key: str, value: Any) -> None:
+def check_option(path: Path, line: int | None, field: str, key: str, value: object) -> None:
     """One value of option ``key`` (at ``field``, ``line`` of the file at ``path``): a known option, a value of its
     type, one ``shc simulate`` takes — else a one-line :class:`SpecError`."""
     if key not in OPTIONS:
@@ -119,7 +119,7 @@ def _bounds(document: Document, where: tuple[str, ...]) -> Iterator[tuple[str, A
     yield from ((bound, table[bound]) for bound in ("low", "high"))
 
 
-def _check(document: Document, where: tuple[str, ...], key: str, value: Any) -> None:
+def _check(document: Document, where: tuple[str, ...], key: str, value: object) -> None:
     if is_option(key):
         check_option(document.path, document.line(where), ".".join(where), key, value)
 

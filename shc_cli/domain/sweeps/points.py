@@ -62,7 +62,7 @@ def run_point(point: Point, out: str, metrics: tuple[str, ...] = METRICS, skip: 
                 shutil.rmtree(partial)  # a crashed earlier attempt
             simulate_point(point, Path(out), directory)
         from shc_cli.analysis.metrics import Window, analyze_run
-        from shc_cli.loop.opening import open_run
+        from shc_cli.domain.stored_run import open_run
 
         stopped = signal_stop(directory)
         if stopped is not None:  # Ctrl-C during this run: it is kept (partial), the sweep stops
@@ -127,7 +127,7 @@ def signal_stop(directory: Path) -> str | None:
     """The signal (``"SIGINT"``, ``"SIGTERM"``) that stopped the finished run in ``directory``, or None."""
     import json
 
-    from shc_cli.loop.summary import parse_summary
+    from shc_cli.record.summary import parse_summary
 
     try:
         summary = parse_summary(json.loads((directory / "summary.json").read_text(encoding="utf-8")))

@@ -16,7 +16,8 @@ from typing import IO, Any
 Row = dict[str, Any]
 """One row of a result table: column → value (grid values, status, summary keys, metrics)."""
 
-METRICS = ("cot", "cot_displacement", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps", "steady_speed_mps",
+METRICS = ("cot", "cot_displacement", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps",
+           "steady_speed_mps",
            "commanded_speed_mps", "speed_ratio", "distance_m", "duty_factor", "foot_slip_m",
            "stability_margin_median_m", "zmp_margin_median_m", "height_median_m", "height_iqr_m",
            "roll_rate_median_rps", "pitch_rate_median_rps", "step_frequency_hz")
@@ -32,7 +33,7 @@ def sweep_columns(grid: list[str]) -> list[str]:
     return ["index", "slug", *grid, "status", "error", *RUN_KEYS, WARNINGS, *METRICS]
 
 
-def cell(value: Any) -> str:
+def cell(value: object) -> str:
     """A value as a table cell."""
     if value is None:
         return ""

@@ -119,7 +119,7 @@ def run_sweep(file: Path, workers: int | None = None, executor: str = "local", s
     if resume and overwrite:
         raise SpecError([Issue(None, None, "--overwrite", "cannot be combined with --resume", "choose one")])
     if not resume:
-        from shc_cli.loop.runlog import clear_output
+        from shc_cli.record.runlog import clear_output
 
         clear_output(out, overwrite,
                      "add --resume to continue it, --overwrite to run it again, or choose another --out")

@@ -1,6 +1,6 @@
 """The one run-log reader: a ``plan``, ``simulate`` or ``run-hw`` run directory as arrays, whatever wrote it.
 
-:func:`shc_cli.loop.opening.open_run` opens any run — a directory here, or a bag through
+:func:`shc_cli.domain.stored_run.open_run` opens any run — a directory here, or a bag through
 :mod:`shc_cli.interop.bagrun` — so this module does not know about bags (no import circle).
 
 :func:`read_run` gives a :class:`RunLog` with the same fields for every kind of run; what a kind cannot know
@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 
 from shc_cli.errors import OutputError, SpecError
-from shc_cli.loop.runlog import ODOMETRY_COLUMNS, PARTIAL_SUFFIX, ROBOT_FILE
-from shc_cli.loop.summary import RunSummary
+from shc_cli.record.runlog import ODOMETRY_COLUMNS, PARTIAL_SUFFIX, ROBOT_FILE
+from shc_cli.record.summary import RunSummary
 from shc_cli.spec.robot import Robot
 
 
@@ -106,10 +106,10 @@ class RunLog:
 
 def read_run(path: Path) -> RunLog:
     """Read a run directory written by ``shc plan``, ``shc simulate`` or ``shc run-hw``; raises :class:`SpecError`
-    (exit 2) with one line when it is not one. Bags too: :func:`shc_cli.loop.opening.open_run`."""
+    (exit 2) with one line when it is not one. Bags too: :func:`shc_cli.domain.stored_run.open_run`."""
     path = Path(path)
     if is_bag(path):
-        raise bad_run(path, "a bag, not a run directory", "open it with shc_cli.loop.opening.open_run")
+        raise bad_run(path, "a bag, not a run directory", "open it with shc_cli.domain.stored_run.open_run")
     if not path.is_dir():
         raise bad_run(path, "not a run directory", "give a directory written by shc plan or shc simulate")
     if path.name.endswith(PARTIAL_SUFFIX) and not (path / "summary.json").exists():
@@ -153,12 +153,12 @@ def read_tables(path: Path, robot: Robot, summary: RunSummary | None = None) -> 
     return _plan_run(path, summary, robot)
 
 
-def checked_summary(file: Path, data: Any) -> RunSummary:
+def checked_summary(file: Path, data: object) -> RunSummary:
     """The :class:`RunSummary` of a ``summary.json``'s JSON data; one line naming the first bad field if it is not
     one (keys this version does not know are left out)."""
     from pydantic import ValidationError
 
-    from shc_cli.loop.summary import parse_summary
+    from shc_cli.record.summary import parse_summary
 
     try:
         return parse_summary(data)

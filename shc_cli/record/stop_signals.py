@@ -1,6 +1,6 @@
 """SIGINT and SIGTERM as a run's stop request, from the moment its run directory exists until it is finished.
 
-A run directory (:class:`~shc_cli.loop.runlog.RunDirectory`) catches both signals as soon as it is created, so a
+A run directory (:class:`~shc_cli.record.runlog.RunDirectory`) catches both signals as soon as it is created, so a
 signal while the physics opens or the controller is built is not lost: the loop, once it starts, stops at its
 first cycle and the run directory is finished like any interrupted run (``summary.json`` with ``"complete":
 false``). :func:`shc_cli.loop.session.execute` routes the signals to the loop while it runs; a repeated signal while
@@ -13,6 +13,7 @@ from __future__ import annotations
 import signal
 import threading
 from collections.abc import Callable
+from types import FrameType
 from typing import Any
 
 from shc_cli.errors import interrupt
@@ -43,7 +44,7 @@ class StopSignals:
         if threading.current_thread() is threading.main_thread() and not self._previous:
             self._previous = {sig: signal.signal(sig, self._handle) for sig in (signal.SIGINT, signal.SIGTERM)}
 
-    def _handle(self, signum: int, frame: Any) -> None:
+    def _handle(self, signum: int, frame: FrameType | None) -> None:
         name = signal.Signals(signum).name
         if self.finishing:
             raise interrupt(name)  # a second Ctrl-C while finishing: skip what is left (the plots)

@@ -39,14 +39,14 @@ import numpy as np
 
 from shc_cli.backends.base import MEASURED_BODY_COLUMNS, Measured
 from shc_cli.errors import OutputError
-from shc_cli.loop.stop_signals import StopSignals
 from shc_cli.model.chains import JointSlots, joint_slots
+from shc_cli.record.stop_signals import StopSignals
 from shc_cli.spec.robot import Robot
 
 if TYPE_CHECKING:  # the controller (and numba) only for the annotation: readers of runs stay light
     from shc_cli.backends.base import MeasuringBackend
     from shc_cli.control.controller import Command, CycleOutput
-    from shc_cli.loop.summary import RunSummary
+    from shc_cli.record.summary import RunSummary
 
 ReadingT = TypeVar("ReadingT")
 """The measuring backend's reading type (:data:`shc_cli.backends.base.ReadingT`)."""
@@ -70,7 +70,7 @@ class RunDirectory:
     """A run directory written while the run goes on: ``<name>.partial`` until :meth:`finish` renames it.
 
     Tables are CSV files whose rows are formatted with one ``%`` operation each (``log.csv``: a block at a time by
-    the compiled formatter, :mod:`shc_cli.loop.csv_rows`, the same bytes) and flushed by :meth:`flush`, so an
+    the compiled formatter, :mod:`shc_cli.record.csv_rows`, the same bytes) and flushed by :meth:`flush`, so an
     interrupted run keeps every flushed row; :meth:`close` writes and flushes every recorded row.
 
     Args:
@@ -96,7 +96,7 @@ class RunDirectory:
         self._handles: list[IO[str]] = []
         self._before_close: list[Callable[[], None]] = []
         self.signals = StopSignals()
-        """SIGINT/SIGTERM become this run's stop request from now on (:mod:`shc_cli.loop.stop_signals`)."""
+        """SIGINT/SIGTERM become this run's stop request from now on (:mod:`shc_cli.record.stop_signals`)."""
         self.signals.install()
 
     def __enter__(self) -> RunDirectory:
@@ -150,9 +150,9 @@ class RunDirectory:
         return not self.partial.exists() and self.directory.exists()
 
     def finish(self, summary: RunSummary) -> Path:
-        """Write ``summary.json`` (:class:`~shc_cli.loop.summary.RunSummary`), close the tables and give the
+        """Write ``summary.json`` (:class:`~shc_cli.record.summary.RunSummary`), close the tables and give the
         directory its final name."""
-        from shc_cli.loop.summary import write_summary
+        from shc_cli.record.summary import write_summary
 
         self.close()
         write_summary(self.partial, summary)
@@ -224,7 +224,7 @@ class LogRecorder(Generic[ReadingT]):
     """
 
     def __init__(self, run: RunDirectory, robot: Robot, backend: MeasuringBackend[ReadingT]) -> None:
-        from shc_cli.loop.csv_rows import RowBlock
+        from shc_cli.record.csv_rows import RowBlock
 
         self.run = run
         columns = log_columns(robot)

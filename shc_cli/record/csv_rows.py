@@ -1,4 +1,4 @@
-"""Rows of a CSV table gathered in a block and written by the compiled formatter (:mod:`shc_cli.loop.csv_kernels`).
+"""Rows of a CSV table gathered in a block and written by the compiled formatter (:mod:`shc_cli.record.csv_kernels`).
 
 :class:`RowBlock` keeps up to ``capacity`` rows of ``cycle, t, values…, names…`` in arrays; :meth:`RowBlock.drain`
 formats them in one kernel call and writes the text, with Python's ``%`` for the rare row the kernel leaves to it,
@@ -24,7 +24,7 @@ class RowBlock:
     """
 
     def __init__(self, columns: int, names: int, row_format: str, capacity: int = 256) -> None:
-        from shc_cli.loop import csv_kernels
+        from shc_cli.record import csv_kernels
 
         self._kernels: Any = csv_kernels
         self.row_format = row_format

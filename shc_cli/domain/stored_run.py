@@ -1,7 +1,7 @@
 """Open any run: a run directory (``plan``, ``simulate``, ``run-hw``) or a bag written from one by ``shc export
-bag``, as a :class:`~shc_cli.loop.runread.RunLog`.
+bag``, as a :class:`~shc_cli.record.runread.RunLog`.
 
-The one module above :mod:`shc_cli.loop.runread` (directories) and :mod:`shc_cli.interop.bagrun` (bags), so neither
+The one module above :mod:`shc_cli.record.runread` (directories) and :mod:`shc_cli.interop.bagrun` (bags), so neither
 needs the other.
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from shc_cli.loop.runread import RunLog, bad_run, first_line, is_bag, read_run
+from shc_cli.record.runread import RunLog, bad_run, first_line, is_bag, read_run
 
 
 def open_run(path: Path | str) -> RunLog:

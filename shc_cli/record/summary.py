@@ -1,7 +1,7 @@
 """``summary.json``: the typed summary every run directory ends with (``plan``, ``simulate``, ``run-hw``).
 
-:class:`RunSummary` is written by :meth:`shc_cli.loop.runlog.RunDirectory.finish` and read by
-:func:`shc_cli.loop.runread.read_run` (and the bag reader); every tool that reads a run (``analyze``, ``view``,
+:class:`RunSummary` is written by :meth:`shc_cli.record.runlog.RunDirectory.finish` and read by
+:func:`shc_cli.record.runread.read_run` (and the bag reader); every tool that reads a run (``analyze``, ``view``,
 ``render``, ``export bag``, sweeps, studies, the Python API) reads its fields, never string keys. One model holds
 every kind of run: a field a kind of run does not have is absent from its file (``None`` here). Keys keep the
 names they always had; ``shc schema summary`` prints the JSON Schema (docs/reference generates from it).
@@ -251,7 +251,7 @@ class RunSummary(BaseModel):
                                                            "complete and stop_reason are written.")
     plots_skipped: bool | None = Field(None, description="A second signal stopped the plots.")
 
-    def updated(self, **fields: Any) -> RunSummary:
+    def updated(self, **fields: object) -> RunSummary:
         """This summary with ``fields`` set (validated; the fields set so far keep their values)."""
         return RunSummary.model_validate({**self.model_dump(exclude_unset=True), **fields})
 
@@ -267,7 +267,7 @@ def summary_schema() -> dict[str, Any]:
     return RunSummary.model_json_schema()
 
 
-def parse_summary(data: Any) -> RunSummary:
+def parse_summary(data: object) -> RunSummary:
     """A summary read from JSON: keys this version does not know are left out (runs from other versions stay
     readable); raises :class:`pydantic.ValidationError` on a wrong type."""
     if not isinstance(data, dict):
