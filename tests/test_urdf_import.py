@@ -469,16 +469,11 @@ def _prismatic() -> str:
     return robot_urdf([leg])
 
 
-def _continuous() -> str:
-    return robot_urdf([LegSpec("p", [Element("continuous", (0.1, -0.1, 0.0))], sphere=(0.0, 0.0, 0.0))])
-
-
 @pytest.mark.parametrize(("content", "message"), [
     (None, "file not found"),
     ("<robot name='x'><link name='a'>", "malformed XML"),
     (robot_urdf([LegSpec("p", [Element("fixed", (0.1, 0.0, 0.0))])]), "no legs found"),
     (_prismatic(), "is prismatic (it slides)"),
-    (_continuous(), "is continuous (it has no limits)"),
     (robot_urdf([LegSpec("p", [Element("revolute", (0.1, -0.1, 0.0), lower=0.5, upper=0.5)])]),
      "has lower 0.5 >= upper 0.5"),
 ])

@@ -58,9 +58,11 @@ from shc_cli.interop.servo_map import servo_table, with_check_note
 from shc_cli.interop.urdf_import_clean import (
     ON_AXIS,
     SERVO_MASS,
+    WHOLE_TURN,
     dummy_tail,
     forward_turn,
     leg_chains,
+    open_continuous,
     placeholders,
     stub_joints,
 )
@@ -102,12 +104,13 @@ FK_SAMPLES = 200
 
 def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: list[TipSpec] | None = None,
                 clearance: float | None = None, reach: float | None = None, forward: float | None = None,
-                stubs: dict[str, str] | None = None) -> Imported:
+                stubs: dict[str, str] | None = None, opened: list[str] | None = None) -> Imported:
     """The shc robot table tree of a parsed URDF (module docstring).
 
     ``forward``: the turn of the shc body frame from base_link about z [rad] (None: π/2 if the legs' layout says
     the URDF's +x is not forward, :func:`~shc_cli.interop.urdf_import_clean.forward_turn`, else 0)."""
     stubs = stub_joints(model.robot.joints) if stubs is None else stubs
+    opened = open_continuous(model.robot.joints) if opened is None else opened
     tree = Tree(model, stubs, forward or 0.0)
     found = find_legs(tree, legs, tips or [], file)
     notes: list[str] = [f"{joint} is taken as fixed: {why}" for joint, why in stubs.items()]
@@ -132,7 +135,7 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
     if forward is None and legs == "auto":
         yaw = forward_turn([np.mean([c.hip, *c.points, c.tip], axis=0) for c in chains])
         if yaw:
-            again = import_tree(model, file, name, legs, tips, clearance, reach, yaw, stubs)
+            again = import_tree(model, file, name, legs, tips, clearance, reach, yaw, stubs, opened)
             quarter = abs(abs(yaw) - math.pi / 2) < 1e-9
             way = (f"base_link's {'+y' if yaw > 0 else '-y'}" if quarter else
                    f"{math.degrees(yaw):g} deg from base_link's +x towards {'+y' if yaw > 0 else '-y'}, halfway "
@@ -182,6 +185,11 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
         body.pop("com", None)
         body.pop("inertia", None)
         body["mass"] = _round(SERVO_MASS * sum(len(c.joints) for c in chains), 6)
+    continuous = [j.name for c in chains for j in c.joints if j.name in opened]
+    if continuous:
+        notes.append(f"{len(continuous)} leg joints are continuous in the URDF ({_names(continuous)}): a continuous "
+                     f"joint is revolute without limits, so they get {WHOLE_TURN[0]:.4g} … {WHOLE_TURN[1]:.4g} rad "
+                     "(a whole turn; the stance and the walk choose angles inside it); write your servos' limits")
     if unused:
         notes.append(f"URDF joints in no leg (their links count as body): {', '.join(sorted(unused))}")
     efforts = Counter(j.limit.effort for c in chains for j in c.joints if j.limit.effort)
@@ -260,6 +268,11 @@ def _trace(tree: Tree, chain: LegChain, file: Path, notes: list[str]) -> None:
         raise NeedsSnap(f"axes of {names[error.index]} and {names[error.index + 1]} are {error.angle:.2g} rad from "
                         f"parallel: the DH table would need an offset of {error.offset:.3g} m",
                         max(error.angle * 2, SUGGESTED_SNAP)) from None
+
+
+def _names(names: list[str], shown: int = 3) -> str:
+    """The first ``shown`` names and how many more."""
+    return ", ".join(names[:shown]) + (f" and {len(names) - shown} more" if len(names) > shown else "")
 
 
 class NeedsSnap(Exception):

@@ -20,7 +20,7 @@ from shc_cli.interop.urdf_import_dh import Row
 FloatArray = NDArray[np.float64]
 
 
-UNSUPPORTED = {"prismatic": "slides", "continuous": "has no limits", "planar": "moves in a plane",
+UNSUPPORTED = {"prismatic": "slides", "planar": "moves in a plane",
                "floating": "moves freely"}
 """Joint types a leg cannot contain, and why."""
 

@@ -1,0 +1,94 @@
+"""Writes the small descriptions of tests/data/classes (one property of issue 37 each); run from the repo root:
+``python tests/data/classes/make_classes.py``. Written for these tests (no third-party source)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+HERE = Path(__file__).parent
+HIPS = [("fr", 0.12, -0.08), ("mr", 0.0, -0.1), ("rr", -0.12, -0.08),
+        ("rl", -0.12, 0.08), ("ml", 0.0, 0.1), ("fl", 0.12, 0.08)]
+INERTIA = '<inertia ixx="2e-5" ixy="0" ixz="0" iyy="2e-5" iyz="0" izz="2e-5"/>'
+
+
+def link(name: str, mass: float, extra: str = "") -> str:
+    return (f'  <link name="{name}"><inertial><origin xyz="0 0 0"/><mass value="{mass}"/>{INERTIA}</inertial>'
+            f"{extra}</link>")
+
+
+def joint(name: str, kind: str, parent: str, child: str, xyz: str, rpy: str = "0 0 0", axis: str = "0 0 1",
+          limits: str = 'lower="-1.6" upper="1.6"') -> str:
+    body = f'<parent link="{parent}"/><child link="{child}"/><origin xyz="{xyz}" rpy="{rpy}"/>'
+    if kind != "fixed":
+        body += f'<axis xyz="{axis}"/><limit {limits} effort="1.5" velocity="6.0"/>'
+    return f'  <joint name="{name}" type="{kind}">{body}</joint>'
+
+
+def body(name: str = "base_link", mass: float = 1.5) -> str:
+    return link(name, mass, '<collision><geometry><box size="0.3 0.2 0.05"/></geometry></collision>')
+
+
+SPHERE = '<collision><geometry><sphere radius="0.01"/></geometry></collision>'
+TIBIA_ROD = ('<collision><origin xyz="0.06 0 0" rpy="0 1.5707963267948966 0"/><geometry>'
+             '<cylinder radius="0.01" length="0.12"/></geometry></collision>')
+
+
+def hexapod(kind: str = "revolute", limits: str = 'lower="-1.6" upper="1.6"', femur_rpy: str = "0 0 0",
+            femur_axis: str = "0 1 0", tibia_rpy: str = "0 0 0", tibia_axis: str = "0 1 0", foot: bool = True,
+            base: str = "base_link", tibia_extra: str = "", foot_xyz: str = "0.12 0 0") -> list[str]:
+    """Six 3-joint legs (coxa yaw, femur and tibia pitch), flat at the zero pose; a foot link with a sphere at
+    the tibia's end unless ``foot`` is False."""
+    lines = []
+    for leg, x, y in HIPS:
+        yaw = math.atan2(y, x)
+        lines += [link(f"{leg}_coxa", 0.05), link(f"{leg}_femur", 0.08), link(f"{leg}_tibia", 0.06, tibia_extra),
+                  joint(f"{leg}_coxa_joint", kind, base, f"{leg}_coxa", f"{x} {y} 0", f"0 0 {yaw!r}",
+                        limits=limits),
+                  joint(f"{leg}_femur_joint", kind, f"{leg}_coxa", f"{leg}_femur", "0.04 0 0", femur_rpy,
+                        femur_axis, limits),
+                  joint(f"{leg}_tibia_joint", kind, f"{leg}_femur", f"{leg}_tibia", "0.08 0 0", tibia_rpy,
+                        tibia_axis, limits)]
+        if foot:
+            lines += [link(f"{leg}_foot", 0.01, SPHERE),
+                      joint(f"{leg}_foot_joint", "fixed", f"{leg}_tibia", f"{leg}_foot", foot_xyz)]
+    return lines
+
+
+def robot(name: str, lines: list[str], head: str = "") -> str:
+    return f'<?xml version="1.0"?>\n<robot name="{name}"{head}>\n' + "\n".join(lines) + "\n</robot>\n"
+
+
+def main() -> None:
+    files = {
+        # 1: a vendor macro's continuous joints (no lower/upper anywhere).
+        "continuous_hexapod.urdf": robot("continuous_hexapod", [body(), *hexapod("continuous", limits="")]),
+        # 3: pi/2 written 1.57 and pi 3.14: the femur frame turned 1.57 about x (its axis z), the tibia's 3.14
+        # about y (its axis -z): the knee axis 0.0016 rad from the femur's, tilted along the femur.
+        "rounded_rpy_hexapod.urdf": robot("rounded_rpy_hexapod", [body(), *hexapod(
+            femur_rpy="1.57 0 0", femur_axis="0 0 1", tibia_rpy="0 3.14 0", tibia_axis="0 0 -1",
+            foot_xyz="-0.12 0 0")]),
+        # 6: no foot link, the tibia frame on the knee axis, a rod along the tibia as its collision geometry.
+        "rod_tibia_hexapod.urdf": robot("rod_tibia_hexapod", [body(), *hexapod(foot=False, tibia_extra=TIBIA_ROD)]),
+        # 4: a massless spawn frame as the root, the body fixed to it 1.2 m away and 0.4 m up.
+        "spawn_root_hexapod.urdf": robot("spawn_root_hexapod", [
+            '  <link name="spawn"/>', body("torso"),
+            joint("spawn_to_torso", "fixed", "spawn", "torso", "1.0 0.6 0.4", "0 0 0.3"),
+            *hexapod(base="torso")]),
+    }
+    # 2: a CAD exporter: the body and the feet are children of the root through floating joints.
+    detached = [link("root", 0.0), body("chassis"), joint("root_chassis", "floating", "root", "chassis", "0 0 0")]
+    detached += [line for line in hexapod(base="chassis", foot=False)]
+    for leg, x, y in HIPS:
+        reach = 0.04 + 0.08 + 0.12
+        norm = math.hypot(x, y)
+        fx, fy = x + reach * x / norm, y + reach * y / norm
+        detached += [link(f"{leg}_foot", 0.01, SPHERE),
+                     joint(f"{leg}_foot_float", "floating", "root", f"{leg}_foot", f"{fx!r} {fy!r} 0")]
+    files["detached_feet_hexapod.urdf"] = robot("detached_feet_hexapod", detached)
+    for name, text in files.items():
+        (HERE / name).write_text(text, encoding="utf-8")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,83 @@
+"""``shc import urdf`` on the classes of description of issue 37 (tests/data/classes, one property each, made by
+``make_classes.py`` there): each imports with no options, and its tips follow the source's own kinematics
+(yourdfpy's forward kinematics of the file, the reference) at random joint vectors."""
+
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from shc_cli.model.chains import Chains
+from shc_cli.spec.loading import load_robot
+
+from .test_cli import run
+
+pytest.importorskip("yourdfpy", reason="shc import urdf needs the 'urdf' extra")
+
+CLASSES = Path(__file__).parent / "data" / "classes"
+LEGS = ["fr", "mr", "rr", "rl", "ml", "fl"]
+
+
+def _import(path: Path, out: Path, capsys, monkeypatch, *options: str) -> tuple[str, str, Path]:  # type: ignore[no-untyped-def]
+    code, stdout, err = run(["import", "urdf", str(path), "--out", str(out), *options], capsys, monkeypatch)
+    assert code == 0, err
+    return stdout, err, next(iter((out / "robots").glob("*.toml")))
+
+
+def _fk_worst(source: Path, robot_file: Path, tips: dict[str, tuple[str, tuple[float, float, float]]],
+              base: str = "base_link", samples: int = 40, text: str | None = None) -> float:
+    """Largest distance between the robot file's tips and yourdfpy's FK of ``source`` (or its ``text``) at random
+    joint vectors inside the file's limits [m]; ``tips`` maps each leg's first URDF joint to its tip link and the
+    tip point in that link (what the description means by the foot, written by the test)."""
+    from shc_cli.interop.urdf_import_source import parse_urdf
+
+    model = parse_urdf(source, text or source.read_text())
+    robot = load_robot(robot_file).robot
+    servos = robot.hardware.servos
+    chains = Chains.from_robot(robot)
+    rng = np.random.default_rng(11)
+    worst = 0.0
+    for _ in range(samples):
+        q = rng.uniform(chains.lower, chains.upper)
+        cfg = {name: 0.0 for name in model.actuated_joint_names}
+        for i, (leg_id, spec) in enumerate(robot.legs.items()):
+            for k, joint in enumerate(spec.joints):
+                cfg[servos[f"{leg_id}_{joint}"].joint] = float(q[i, k])
+        model.update_cfg(cfg)
+        ours = chains.tips(q)
+        for i, (leg_id, spec) in enumerate(robot.legs.items()):
+            end, point = tips[servos[f"{leg_id}_{next(iter(spec.joints))}"].joint]
+            transform = np.asarray(model.get_transform(frame_to=end, frame_from=base), dtype=float)
+            worst = max(worst, float(np.linalg.norm(ours[i] - (transform @ np.append(point, 1.0))[:3])))
+    return worst
+
+
+FEET = {f"{leg}_coxa_joint": (f"{leg}_foot", (0.0, 0.0, 0.0)) for leg in LEGS}
+"""The made-up hexapods' feet: the centre of each foot link's sphere."""
+
+
+def test_continuous_joints_are_revolute_with_a_whole_turn(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    path = CLASSES / "continuous_hexapod.urdf"
+    out, _, robot_file = _import(path, tmp_path, capsys, monkeypatch)
+    assert "18 leg joints are continuous in the URDF" in out and "-3.142 … 3.142 rad" in out
+    data = tomllib.loads(robot_file.read_text())
+    joints = data["templates"]["leg"]["joints"]
+    assert all((j["min"], j["max"]) == (-math.pi, math.pi) for j in joints.values())
+    assert _fk_worst(path, robot_file, FEET) < 1e-9
+
+
+@pytest.mark.slow  # imports and walks 10 s in MuJoCo
+@pytest.mark.parametrize(("name", "share"), [("continuous_hexapod", 0.6)])
+def test_each_class_walks_10_s(name: str, share: float, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    _, _, robot_file = _import(CLASSES / f"{name}.urdf", tmp_path, capsys, monkeypatch)
+    code, _, err = run(["simulate", str(robot_file), "--duration", "10", "--no-plots", "--out",
+                        str(tmp_path / "sim")], capsys, monkeypatch)
+    assert code == 0, err
+    summary = json.loads((tmp_path / "sim" / "summary.json").read_text())
+    assert not summary["fell"] and summary["complete"], summary
+    assert summary["walked_share"] >= share and summary["max_tilt_rad"] < 0.2, summary
