@@ -51,7 +51,7 @@ def _fk_worst(source: Path, robot_file: Path, tips: dict[str, tuple[str, tuple[f
         model.update_cfg(cfg)
         ours = chains.tips(q)
         for i, (leg_id, spec) in enumerate(robot.legs.items()):
-            end, point = tips[servos[f"{leg_id}_{next(iter(spec.joints))}"].joint]
+            end, point = tips[str(servos[f"{leg_id}_{next(iter(spec.joints))}"].joint)]
             transform = np.asarray(model.get_transform(frame_to=end, frame_from=base), dtype=float)
             worst = max(worst, float(np.linalg.norm(ours[i] - (transform @ np.append(point, 1.0))[:3])))
     return worst
@@ -71,8 +71,22 @@ def test_continuous_joints_are_revolute_with_a_whole_turn(tmp_path: Path, capsys
     assert _fk_worst(path, robot_file, FEET) < 1e-9
 
 
+def test_rounded_rpy_values_are_snapped_and_the_tip_move_reported(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """1.57 for pi/2 and 3.14 for pi put the knee axis 0.0016 rad off the femur's: snapped without being asked;
+    the tips follow the snapped file exactly and the written one within 0.0016 × 0.12 m (the tibia) + 0.0008 ×
+    0.24 m (the leg)."""
+    from shc_cli.interop.urdf_import_source import read_source
+
+    path = CLASSES / "rounded_rpy_hexapod.urdf"
+    out, _, robot_file = _import(path, tmp_path, capsys, monkeypatch)
+    assert "0.0016 rad from parallel" in out and "snapped" in out and "m at most (accepted up to" in out, out
+    tips = {f"{leg}_coxa_joint": (f"{leg}_foot", (0.0, 0.0, 0.0)) for leg in LEGS}
+    assert _fk_worst(path, robot_file, tips, text=read_source(path, {}, 0.002).snapped_text) < 1e-9
+    assert _fk_worst(path, robot_file, tips) < 0.0016 * 0.12 + 0.0008 * 0.24
+
+
 @pytest.mark.slow  # imports and walks 10 s in MuJoCo
-@pytest.mark.parametrize(("name", "share"), [("continuous_hexapod", 0.6)])
+@pytest.mark.parametrize(("name", "share"), [("continuous_hexapod", 0.6), ("rounded_rpy_hexapod", 0.6)])
 def test_each_class_walks_10_s(name: str, share: float, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     _, _, robot_file = _import(CLASSES / f"{name}.urdf", tmp_path, capsys, monkeypatch)
     code, _, err = run(["simulate", str(robot_file), "--duration", "10", "--no-plots", "--out",

@@ -15,7 +15,8 @@
 * **What is not a leg** (:mod:`shc_cli.interop.urdf_import_clean`): sensor stand-ins and dummy foot joints are
   fixed, head and camera chains left out, placeholder inertias and speed limits replaced (and named), and a
   body frame whose +x points at a leg turned a quarter (``--forward`` chooses). Axes less than
-  :data:`AUTO_SNAP` from parallel are snapped without being asked.
+  nearly parallel axes are snapped without being asked (:data:`SNAP_STEPS`, if the tips move less than
+  :data:`SNAP_MOVE` of a leg's length; the note says by how much).
 * **Servo map**: ``[hardware.servos]`` (:mod:`shc_cli.interop.servo_map`): ids numbered, each joint's URDF name.
 * **DH**: :mod:`shc_cli.interop.urdf_import_dh`: exact for any axes; URDF angle = shc angle.
 * **Leg ids** by position (the mean of the leg's joint origins and tip at the zero pose: a joint's origin may
@@ -93,8 +94,14 @@ FloatArray = NDArray[np.float64]
 
 GAITS = {4: "quad_wave", 6: "tripod", 8: "octo_alternating"}
 """Gait written for a robot with this many legs (others get ``wave``, which fits none but six legs)."""
-AUTO_SNAP = 0.001
-"""Snap tolerance used without being asked when two axes are nearly parallel [rad] (1.57 is 0.0008 from π/2)."""
+SNAP_STEPS = (0.001, 0.002, 0.005, 0.01, 0.02)
+"""Snap tolerances tried in turn without being asked when two axes are nearly parallel [rad] (1.57 is 0.0008
+from π/2, 3.14 0.0016 from π); the first that makes every leg's axes parallel or skew enough is kept."""
+SNAP_MOVE = 0.005
+"""An automatic snap is kept only if it moves no tip (against the unsnapped URDF, at random joint vectors) more
+than this share of the longest leg's length; beyond, the import refuses naming the ``--snap`` that accepts it."""
+BEYOND = (0.05, 0.1, 0.2)
+"""Snap tolerances tried only to name a ``--snap`` in a refusal when none of :data:`SNAP_STEPS` helps [rad]."""
 FK_SAMPLES = 200
 """Random joint vectors per leg of the forward-kinematics check after writing."""
 
@@ -379,22 +386,30 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
     robot_name = name or re.sub(r"[^A-Za-z0-9_-]", "_", str(model.robot.name or file.stem))
     out = out if out is not None else Path("imported") / robot_name
     tip_specs = [TipSpec.parse(t) for t in tips or []]
+    needed: NeedsSnap | None = None
     try:
         imported = import_tree(model, file, robot_name, legs, tip_specs, clearance, reach, forward)
-    except NeedsSnap as needed:
-        if snap > 0.0 or needed.snap > AUTO_SNAP:
+    except NeedsSnap as refused:
+        needed = refused
+        if snap > 0.0:
             raise _fail(file, needed.problem, f"snap the URDF's angles with --snap {needed.snap:.1g} or fix them")\
                 from None
-        snap = AUTO_SNAP
-        source = read_source(file, args or {}, snap)
-        model = parse_urdf(file, source.snapped_text)
-        try:
-            imported = import_tree(model, file, robot_name, legs, tip_specs, clearance, reach, forward)
-        except NeedsSnap as still:
-            raise _fail(file, still.problem, "fix the URDF's angles (snapping them by "
-                        f"{AUTO_SNAP:g} rad did not make the axes parallel)") from None
-        imported.notes.append(f"{needed.problem}: angles within {AUTO_SNAP:g} rad of a multiple of pi/2 snapped "
-                              "(--snap)")
+        for step in (*SNAP_STEPS, *BEYOND):
+            source = read_source(file, args or {}, step)
+            model = parse_urdf(file, source.snapped_text)
+            try:
+                imported = import_tree(model, file, robot_name, legs, tip_specs, clearance, reach, forward)
+            except NeedsSnap:
+                continue
+            snap = step
+            break
+        else:
+            raise _fail(file, f"{needed.problem}, and snapping angles by up to {BEYOND[-1]:g} rad does not make the "
+                        "axes parallel", "fix the URDF's joint origins and axes") from None
+        if snap > SNAP_STEPS[-1]:
+            raise _fail(file, f"{needed.problem} (a skew the import does not snap on its own: snapping angles within "
+                        f"{snap:g} rad of a multiple of pi/2 makes them parallel)",
+                        f"accept that with --snap {snap:g}, or fix the URDF's angles") from None
     if imported.refusal is not None:
         raise _fail(file, *imported.refusal)
     _finish(imported, clearance, reach, file)
@@ -406,19 +421,8 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
     sway = _sway(imported, robot_name)
     keys = ("name", "description", "time_delta", "body", "walker", "pose", "servo", "templates", "legs", "hardware")
     tree: dict[str, Any] = {key: imported.tree[key] for key in keys if key in imported.tree}
-    header = [f"# Imported by `shc import urdf` from {file.name}. Units: m, rad, s, kg.",
-              f"# base_link is the URDF link '{imported.base_frame}'"
-              + (f" turned {math.degrees(imported.yaw):g} deg about z (forward)" if imported.yaw else "")
-              + ". Joint angles are the URDF's; [hardware.servos] names each joint's URDF joint.",
-              *_tip_lines(imported.legs),
-              *(f"# Note: {note}." for note in imported.notes)]
-    if source.snap > 0.0:
-        header.append(f"# rpy values within {snap:g} rad of a multiple of pi/2 snapped to it (largest change "
-                      f"{source.snap:.2g} rad).")
-    header.append("# Not read: visuals, meshes (but a foot's, when its link frame is on the knee axis), transmissions, "
-                  "gazebo tags, dynamics (damping, friction).")
     robot_path = out / "robots" / f"{robot_name}.toml"
-    text = "\n".join(header) + "\n" + with_check_note(dump_toml(tree))
+    text = _header(file, imported, snap, source.snap) + with_check_note(dump_toml(tree))
     pose_path = out / "poses" / sway[0] if sway is not None else None
     with tempfile.TemporaryDirectory() as folder:  # checked before anything is written
         draft = Path(folder) / "robots" / robot_path.name
@@ -441,10 +445,37 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
     if source.snap > 0.0:
         unsnapped = fk_error(parse_urdf(file, source.text), imported.legs, imported.base_frame, loaded.robot,
                              yaw=imported.yaw)
+    if needed is not None:
+        limit = SNAP_MOVE * max(_length(leg) for leg in imported.legs)
+        moved = (f"angles within {snap:g} rad of a multiple of pi/2 snapped (--snap), which moves the tips "
+                 f"{unsnapped:.2g} m at most")
+        if unsnapped > limit:
+            raise _fail(file, f"{needed.problem}; {moved}, more than the {limit:.2g} m ({SNAP_MOVE:.1%} of the leg's "
+                        "length) the import accepts on its own", f"accept it with --snap {snap:g}, or fix the URDF's "
+                        "angles")
+        imported.notes.append(f"{needed.problem}: {moved} (accepted up to {limit:.2g} m, {SNAP_MOVE:.1%} of the "
+                              "leg's length)")
+        text = _header(file, imported, snap, source.snap) + with_check_note(dump_toml(tree))
     if pose_path is not None and sway is not None:
         write_text(pose_path, sway[1])
     write_text(robot_path, text)
     return Result(robot_path, imported.notes, error, unsnapped, source.snap, pose_path)
+
+
+def _header(file: Path, imported: Imported, snap: float, largest: float) -> str:
+    """The robot file's comment lines: where it came from, the base frame, the tips, the notes."""
+    header = [f"# Imported by `shc import urdf` from {file.name}. Units: m, rad, s, kg.",
+              f"# base_link is the URDF link '{imported.base_frame}'"
+              + (f" turned {math.degrees(imported.yaw):g} deg about z (forward)" if imported.yaw else "")
+              + ". Joint angles are the URDF's; [hardware.servos] names each joint's URDF joint.",
+              *_tip_lines(imported.legs),
+              *(f"# Note: {note}." for note in imported.notes)]
+    if largest > 0.0:
+        header.append(f"# rpy values within {snap:g} rad of a multiple of pi/2 snapped to it (largest change "
+                      f"{largest:.2g} rad).")
+    header.append("# Not read: visuals, meshes (but a foot's, when its link frame is on the knee axis), transmissions, "
+                  "gazebo tags, dynamics (damping, friction).")
+    return "\n".join(header) + "\n"
 
 
 POSES_FROM_ROBOT = "../poses/"
