@@ -85,8 +85,19 @@ def test_rounded_rpy_values_are_snapped_and_the_tip_move_reported(tmp_path: Path
     assert _fk_worst(path, robot_file, tips) < 0.0016 * 0.12 + 0.0008 * 0.24
 
 
+def test_a_tip_on_the_knee_axis_is_the_far_end_of_the_tibias_geometry(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """No foot link and the tibia frame on the knee axis: the tip is the far end of the tibia's collision
+    cylinder (0.12 m long, centred 0.06 m out along the tibia's x): (0.12, 0, 0) in the tibia's frame."""
+    path = CLASSES / "rod_tibia_hexapod.urdf"
+    _, _, robot_file = _import(path, tmp_path, capsys, monkeypatch)
+    assert "collision or visual geometry farthest from its joint's axis" in robot_file.read_text()
+    tips = {f"{leg}_coxa_joint": (f"{leg}_tibia", (0.12, 0.0, 0.0)) for leg in LEGS}
+    assert _fk_worst(path, robot_file, tips) < 1e-9
+
+
 @pytest.mark.slow  # imports and walks 10 s in MuJoCo
-@pytest.mark.parametrize(("name", "share"), [("continuous_hexapod", 0.6), ("rounded_rpy_hexapod", 0.6)])
+@pytest.mark.parametrize(("name", "share"), [("continuous_hexapod", 0.6), ("rounded_rpy_hexapod", 0.6),
+                                           ("rod_tibia_hexapod", 0.6)])
 def test_each_class_walks_10_s(name: str, share: float, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     _, _, robot_file = _import(CLASSES / f"{name}.urdf", tmp_path, capsys, monkeypatch)
     code, _, err = run(["simulate", str(robot_file), "--duration", "10", "--no-plots", "--out",

@@ -11,7 +11,8 @@
   names tip links by glob pattern and the tip point in their frame.
 * **Tip**: the centre of the tip link's first collision sphere, else its frame origin (``--tip`` names it); a
   frame origin on the last joint's axis (a tibia frame on the knee and no foot frame) is replaced by the point of
-  the link's mesh farthest from that axis, else the import is refused with the ``--tip`` that would fix it.
+  the link's mesh farthest from that axis, else by the end of its cylinders and boxes (collision or visual)
+  farthest from it, else the import is refused with the ``--tip`` that would fix it.
 * **What is not a leg** (:mod:`shc_cli.interop.urdf_import_clean`): sensor stand-ins and dummy foot joints are
   fixed, head and camera chains left out, placeholder inertias and speed limits replaced (and named), and a
   body frame whose +x points at a leg turned a quarter (``--forward`` chooses). Axes less than
@@ -70,7 +71,7 @@ from shc_cli.interop.urdf_import_clean import (
 from shc_cli.interop.urdf_import_dh import Axis, NearlyParallel, chain_dh
 from shc_cli.interop.urdf_import_source import SUGGESTED_SNAP, parse_urdf, read_source
 from shc_cli.interop.urdf_import_stance import _finish, _length
-from shc_cli.interop.urdf_import_tip import _mesh_tip, _off_axis, _tip_hint
+from shc_cli.interop.urdf_import_tip import _mesh_tip, _off_axis, _tip_hint, primitive_tip
 from shc_cli.interop.urdf_import_tree import (
     Imported,
     LegChain,
@@ -259,7 +260,7 @@ def _trace(tree: Tree, chain: LegChain, file: Path, notes: list[str]) -> None:
                      "pass through the tip: taken as fixed")
         chain.joints, axes = chain.joints[:-dummies], axes[:-dummies]
     if chain.tip_source.startswith("the origin of") and _off_axis(chain.tip, axes[-1]) < ON_AXIS:
-        found = _mesh_tip(tree, chain.end, axes[-1], file)
+        found = _mesh_tip(tree, chain.end, axes[-1], file) or primitive_tip(tree, chain.end, axes[-1])
         if found is not None:
             chain.tip, chain.tip_source = found
             chain.tip_local = (np.linalg.inv(tree.pose[chain.end]) @ np.append(chain.tip, 1.0))[:3]

@@ -4,6 +4,7 @@ link's mesh, else of its collision or visual primitives; the ``--tip`` hint othe
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -64,15 +65,10 @@ def _mesh_tip(tree: Tree, link: str, axis: Axis, file: Path) -> tuple[FloatArray
     return None if best is None or best[0] < ON_AXIS else (best[1], best[2])
 
 
-def _tip_hint(tree: Tree, legs: list[LegChain]) -> str:
-    """The ``--tip`` option that names the far end of the legs' last links (from their collision or visual
-    geometry, else twice their centre of mass), with a glob pattern when the links' names share an end."""
-    leg = legs[0]
-    link = tree.links[leg.end]
-    joint = leg.joints[-1]
-    axis = np.array([1.0, 0.0, 0.0]) if joint.axis is None else np.asarray(joint.axis, dtype=float)
-    axis = axis / np.linalg.norm(axis)
-    candidates: list[FloatArray] = []
+def primitive_ends(link: Any) -> list[FloatArray]:
+    """Both ends of each cylinder (along its axis) and box (along its longest side) of the link's collision and
+    visual geometry, in the link's frame [m]."""
+    out: list[FloatArray] = []
     for shape in [*(link.collisions or []), *(link.visuals or [])]:
         origin = np.eye(4) if shape.origin is None else np.asarray(shape.origin, dtype=float)
         geometry = shape.geometry
@@ -83,7 +79,33 @@ def _tip_hint(tree: Tree, legs: list[LegChain]) -> str:
             size = np.asarray(geometry.box.size, dtype=float)
             half = np.where(size == size.max(), size / 2, 0.0)
         if half is not None:
-            candidates += [(origin @ np.append(sign * half, 1.0))[:3] for sign in (1.0, -1.0)]
+            out += [(origin @ np.append(sign * half, 1.0))[:3] for sign in (1.0, -1.0)]
+    return out
+
+
+def primitive_tip(tree: Tree, link: str, axis: Axis) -> tuple[FloatArray, str] | None:
+    """The end of ``link``'s cylinders and boxes (:func:`primitive_ends`) farthest from ``axis`` (in base_link,
+    with how it was found), for a leg whose link frame sits on its last joint's axis and that has no mesh; None
+    if it has no such geometry off the axis."""
+    ends = [(tree.pose[link] @ np.append(end, 1.0))[:3] for end in primitive_ends(tree.links[link])]
+    if not ends:
+        return None
+    best = max(ends, key=lambda point: _off_axis(point, axis))
+    if _off_axis(best, axis) < ON_AXIS:
+        return None
+    return best, (f"the end of {link}'s collision or visual geometry farthest from its joint's axis (the link's frame "
+                  "is on the axis)")
+
+
+def _tip_hint(tree: Tree, legs: list[LegChain]) -> str:
+    """The ``--tip`` option that names the far end of the legs' last links (from their collision or visual
+    geometry, else twice their centre of mass), with a glob pattern when the links' names share an end."""
+    leg = legs[0]
+    link = tree.links[leg.end]
+    joint = leg.joints[-1]
+    axis = np.array([1.0, 0.0, 0.0]) if joint.axis is None else np.asarray(joint.axis, dtype=float)
+    axis = axis / np.linalg.norm(axis)
+    candidates = primitive_ends(link)
     if not candidates and link.inertial is not None and link.inertial.origin is not None:
         candidates.append(2.0 * np.asarray(link.inertial.origin, dtype=float)[:3, 3])
     names = [chain.end for chain in legs]
