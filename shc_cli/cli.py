@@ -509,12 +509,14 @@ def import_urdf(
     arg: Annotated[list[str] | None, typer.Option(help="xacro argument NAME=VALUE. Repeatable.")] = None,
     forward: Annotated[str | None, typer.Option(help="base_link axis the robot walks along: +x, +y, -x or -y "
                                                      "[default: +x, or +y if a leg is straight ahead].")] = None,
+    base: Annotated[str | None, typer.Option(help="Body link that is shc's base_link [default: base_link, else the "
+                                                  "root, else (a massless root) where the legs meet].")] = None,
 ) -> None:
     """Turn a legged robot's URDF or xacro into an shc robot file (legs, limits, masses, a standing pose and the
     servo map of [hardware.servos])."""
     from shc_cli.commands.importing import import_urdf as run
 
-    run(file, out, name, legs, tip, clearance, reach, snap, arg, forward)
+    run(file, out, name, legs, tip, clearance, reach, snap, arg, forward, base)
 
 
 hw_app = typer.Typer(help="Bring a robot's servos up: find them, check where they stand, jog each joint to confirm "

@@ -95,9 +95,25 @@ def test_a_tip_on_the_knee_axis_is_the_far_end_of_the_tibias_geometry(tmp_path: 
     assert _fk_worst(path, robot_file, tips) < 1e-9
 
 
+def test_a_massless_spawn_root_far_from_the_body_is_not_the_base(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The root ``spawn`` has no mass and holds the body ``torso`` 1.2 m away: base_link is torso, where the legs
+    meet; ``--base spawn`` keeps the root (and no stance is found 0.4 m under it); a link not in the body is one
+    line."""
+    path = CLASSES / "spawn_root_hexapod.urdf"
+    out, _, robot_file = _import(path, tmp_path, capsys, monkeypatch)
+    assert "base_link is torso, where the legs meet" in out and "URDF link 'torso'" in robot_file.read_text()
+    data = tomllib.loads(robot_file.read_text())
+    assert data["body"]["mass"] == 1.5 and data["body"]["size"] == [0.3, 0.2, 0.05]
+    assert _fk_worst(path, robot_file, FEET, base="torso") < 1e-9
+    for base, message in [("spawn", "no standing pose found"), ("fr_tibia", "'fr_tibia' is not a link of the body")]:
+        code, _, err = run(["import", "urdf", str(path), "--out", str(tmp_path / base), "--base", base], capsys,
+                           monkeypatch)
+        assert code == 2 and err.count("\n") == 1 and message in err, err
+
+
 @pytest.mark.slow  # imports and walks 10 s in MuJoCo
 @pytest.mark.parametrize(("name", "share"), [("continuous_hexapod", 0.6), ("rounded_rpy_hexapod", 0.6),
-                                           ("rod_tibia_hexapod", 0.6)])
+                                           ("rod_tibia_hexapod", 0.6), ("spawn_root_hexapod", 0.6)])
 def test_each_class_walks_10_s(name: str, share: float, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     _, _, robot_file = _import(CLASSES / f"{name}.urdf", tmp_path, capsys, monkeypatch)
     code, _, err = run(["simulate", str(robot_file), "--duration", "10", "--no-plots", "--out",

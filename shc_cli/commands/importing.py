@@ -20,9 +20,10 @@ def import_openshc(robot: Path, gait: Path | None, auto_pose: Path | None, out: 
 
 def import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tip: list[str] | None,
                 clearance: float | None, reach: float | None, snap: float, arguments: list[str] | None,
-                forward: str | None = None) -> None:
+                forward: str | None = None, base: str | None = None) -> None:
     """A URDF or xacro → an shc robot file with its servo map; ``arguments`` are xacro's ``NAME=VALUE``, ``forward``
-    the base_link axis the robot walks along (``+x``, ``+y``, ``-x``, ``-y``; None: the import decides)."""
+    the base_link axis the robot walks along (``+x``, ``+y``, ``-x``, ``-y``; None: the import decides), ``base`` the
+    body link that is shc's base_link (None: the import decides)."""
     from shc_cli.interop.urdf_import import import_urdf as convert
 
     mappings = {}
@@ -35,7 +36,7 @@ def import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tip: 
     if forward is not None and forward not in turns:
         raise SpecError([Issue(None, None, "--forward", f"'{forward}' is not an axis", "give +x, +y, -x or -y")])
     result = convert(file, out, name, legs, tip, clearance, reach, snap, mappings,
-                     None if forward is None else turns[forward])
+                     None if forward is None else turns[forward], base)
     for note in result.notes:
         typer.echo(f"note: {note}")
     typer.echo(f"forward kinematics: largest tip difference to the URDF {result.fk_error:.2g} m at 200 random joint "

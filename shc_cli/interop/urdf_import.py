@@ -112,16 +112,19 @@ FK_SAMPLES = 200
 
 def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: list[TipSpec] | None = None,
                 clearance: float | None = None, reach: float | None = None, forward: float | None = None,
-                stubs: dict[str, str] | None = None, opened: list[str] | None = None) -> Imported:
+                stubs: dict[str, str] | None = None, opened: list[str] | None = None,
+                base: str | None = None) -> Imported:
     """The shc robot table tree of a parsed URDF (module docstring).
 
     ``forward``: the turn of the shc body frame from base_link about z [rad] (None: π/2 if the legs' layout says
     the URDF's +x is not forward, :func:`~shc_cli.interop.urdf_import_clean.forward_turn`, else 0)."""
     stubs = stub_joints(model.robot.joints) if stubs is None else stubs
     opened = open_continuous(model.robot.joints) if opened is None else opened
-    tree = Tree(model, stubs, forward or 0.0)
+    tree = Tree(model, stubs, forward or 0.0, base)
     found = find_legs(tree, legs, tips or [], file)
     notes: list[str] = [f"{joint} is taken as fixed: {why}" for joint, why in stubs.items()]
+    if tree.base_note:
+        notes.append(tree.base_note)
     if tree.skipped:
         notes.append(f"the root {tree.skipped[0]} holds the robot by a free joint: the body starts at {tree.root}")
     for _, chain in found:
@@ -143,7 +146,7 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
     if forward is None and legs == "auto":
         yaw = forward_turn([np.mean([c.hip, *c.points, c.tip], axis=0) for c in chains])
         if yaw:
-            again = import_tree(model, file, name, legs, tips, clearance, reach, yaw, stubs, opened)
+            again = import_tree(model, file, name, legs, tips, clearance, reach, yaw, stubs, opened, base)
             quarter = abs(abs(yaw) - math.pi / 2) < 1e-9
             way = (f"base_link's {'+y' if yaw > 0 else '-y'}" if quarter else
                    f"{math.degrees(yaw):g} deg from base_link's +x towards {'+y' if yaw > 0 else '-y'}, halfway "
@@ -359,7 +362,8 @@ class Result:
 
 def import_urdf(file: Path, out: Path | None = None, name: str | None = None, legs: str = "auto",
                 tips: list[str] | None = None, clearance: float | None = None, reach: float | None = None,
-                snap: float = 0.0, args: dict[str, str] | None = None, forward: float | None = None) -> Result:
+                snap: float = 0.0, args: dict[str, str] | None = None, forward: float | None = None,
+                base: str | None = None) -> Result:
     """Write ``OUT/robots/NAME.toml`` (its ``[hardware.servos]`` the servo map, to check) from a URDF or xacro
     file; check the robot
     (``shc validate``'s checks) and its forward kinematics against the URDF before returning.
@@ -368,7 +372,7 @@ def import_urdf(file: Path, out: Path | None = None, name: str | None = None, le
     zero-length chain, values the robot model refuses) is one line naming the file (found by
     ``tests/test_fuzz_inputs.py``)."""
     try:
-        return _import_urdf(file, out, name, legs, tips, clearance, reach, snap, args, forward)
+        return _import_urdf(file, out, name, legs, tips, clearance, reach, snap, args, forward, base)
     except (ValueError, LookupError, ArithmeticError) as error:  # pydantic's ValidationError is a ValueError
         lines = str(error).strip().splitlines()
         raise _fail(file, f"cannot import it: {type(error).__name__}: {lines[0] if lines else ''}",
@@ -377,7 +381,7 @@ def import_urdf(file: Path, out: Path | None = None, name: str | None = None, le
 
 def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips: list[str] | None,
                  clearance: float | None, reach: float | None, snap: float, args: dict[str, str] | None,
-                 forward: float | None) -> Result:
+                 forward: float | None, base: str | None) -> Result:
     from shc_cli.outputs import write_text
     from shc_cli.spec.loading import load_gait, load_robot
     from shc_cli.validation import check_robot
@@ -389,7 +393,7 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
     tip_specs = [TipSpec.parse(t) for t in tips or []]
     needed: NeedsSnap | None = None
     try:
-        imported = import_tree(model, file, robot_name, legs, tip_specs, clearance, reach, forward)
+        imported = import_tree(model, file, robot_name, legs, tip_specs, clearance, reach, forward, base=base)
     except NeedsSnap as refused:
         needed = refused
         if snap > 0.0:
@@ -399,7 +403,8 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
             source = read_source(file, args or {}, step)
             model = parse_urdf(file, source.snapped_text)
             try:
-                imported = import_tree(model, file, robot_name, legs, tip_specs, clearance, reach, forward)
+                imported = import_tree(model, file, robot_name, legs, tip_specs, clearance, reach, forward,
+                                       base=base)
             except NeedsSnap:
                 continue
             snap = step

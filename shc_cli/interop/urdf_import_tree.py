@@ -88,7 +88,8 @@ class Imported:
 class Tree:
     """Links and joints of a yourdfpy model with zero-pose transforms in the shc base frame."""
 
-    def __init__(self, model: Any, fixed: dict[str, str] | None = None, yaw: float = 0.0) -> None:
+    def __init__(self, model: Any, fixed: dict[str, str] | None = None, yaw: float = 0.0,
+                 base: str | None = None) -> None:
         self.model = model
         self.fixed = dict(fixed or {})
         """Moving joints taken as fixed at 0: ``{name: why}`` (:mod:`shc_cli.interop.urdf_import_clean`)."""
@@ -106,10 +107,47 @@ class Tree:
             self.skipped.append(self.root)  # a 'world' link holding the robot by a free joint
             self.root = self.children[self.root][0].child
         self.body = self._fixed_set(self.root)
-        self.base_frame = "base_link" if "base_link" in self.body else self.root
+        self.base_note = ""
+        """Why base_frame is not the root (a massless spawn or world frame), if it is not."""
+        self.base_frame = self._base_frame(base)
         world = self._world()
         inverse = turn(yaw).T @ np.linalg.inv(world[self.base_frame])
         self.pose = {name: inverse @ transform for name, transform in world.items()}
+
+    def _base_frame(self, base: str | None) -> str:
+        """``base`` (``--base``); else ``base_link`` if the body has it; else the root, unless the root has no mass:
+        then the body link where the moving joints meet (their parents' deepest common ancestor among the body
+        links), or the heaviest body link if they meet only at the root, unless its frame is the root's."""
+        if base is not None:
+            if base not in self.body:
+                raise SpecError([Issue(None, None, "--base", f"'{base}' is not a link of the body (the root "
+                                       f"{self.root} and the links fixed to it)",
+                                       f"give one of {', '.join(sorted(self.body)[:6])}")])
+            return base
+        if "base_link" in self.body:
+            return "base_link"
+        if _mass(self.links[self.root]) > 0.0 or len(self.body) == 1:
+            return self.root
+        parents = {j.parent for j in self.joints.values() if not self.is_fixed(j) and j.parent in self.body}
+        lines = [self._ancestors(link) for link in parents]
+        shared = [link for link in lines[0] if all(link in line for line in lines[1:])] if lines else []
+        meet = shared[0] if shared else self.root
+        how = "where the legs meet"
+        if meet == self.root:
+            meet = max(self.body, key=lambda link: _mass(self.links[link]))
+            how = "the heaviest body link"
+        if meet != self.root and not np.allclose(self._world()[meet], np.eye(4), atol=1e-9):
+            self.base_note = (f"the root link {self.root} has no mass (a spawn or world frame): base_link is {meet}, "
+                              f"{how} (--base LINK chooses another)")
+            return meet
+        return self.root
+
+    def _ancestors(self, link: str) -> list[str]:
+        """``link`` and the body links above it up to the root, nearest first."""
+        out = [link]
+        while out[-1] != self.root and out[-1] in self.parent_joint:
+            out.append(self.parent_joint[out[-1]].parent)
+        return out
 
     def _fixed_set(self, start: str) -> list[str]:
         out, stack = [], [start]
@@ -153,6 +191,12 @@ class Tree:
     def leaves(self) -> list[str]:
         return [name for name in self.links
                 if not self.children.get(name) and name not in self.body and name not in self.skipped]
+
+
+def _mass(link: Any) -> float:
+    """The link's mass, 0 without an inertial [kg]."""
+    inertial = link.inertial
+    return float(inertial.mass or 0.0) if inertial is not None and inertial.mass is not None else 0.0
 
 
 def turn(yaw: float) -> FloatArray:
