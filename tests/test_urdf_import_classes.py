@@ -111,6 +111,34 @@ def test_a_massless_spawn_root_far_from_the_body_is_not_the_base(tmp_path: Path,
         assert code == 2 and err.count("\n") == 1 and message in err, err
 
 
+def test_a_missing_package_in_a_ros2_control_parameter_is_a_note(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """``$(find my_hexapod_control)`` in a ros2_control and a Gazebo parameter, that package absent: the import
+    goes on and says where it was left; an include from an absent package is still one line."""
+    path = CLASSES / "ros2_control_hexapod.urdf.xacro"
+    out, _, robot_file = _import(path, tmp_path, capsys, monkeypatch)
+    assert "$(find my_hexapod_control): no folder 'my_hexapod_control'" in out
+    assert "left as package://my_hexapod_control, in <param>, <parameters>" in out, out
+    assert _fk_worst(path, robot_file, FEET, text=_expanded(path)) < 1e-9
+    including = tmp_path / "including.urdf.xacro"
+    including.write_text('<robot name="x" xmlns:xacro="http://www.ros.org/wiki/xacro">'
+                         '<xacro:include filename="$(find absent_description)/urdf/leg.xacro"/></robot>')
+    code, _, err = run(["import", "urdf", str(including), "--out", str(tmp_path / "x")], capsys, monkeypatch)
+    assert code == 2 and err.count("\n") == 1 and "$(find absent_description): no folder" in err, err
+
+
+def _expanded(path: Path) -> str:
+    """The xacro file expanded by xacro itself, ``$(find)`` of an absent package given as a plain string."""
+    import xacro
+    import xacro.substitution_args as substitution
+
+    original = substitution._eval_find
+    substitution._eval_find = lambda package: f"/absent/{package}"
+    try:
+        return str(xacro.process_file(str(path)).toprettyxml(indent="  "))
+    finally:
+        substitution._eval_find = original
+
+
 @pytest.mark.slow  # imports and walks 10 s in MuJoCo
 @pytest.mark.parametrize(("name", "share"), [("continuous_hexapod", 0.6), ("rounded_rpy_hexapod", 0.6),
                                            ("rod_tibia_hexapod", 0.6), ("spawn_root_hexapod", 0.6)])

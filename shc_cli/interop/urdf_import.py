@@ -418,6 +418,7 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
                         f"accept that with --snap {snap:g}, or fix the URDF's angles") from None
     if imported.refusal is not None:
         raise _fail(file, *imported.refusal)
+    imported.notes += source.warnings
     _finish(imported, clearance, reach, file)
     imported.tree["templates"], imported.tree["legs"] = factor_legs(imported.tree["legs"])
     imported.tree["hardware"] = servo_table(

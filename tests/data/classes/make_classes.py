@@ -86,6 +86,17 @@ def main() -> None:
         detached += [link(f"{leg}_foot", 0.01, SPHERE),
                      joint(f"{leg}_foot_float", "floating", "root", f"{leg}_foot", f"{fx!r} {fy!r} 0")]
     files["detached_feet_hexapod.urdf"] = robot("detached_feet_hexapod", detached)
+    # 5: a ros2_control block naming its parameter file in a package that is not installed here.
+    control = ['  <ros2_control name="hexapod_system" type="system">',
+               '    <hardware><plugin>mock_components/GenericSystem</plugin>',
+               '      <param name="calibration">$(find my_hexapod_control)/config/calibration.yaml</param></hardware>',
+               *(f'    <joint name="{leg}_{part}_joint"><command_interface name="position"/></joint>'
+                 for leg, _, _ in HIPS for part in ("coxa", "femur", "tibia")),
+               "  </ros2_control>",
+               '  <gazebo><plugin filename="libgz_ros2_control-system.so" name="gz_ros2_control::GazeboSimROS2ControlPlugin">',
+               "    <parameters>$(find my_hexapod_control)/config/controllers.yaml</parameters></plugin></gazebo>"]
+    files["ros2_control_hexapod.urdf.xacro"] = robot("ros2_control_hexapod", [body(), *hexapod(), *control],
+                                                     ' xmlns:xacro="http://www.ros.org/wiki/xacro"')
     for name, text in files.items():
         (HERE / name).write_text(text, encoding="utf-8")
 
