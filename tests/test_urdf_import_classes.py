@@ -139,11 +139,31 @@ def _expanded(path: Path) -> str:
         substitution._eval_find = original
 
 
+def test_feet_hanging_off_the_root_by_floating_joints_are_the_tips(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """A CAD export: the body and the six feet are children of the root by floating joints, each foot placed at
+    its tibia's end (0.12 m along the tibia of a flat leg): the feet are the tips, (0.12, 0, 0) in each tibia's
+    frame, the body starts at the chassis; a seventh floating link that ends no leg is one line naming it."""
+    path = CLASSES / "detached_feet_hexapod.urdf"
+    out, _, robot_file = _import(path, tmp_path, capsys, monkeypatch)
+    assert "fixed, where they sit, to the leg ends nearest them (fr_foot → fr_tibia" in out, out
+    tips = {f"{leg}_coxa_joint": (f"{leg}_tibia", (0.12, 0.0, 0.0)) for leg in LEGS}
+    assert _fk_worst(path, robot_file, tips, base="chassis") < 1e-9
+    data = tomllib.loads(robot_file.read_text())
+    assert data["templates"]["leg"]["joints"]["tibia"]["mass"] == pytest.approx(0.07)  # the foot's 0.01 kg with it
+    extra = tmp_path / "camera.urdf"
+    extra.write_text(path.read_text().replace("</robot>", '<link name="camera"/><joint name="cam" type="floating">'
+                                              '<parent link="root"/><child link="camera"/></joint></robot>'))
+    code, _, err = run(["import", "urdf", str(extra), "--out", str(tmp_path / "cam")], capsys, monkeypatch)
+    assert code == 2 and err.count("\n") == 1 and "link camera hangs off the root by floating joints" in err, err
+
+
 @pytest.mark.slow  # imports and walks 10 s in MuJoCo
 @pytest.mark.parametrize(("name", "share"), [("continuous_hexapod", 0.6), ("rounded_rpy_hexapod", 0.6),
-                                           ("rod_tibia_hexapod", 0.6), ("spawn_root_hexapod", 0.6)])
+                                           ("rod_tibia_hexapod", 0.6), ("spawn_root_hexapod", 0.6),
+                                           ("detached_feet_hexapod", 0.6), ("ros2_control_hexapod.urdf", 0.6)])
 def test_each_class_walks_10_s(name: str, share: float, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    _, _, robot_file = _import(CLASSES / f"{name}.urdf", tmp_path, capsys, monkeypatch)
+    suffix = ".xacro" if name.endswith(".urdf") else ".urdf"
+    _, _, robot_file = _import(CLASSES / f"{name}{suffix}", tmp_path, capsys, monkeypatch)
     code, _, err = run(["simulate", str(robot_file), "--duration", "10", "--no-plots", "--out",
                         str(tmp_path / "sim")], capsys, monkeypatch)
     assert code == 0, err

@@ -18,6 +18,8 @@
   body frame whose +x points at a leg turned a quarter (``--forward`` chooses). Axes less than
   nearly parallel axes are snapped without being asked (:data:`SNAP_STEPS`, if the tips move less than
   :data:`SNAP_MOVE` of a leg's length; the note says by how much).
+* **Detached parts** (:mod:`shc_cli.interop.urdf_import_detached`): links hanging off the root by floating
+  joints (a CAD export's feet) are fixed to the leg ends they sit at, else refused naming them.
 * **Servo map**: ``[hardware.servos]`` (:mod:`shc_cli.interop.servo_map`): ids numbered, each joint's URDF name.
 * **DH**: :mod:`shc_cli.interop.urdf_import_dh`: exact for any axes; URDF angle = shc angle.
 * **Leg ids** by position (the mean of the leg's joint origins and tip at the zero pose: a joint's origin may
@@ -68,6 +70,7 @@ from shc_cli.interop.urdf_import_clean import (
     placeholders,
     stub_joints,
 )
+from shc_cli.interop.urdf_import_detached import attach_detached
 from shc_cli.interop.urdf_import_dh import Axis, NearlyParallel, chain_dh
 from shc_cli.interop.urdf_import_source import SUGGESTED_SNAP, parse_urdf, read_source
 from shc_cli.interop.urdf_import_stance import _finish, _length
@@ -387,7 +390,7 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
     from shc_cli.validation import check_robot
 
     source = read_source(file, args or {}, snap)
-    model = parse_urdf(file, source.snapped_text)
+    model, attached = _parse(file, source.snapped_text)
     robot_name = name or re.sub(r"[^A-Za-z0-9_-]", "_", str(model.robot.name or file.stem))
     out = out if out is not None else Path("imported") / robot_name
     tip_specs = [TipSpec.parse(t) for t in tips or []]
@@ -401,7 +404,7 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
                 from None
         for step in (*SNAP_STEPS, *BEYOND):
             source = read_source(file, args or {}, step)
-            model = parse_urdf(file, source.snapped_text)
+            model, attached = _parse(file, source.snapped_text)
             try:
                 imported = import_tree(model, file, robot_name, legs, tip_specs, clearance, reach, forward,
                                        base=base)
@@ -418,7 +421,7 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
                         f"accept that with --snap {snap:g}, or fix the URDF's angles") from None
     if imported.refusal is not None:
         raise _fail(file, *imported.refusal)
-    imported.notes += source.warnings
+    imported.notes += [*attached, *source.warnings]
     _finish(imported, clearance, reach, file)
     imported.tree["templates"], imported.tree["legs"] = factor_legs(imported.tree["legs"])
     imported.tree["hardware"] = servo_table(
@@ -450,7 +453,7 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
     error = fk_error(model, imported.legs, imported.base_frame, loaded.robot, yaw=imported.yaw)
     unsnapped = error
     if source.snap > 0.0:
-        unsnapped = fk_error(parse_urdf(file, source.text), imported.legs, imported.base_frame, loaded.robot,
+        unsnapped = fk_error(_parse(file, source.text)[0], imported.legs, imported.base_frame, loaded.robot,
                              yaw=imported.yaw)
     if needed is not None:
         limit = SNAP_MOVE * max(_length(leg) for leg in imported.legs)
@@ -467,6 +470,15 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
         write_text(pose_path, sway[1])
     write_text(robot_path, text)
     return Result(robot_path, imported.notes, error, unsnapped, source.snap, pose_path)
+
+
+def _parse(file: Path, text: str) -> tuple[Any, list[str]]:
+    """yourdfpy's model of the text, with parts hanging off the root by floating joints fixed to the leg ends they
+    sit at (:mod:`shc_cli.interop.urdf_import_detached`), and the notes on it."""
+    model, notes, problem = attach_detached(parse_urdf(file, text))
+    if problem is not None:
+        raise _fail(file, problem, "fix them to the links they belong to (fixed joints), or delete them")
+    return model, notes
 
 
 def _header(file: Path, imported: Imported, snap: float, largest: float) -> str:
