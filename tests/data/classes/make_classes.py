@@ -93,7 +93,8 @@ def main() -> None:
                *(f'    <joint name="{leg}_{part}_joint"><command_interface name="position"/></joint>'
                  for leg, _, _ in HIPS for part in ("coxa", "femur", "tibia")),
                "  </ros2_control>",
-               '  <gazebo><plugin filename="libgz_ros2_control-system.so" name="gz_ros2_control::GazeboSimROS2ControlPlugin">',
+               '  <gazebo><plugin filename="libgz_ros2_control-system.so"'
+               ' name="gz_ros2_control::GazeboSimROS2ControlPlugin">',
                "    <parameters>$(find my_hexapod_control)/config/controllers.yaml</parameters></plugin></gazebo>"]
     files["ros2_control_hexapod.urdf.xacro"] = robot("ros2_control_hexapod", [body(), *hexapod(), *control],
                                                      ' xmlns:xacro="http://www.ros.org/wiki/xacro"')
