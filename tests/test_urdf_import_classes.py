@@ -157,10 +157,32 @@ def test_feet_hanging_off_the_root_by_floating_joints_are_the_tips(tmp_path: Pat
     assert code == 2 and err.count("\n") == 1 and "link camera hangs off the root by floating joints" in err, err
 
 
+def test_narrow_joint_limits_stand_where_the_joints_centres_put_the_feet(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                        monkeypatch) -> None:
+    """Femur 0.2–0.9 rad down and knee 0.8–1.5 rad bent: no stance of the reach and height search stands, the
+    feet where every joint is at the centre of its range do, with the swing height the limits allow. Narrower
+    still (femur 0.45–0.65, knee 1.1–1.3: no foot lifts 1 cm) is one line naming the leg and the limits."""
+    path = CLASSES / "narrow_limits_hexapod.urdf"
+    out, _, robot_file = _import(path, tmp_path, capsys, monkeypatch)
+    assert "the feet where every joint is at the centre of its limits" in out, out
+    assert "as high as every leg's joint limits lift the foot" in out, out
+    assert _fk_worst(path, robot_file, FEET) < 1e-9
+    data = tomllib.loads(robot_file.read_text())
+    unpacked = [j["unpacked"] for j in data["templates"]["leg"]["joints"].values()]
+    assert unpacked == pytest.approx([0.0, 0.55, 1.15], abs=2e-3)  # the centres of the ranges
+    narrower = tmp_path / "narrower.urdf"
+    narrower.write_text(path.read_text().replace('lower="0.2" upper="0.9"', 'lower="0.45" upper="0.65"')
+                        .replace('lower="0.8" upper="1.5"', 'lower="1.1" upper="1.3"'))
+    code, _, err = run(["import", "urdf", str(narrower), "--out", str(tmp_path / "n")], capsys, monkeypatch)
+    assert code == 2 and err.count("\n") == 1 and "nor where poses across the joint ranges put them" in err, err
+    assert "femur at its lower limit 0.45 rad, tibia at its upper limit 1.3 rad" in err, err
+
+
 @pytest.mark.slow  # imports and walks 10 s in MuJoCo
 @pytest.mark.parametrize(("name", "share"), [("continuous_hexapod", 0.6), ("rounded_rpy_hexapod", 0.6),
                                            ("rod_tibia_hexapod", 0.6), ("spawn_root_hexapod", 0.6),
-                                           ("detached_feet_hexapod", 0.6), ("ros2_control_hexapod.urdf", 0.6)])
+                                           ("detached_feet_hexapod", 0.6), ("ros2_control_hexapod.urdf", 0.6),
+                                           ("narrow_limits_hexapod", 0.6)])
 def test_each_class_walks_10_s(name: str, share: float, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     suffix = ".xacro" if name.endswith(".urdf") else ".urdf"
     _, _, robot_file = _import(CLASSES / f"{name}{suffix}", tmp_path, capsys, monkeypatch)

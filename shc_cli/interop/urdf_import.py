@@ -39,7 +39,10 @@
   reachable, each foot is put 0.5, 0.4, 0.6, 0.3, 0.7 or 0.2 of the leg's length out from its hip (along the
   zero pose's leg direction) with the body as many shares of a leg's length above the hips, then (a knee
   limit that keeps the leg nearly straight) 0.75 … 0.9 out with the body 0.05 … 0.7 of it above the
-  hips. ``--clearance`` and ``--reach`` fix either (a stance they ask for that a leg cannot take is refused
+  hips; then (narrow limits) the feet where every joint is at the centre of its range, then where the first
+  three joints are at 0.3, 0.5 or 0.7 of theirs, with the swing height as high as the limits lift every foot
+  (at least 1 cm) if a fifth of the clearance is too high; a refusal names the leg and the limits that stop it.
+  ``--clearance`` and ``--reach`` fix either (a stance they ask for that a leg cannot take is refused
   naming the leg, the joint limit and the range that stands). ``unpacked`` is the pose the IK finds there
   from every joint at 0, else (a zero pose far from any stance: legs straight up) from each leg's pose nearest
   its foot among :data:`SEED_POSES` spread over its joint ranges.

@@ -30,6 +30,13 @@ FAR = [0.75, 0.8, 0.85, 0.9]
 """Reaches tried when none of :data:`FRACTIONS` stands (a knee limit that keeps the leg nearly straight)."""
 HEIGHTS = [round(0.05 * k, 2) for k in range(1, 15)]
 """Body heights tried with the reaches of :data:`FAR`, as shares of the leg's length (a narrow band may fit)."""
+MIN_SWING = 0.01
+"""Smallest swing height written [m] (``walker.swing_height.min``)."""
+JOINT_SHARES = (0.3, 0.5, 0.7)
+"""Shares of each joint's range whose feet are tried as stances when none of the reach and height search
+stands (narrow limits)."""
+JOINT_GRID_JOINTS = 3
+"""How many joints of a leg (from the hip) :data:`JOINT_SHARES` are spread over; the rest sit at the centre."""
 SEED_POSES = 729
 """Joint vectors per leg the stance search may start its IK from when OpenSHC's initial pose does not reach."""
 
@@ -47,6 +54,8 @@ class Stance:
     unpacked: FloatArray
     how: str
     walkspace: float
+    swing: float | None = None
+    """Swing height the legs' limits allow, when less than :data:`SWING_SHARE` of the clearance [m]."""
 
 
 def choose_stance(robot_tree: dict[str, Any], legs: list[LegChain], clearance: float | None,
@@ -100,7 +109,42 @@ def choose_stance(robot_tree: dict[str, Any], legs: list[LegChain], clearance: f
         if scored:
             best = max(stance.walkspace for stance in scored)
             return next(stance for stance in scored if stance.walkspace >= TIE * best)
+    if clearance is not None or reach is not None:
+        return None
+    for group_poses in _joint_poses(chains):  # narrow limits: the feet where poses inside the limits put them
+        scored = []
+        for q, what in group_poses:
+            tips = chains.tips(q)
+            height = float(np.median(-tips[:, 2]))
+            if height <= 0.0:
+                continue
+            with_pose = ((q[None], tips[None]) if seeds is None else
+                         (np.concatenate([seeds[0], q[None]]), np.concatenate([seeds[1], tips[None]])))
+            lifts = tuple(lift for lift in (0.5 * SWING_SHARE * height, MIN_SWING) if lift >= MIN_SWING)
+            stance = _try(chains, tips[:, :2], height, what, time_delta, with_pose, lifts)
+            if stance is not None:
+                scored.append(stance)
+        if scored:
+            best = max(stance.walkspace for stance in scored)
+            return next(stance for stance in scored if stance.walkspace >= TIE * best)
     return None
+
+
+def _joint_poses(chains: Any) -> list[list[tuple[FloatArray, str]]]:
+    """Joint vectors inside the limits whose feet are stances to try when no stance of the reach and height
+    search stands (narrow limits): every joint at the centre of its range, then (a group) the first
+    :data:`JOINT_GRID_JOINTS` joints at each of :data:`JOINT_SHARES` of theirs, the others at the centre."""
+    def at(shares: tuple[float, ...]) -> FloatArray:
+        full = np.full(chains.joints, 0.5)
+        full[:len(shares)] = shares
+        return np.asarray(chains.lower + full[None] * (chains.upper - chains.lower), dtype=np.float64)
+
+    centre = [(at(()), "the feet where every joint is at the centre of its limits")]
+    count = min(chains.joints, JOINT_GRID_JOINTS)
+    grid = [(at(shares), "the feet where the joints are at " + ", ".join(f"{s:g}" for s in shares)
+             + " of their ranges" + (", the rest at the centre" if count < chains.joints else ""))
+            for shares in itertools.product(JOINT_SHARES, repeat=count) if set(shares) != {0.5}]
+    return [centre, grid]
 
 
 def _seeds(chains: Any) -> tuple[FloatArray, FloatArray]:
@@ -114,11 +158,11 @@ def _seeds(chains: Any) -> tuple[FloatArray, FloatArray]:
 
 
 def _try(chains: Any, xy: FloatArray, height: float, what: str, time_delta: float,
-         seeds: tuple[FloatArray, FloatArray] | None = None) -> Stance | None:
-    """The stance if every leg reaches it and its swing apex (:data:`SWING_SHARE` of the clearance higher) within
-    its limits, with its walkspace; None otherwise. The IK starts from OpenSHC's initial pose (every joint at 0
-    within its limits), else (a zero pose far from any standing pose: legs straight up) from each leg's pose of
-    ``seeds`` whose tip is nearest its foot."""
+         seeds: tuple[FloatArray, FloatArray] | None = None, lifts: tuple[float, ...] = ()) -> Stance | None:
+    """The stance if every leg reaches it and its swing apex (:data:`SWING_SHARE` of the clearance higher, else
+    the first of ``lifts`` [m] that every leg reaches) within its limits, with its walkspace; None otherwise. The
+    IK starts from OpenSHC's initial pose (every joint at 0 within its limits), else (a zero pose far from any
+    standing pose: legs straight up) from each leg's pose of ``seeds`` whose tip is nearest its foot."""
     from shc_cli.model.ik import solve
     from shc_cli.model.workspace import search_workspaces, walkspace
 
@@ -136,14 +180,19 @@ def _try(chains: Any, xy: FloatArray, height: float, what: str, time_delta: floa
         q, error = solve(chains, start, targets, tolerance=1e-5, max_steps=600, dt=time_delta)
     if not (error < 1e-4).all():
         return None
-    apex = targets + np.array([0.0, 0.0, SWING_SHARE * height])
-    _, lifted = solve(chains, q, apex, tolerance=1e-5, max_steps=300, dt=time_delta)
-    if not (lifted < 1e-4).all():
+    swing = None
+    for lift in (SWING_SHARE * height, *lifts):
+        apex = targets + np.array([0.0, 0.0, lift])
+        _, lifted = solve(chains, q, apex, tolerance=1e-5, max_steps=300, dt=time_delta)
+        if (lifted < 1e-4).all():
+            swing = None if lift == SWING_SHARE * height else lift
+            break
+    else:
         return None
     planes = search_workspaces(chains, q, targets, time_delta).planes
     radius = min(walkspace(planes, {leg: (float(x), float(y)) for leg, (x, y) in zip(chains.names, xy,
                                                                                       strict=True)}).values())
-    return Stance([(float(x), float(y)) for x, y in xy], height, q, what, radius)
+    return Stance([(float(x), float(y)) for x, y in xy], height, q, what, radius, swing)
 
 
 def _length(leg: LegChain) -> float:
@@ -158,22 +207,27 @@ def _finish(imported: Imported, clearance: float | None, reach: float | None, fi
     if stance is None and (clearance is not None or reach is not None):
         raise _fail(file, *_why_not(imported, clearance, reach))
     if stance is None:
+        problem, fix = _why_not(imported, None, None)
         raise _fail(file, "no standing pose found that every leg reaches within its joint limits, with the feet "
                     f"{min(FRACTIONS):g}–{max(FAR):g} of the leg's length out and the body "
-                    f"{min(HEIGHTS):g}–{max(HEIGHTS):g} of it above the hips",
-                    "check the legs' joint limits, or give a stance with --clearance M and --reach FRACTION")
+                    f"{min(HEIGHTS):g}–{max(HEIGHTS):g} of it above the hips, nor where poses across the joint "
+                    f"ranges put them: {problem}", f"{fix}, or check the legs' joint limits")
     walker = imported.tree["walker"]
     walker["body_clearance"] = stance.clearance
-    swing = round(min(max(SWING_SHARE * stance.clearance, 0.01), 0.2), 3)
-    walker["swing_height"] = {"default": swing, "min": 0.01, "max": max(0.05, round(2 * swing, 3)), "step": 0.005}
+    swing = round(min(max(SWING_SHARE * stance.clearance, MIN_SWING), 0.2), 3)
+    why = "a fifth of the clearance"
+    if stance.swing is not None:
+        swing, why = round(stance.swing, 3), "as high as every leg's joint limits lift the foot from the stance"
+    walker["swing_height"] = {"default": swing, "min": MIN_SWING, "max": max(0.05, round(2 * swing, 3)),
+                              "step": 0.005}
     for i, chain in enumerate(imported.legs):
         leg = imported.tree["legs"][chain.leg_id]
         leg["stance"] = {"x": stance.xy[i][0], "y": stance.xy[i][1]}
         for k, joint in enumerate(leg["joints"].values()):
             joint["unpacked"] = float(np.clip(round(float(stance.unpacked[i, k]), 4), joint["min"], joint["max"]))
     imported.notes.insert(0, f"stance and body clearance: {stance.how}")
-    imported.notes.insert(1, f"gait {walker['gait']}, swing height {swing:g} m (a fifth of the clearance), control "
-                             "period 0.01 s, everything else shc's defaults")
+    imported.notes.insert(1, f"gait {walker['gait']}, swing height {swing:g} m ({why}), control period 0.01 s, "
+                             "everything else shc's defaults")
 
 
 def _why_not(imported: Imported, clearance: float | None, reach: float | None) -> tuple[str, str]:
@@ -212,7 +266,8 @@ def _why_not(imported: Imported, clearance: float | None, reach: float | None) -
                        f"{lower[k] if abs(q[worst, k] - lower[k]) < 1e-3 else upper[k]:.3g} rad" for k in at)
              or "out of reach")
     asked = " and ".join(part for part in (f"clearance {clearance:g} m" if clearance is not None else "",
-                                           f"reach {reach:g}" if reach is not None else "") if part)
+                                           f"reach {reach:g}" if reach is not None else "") if part) or \
+        f"the feet {f_reach:g} of its length out and the body {height:.3g} m below the base"
     problem = f"leg {leg.leg_id} cannot stand with {asked} ({limit}, {error[worst] * 1000:.0f} mm short)"
     works: list[float] = []
     if clearance is not None:

@@ -36,19 +36,21 @@ TIBIA_ROD = ('<collision><origin xyz="0.06 0 0" rpy="0 1.5707963267948966 0"/><g
 
 def hexapod(kind: str = "revolute", limits: str = 'lower="-1.6" upper="1.6"', femur_rpy: str = "0 0 0",
             femur_axis: str = "0 1 0", tibia_rpy: str = "0 0 0", tibia_axis: str = "0 1 0", foot: bool = True,
-            base: str = "base_link", tibia_extra: str = "", foot_xyz: str = "0.12 0 0") -> list[str]:
+            base: str = "base_link", tibia_extra: str = "", foot_xyz: str = "0.12 0 0",
+            narrow: tuple[str, str, str] | None = None) -> list[str]:
     """Six 3-joint legs (coxa yaw, femur and tibia pitch), flat at the zero pose; a foot link with a sphere at
     the tibia's end unless ``foot`` is False."""
     lines = []
+    coxa_limits, femur_limits, tibia_limits = narrow or (limits, limits, limits)
     for leg, x, y in HIPS:
         yaw = math.atan2(y, x)
         lines += [link(f"{leg}_coxa", 0.05), link(f"{leg}_femur", 0.08), link(f"{leg}_tibia", 0.06, tibia_extra),
                   joint(f"{leg}_coxa_joint", kind, base, f"{leg}_coxa", f"{x} {y} 0", f"0 0 {yaw!r}",
-                        limits=limits),
+                        limits=coxa_limits),
                   joint(f"{leg}_femur_joint", kind, f"{leg}_coxa", f"{leg}_femur", "0.04 0 0", femur_rpy,
-                        femur_axis, limits),
+                        femur_axis, femur_limits),
                   joint(f"{leg}_tibia_joint", kind, f"{leg}_femur", f"{leg}_tibia", "0.08 0 0", tibia_rpy,
-                        tibia_axis, limits)]
+                        tibia_axis, tibia_limits)]
         if foot:
             lines += [link(f"{leg}_foot", 0.01, SPHERE),
                       joint(f"{leg}_foot_joint", "fixed", f"{leg}_tibia", f"{leg}_foot", foot_xyz)]
@@ -76,6 +78,9 @@ def main() -> None:
             joint("spawn_to_torso", "fixed", "spawn", "torso", "1.0 0.6 0.4", "0 0 0.3"),
             *hexapod(base="torso")]),
     }
+    # 7: a hobby hexapod's narrow limits: the coxa ±0.6 rad, the femur 0.2-0.9 rad down, the knee 0.8-1.5 bent.
+    files["narrow_limits_hexapod.urdf"] = robot("narrow_limits_hexapod", [body(), *hexapod(narrow=(
+        'lower="-0.6" upper="0.6"', 'lower="0.2" upper="0.9"', 'lower="0.8" upper="1.5"'))])
     # 2: a CAD exporter: the body and the feet are children of the root through floating joints.
     detached = [link("root", 0.0), body("chassis"), joint("root_chassis", "floating", "root", "chassis", "0 0 0")]
     detached += [line for line in hexapod(base="chassis", foot=False)]
