@@ -178,14 +178,60 @@ def test_narrow_joint_limits_stand_where_the_joints_centres_put_the_feet(tmp_pat
     assert "femur at its lower limit 0.45 rad, tibia at its upper limit 1.3 rad" in err, err
 
 
+def test_mjcf_imports_with_mujocos_kinematics(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """``shc import mjcf``: two hinges in one body, euler and axis-angle frames and a knee ``ref``; every foot
+    sphere (MuJoCo's geom_xpos, in the trunk's frame) where the robot file's chains put it at random joint
+    vectors (angles from MuJoCo's qpos0); a file MuJoCo refuses is one line."""
+    mujoco = pytest.importorskip("mujoco")
+    path = CLASSES / "mjcf_hexapod.xml"
+    code, out, err = run(["import", "mjcf", str(path), "--out", str(tmp_path)], capsys, monkeypatch)
+    assert code == 0, err
+    assert "largest tip difference to MuJoCo's (mj_kinematics)" in out
+    robot_file = tmp_path / "robots" / "mjcf_hexapod.toml"
+    assert robot_file.read_text().startswith("# Imported by `shc import mjcf` from mjcf_hexapod.xml")
+    robot = load_robot(robot_file).robot
+    chains = Chains.from_robot(robot)
+    data = tomllib.loads(robot_file.read_text())
+    assert data["servo"]["stall_torque"] == 1.5  # ctrlrange 1 × gear 1.5
+    model = mujoco.MjModel.from_xml_path(str(path))
+    state = mujoco.MjData(model)
+    rng = np.random.default_rng(5)
+    trunk = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "trunk")
+    worst = 0.0
+    for _ in range(40):
+        q = rng.uniform(chains.lower, chains.upper)
+        state.qpos[:] = model.qpos0
+        feet = []
+        for i, (leg_id, spec) in enumerate(robot.legs.items()):
+            for k, joint in enumerate(spec.joints):
+                index = model.joint(str(robot.hardware.servos[f"{leg_id}_{joint}"].joint)).qposadr[0]
+                state.qpos[index] = model.qpos0[index] + q[i, k]
+            feet.append(str(robot.hardware.servos[f"{leg_id}_{next(iter(spec.joints))}"].joint).split("_")[0])
+        mujoco.mj_kinematics(model, state)
+        rotation, origin = state.xmat[trunk].reshape(3, 3), state.xpos[trunk]
+        theirs = [rotation.T @ (state.geom(f"{leg}_foot").xpos - origin) for leg in feet]
+        worst = max(worst, float(np.abs(chains.tips(q) - np.array(theirs)).max()))
+    assert worst < 1e-9
+    broken = tmp_path / "broken.xml"
+    broken.write_text("<mujoco><worldbody><body><joint type='hinge' axis='0 0 0'/></body></worldbody></mujoco>")
+    code, _, err = run(["import", "mjcf", str(broken), "--out", str(tmp_path / "b")], capsys, monkeypatch)
+    assert code == 2 and err.count("\n") == 1 and "MuJoCo cannot load it" in err, err
+
+
 @pytest.mark.slow  # imports and walks 10 s in MuJoCo
 @pytest.mark.parametrize(("name", "share"), [("continuous_hexapod", 0.6), ("rounded_rpy_hexapod", 0.6),
                                            ("rod_tibia_hexapod", 0.6), ("spawn_root_hexapod", 0.6),
                                            ("detached_feet_hexapod", 0.6), ("ros2_control_hexapod.urdf", 0.6),
-                                           ("narrow_limits_hexapod", 0.6)])
+                                           ("narrow_limits_hexapod", 0.6), ("mjcf_hexapod", 0.6)])
 def test_each_class_walks_10_s(name: str, share: float, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    suffix = ".xacro" if name.endswith(".urdf") else ".urdf"
-    _, _, robot_file = _import(CLASSES / f"{name}{suffix}", tmp_path, capsys, monkeypatch)
+    if name.startswith("mjcf"):
+        code, _, err = run(["import", "mjcf", str(CLASSES / f"{name}.xml"), "--out", str(tmp_path)], capsys,
+                           monkeypatch)
+        assert code == 0, err
+        robot_file = tmp_path / "robots" / f"{name}.toml"
+    else:
+        suffix = ".xacro" if name.endswith(".urdf") else ".urdf"
+        _, _, robot_file = _import(CLASSES / f"{name}{suffix}", tmp_path, capsys, monkeypatch)
     code, _, err = run(["simulate", str(robot_file), "--duration", "10", "--no-plots", "--out",
                         str(tmp_path / "sim")], capsys, monkeypatch)
     assert code == 0, err

@@ -45,3 +45,23 @@ def import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tip: 
     if result.pose_path is not None:
         typer.echo(f"wrote {result.pose_path}")
     typer.echo(f"wrote {result.robot_path}")
+
+
+def import_mjcf(file: Path, out: Path | None, name: str | None, legs: str, tip: list[str] | None,
+                clearance: float | None, reach: float | None, snap: float, forward: str | None = None,
+                base: str | None = None) -> None:
+    """An MJCF file → an shc robot file with its servo map (MuJoCo's loader; the URDF import's rules)."""
+    from shc_cli.interop.mjcf_import import import_mjcf as convert
+
+    turns = {"+x": 0.0, "+y": math.pi / 2, "-x": math.pi, "-y": -math.pi / 2}
+    if forward is not None and forward not in turns:
+        raise SpecError([Issue(None, None, "--forward", f"'{forward}' is not an axis", "give +x, +y, -x or -y")])
+    result, mujoco_error, notes = convert(file, out, name, legs, tip, clearance, reach, snap,
+                                          None if forward is None else turns[forward], base)
+    for note in [*notes, *result.notes]:
+        typer.echo(f"note: {note}")
+    typer.echo(f"forward kinematics: largest tip difference to MuJoCo's (mj_kinematics) {mujoco_error:.2g} m at 200 "
+               "random joint vectors")
+    if result.pose_path is not None:
+        typer.echo(f"wrote {result.pose_path}")
+    typer.echo(f"wrote {result.robot_path}")

@@ -53,7 +53,7 @@ import math
 import re
 import tempfile
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -364,12 +364,16 @@ class Result:
     snap: float
     pose_path: Path | None = None
     """The auto-pose set written for the robot (a quadruped walking quad_wave), if any."""
+    tips: dict[str, tuple[str, FloatArray]] = field(default_factory=dict)
+    """Each leg's first URDF joint → its tip link and the tip point in that link [m]."""
+    base_frame: str = ""
+    yaw: float = 0.0
 
 
 def import_urdf(file: Path, out: Path | None = None, name: str | None = None, legs: str = "auto",
                 tips: list[str] | None = None, clearance: float | None = None, reach: float | None = None,
                 snap: float = 0.0, args: dict[str, str] | None = None, forward: float | None = None,
-                base: str | None = None) -> Result:
+                base: str | None = None, given: str | None = None, command: str = "urdf") -> Result:
     """Write ``OUT/robots/NAME.toml`` (its ``[hardware.servos]`` the servo map, to check) from a URDF or xacro
     file; check the robot
     (``shc validate``'s checks) and its forward kinematics against the URDF before returning.
@@ -378,7 +382,7 @@ def import_urdf(file: Path, out: Path | None = None, name: str | None = None, le
     zero-length chain, values the robot model refuses) is one line naming the file (found by
     ``tests/test_fuzz_inputs.py``)."""
     try:
-        return _import_urdf(file, out, name, legs, tips, clearance, reach, snap, args, forward, base)
+        return _import_urdf(file, out, name, legs, tips, clearance, reach, snap, args, forward, base, given, command)
     except (ValueError, LookupError, ArithmeticError) as error:  # pydantic's ValidationError is a ValueError
         lines = str(error).strip().splitlines()
         raise _fail(file, f"cannot import it: {type(error).__name__}: {lines[0] if lines else ''}",
@@ -387,12 +391,12 @@ def import_urdf(file: Path, out: Path | None = None, name: str | None = None, le
 
 def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips: list[str] | None,
                  clearance: float | None, reach: float | None, snap: float, args: dict[str, str] | None,
-                 forward: float | None, base: str | None) -> Result:
+                 forward: float | None, base: str | None, given: str | None, command: str) -> Result:
     from shc_cli.outputs import write_text
     from shc_cli.spec.loading import load_gait, load_robot
     from shc_cli.validation import check_robot
 
-    source = read_source(file, args or {}, snap)
+    source = read_source(file, args or {}, snap, given)
     model, attached = _parse(file, source.snapped_text)
     robot_name = name or re.sub(r"[^A-Za-z0-9_-]", "_", str(model.robot.name or file.stem))
     out = out if out is not None else Path("imported") / robot_name
@@ -406,7 +410,7 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
             raise _fail(file, needed.problem, f"snap the URDF's angles with --snap {needed.snap:.1g} or fix them")\
                 from None
         for step in (*SNAP_STEPS, *BEYOND):
-            source = read_source(file, args or {}, step)
+            source = read_source(file, args or {}, step, given)
             model, attached = _parse(file, source.snapped_text)
             try:
                 imported = import_tree(model, file, robot_name, legs, tip_specs, clearance, reach, forward,
@@ -435,7 +439,7 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
     keys = ("name", "description", "time_delta", "body", "walker", "pose", "servo", "templates", "legs", "hardware")
     tree: dict[str, Any] = {key: imported.tree[key] for key in keys if key in imported.tree}
     robot_path = out / "robots" / f"{robot_name}.toml"
-    text = _header(file, imported, snap, source.snap) + with_check_note(dump_toml(tree))
+    text = _header(file, imported, snap, source.snap, command) + with_check_note(dump_toml(tree))
     pose_path = out / "poses" / sway[0] if sway is not None else None
     with tempfile.TemporaryDirectory() as folder:  # checked before anything is written
         draft = Path(folder) / "robots" / robot_path.name
@@ -468,11 +472,13 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
                         "angles")
         imported.notes.append(f"{needed.problem}: {moved} (accepted up to {limit:.2g} m, {SNAP_MOVE:.1%} of the "
                               "leg's length)")
-        text = _header(file, imported, snap, source.snap) + with_check_note(dump_toml(tree))
+        text = _header(file, imported, snap, source.snap, command) + with_check_note(dump_toml(tree))
     if pose_path is not None and sway is not None:
         write_text(pose_path, sway[1])
     write_text(robot_path, text)
-    return Result(robot_path, imported.notes, error, unsnapped, source.snap, pose_path)
+    tips_at = {leg.joints[0].name: (leg.end, leg.tip_local) for leg in imported.legs}
+    return Result(robot_path, imported.notes, error, unsnapped, source.snap, pose_path, tips_at, imported.base_frame,
+                  imported.yaw)
 
 
 def _parse(file: Path, text: str) -> tuple[Any, list[str]]:
@@ -484,9 +490,9 @@ def _parse(file: Path, text: str) -> tuple[Any, list[str]]:
     return model, notes
 
 
-def _header(file: Path, imported: Imported, snap: float, largest: float) -> str:
+def _header(file: Path, imported: Imported, snap: float, largest: float, command: str = "urdf") -> str:
     """The robot file's comment lines: where it came from, the base frame, the tips, the notes."""
-    header = [f"# Imported by `shc import urdf` from {file.name}. Units: m, rad, s, kg.",
+    header = [f"# Imported by `shc import {command}` from {file.name}. Units: m, rad, s, kg.",
               f"# base_link is the URDF link '{imported.base_frame}'"
               + (f" turned {math.degrees(imported.yaw):g} deg about z (forward)" if imported.yaw else "")
               + ". Joint angles are the URDF's; [hardware.servos] names each joint's URDF joint.",

@@ -214,8 +214,9 @@ def _known_geometry(text: str) -> str:
     return ET.tostring(root, encoding="unicode")
 
 
-def read_source(path: Path, args: dict[str, str], snap: float) -> Source:
-    """Read ``path`` (``.xacro`` expanded, anything else as URDF) and snap its rpy values.
+def read_source(path: Path, args: dict[str, str], snap: float, given: str | None = None) -> Source:
+    """Read ``path`` (``.xacro`` expanded, anything else as URDF; ``given``: its URDF text, made from another
+    format) and snap its rpy values.
 
     Raises:
         SpecError: missing file, xacro failure or malformed XML (one line).
@@ -224,7 +225,9 @@ def read_source(path: Path, args: dict[str, str], snap: float) -> Source:
     if not path.is_file():
         raise _fail(path, "file not found", "check the path")
     warnings: list[str] = []
-    if path.suffix == ".xacro" or ".xacro" in path.suffixes:
+    if given is not None:
+        text = given
+    elif path.suffix == ".xacro" or ".xacro" in path.suffixes:
         text, warnings = expand_xacro(path, args)
     else:
         text = path.read_text(encoding="utf-8", errors="replace")

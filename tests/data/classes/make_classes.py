@@ -61,6 +61,35 @@ def robot(name: str, lines: list[str], head: str = "") -> str:
     return f'<?xml version="1.0"?>\n<robot name="{name}"{head}>\n' + "\n".join(lines) + "\n</robot>\n"
 
 
+def mjcf_hexapod() -> str:
+    """11: the same hexapod as MJCF: a free trunk, the coxa body holding both the yaw and the femur joint (two
+    hinges in one body, the second 0.04 m out), euler and axis-angle frames, a knee ``ref`` of 0.3 rad, foot spheres
+    on the tibia bodies, position-free motors with ctrlrange and gear."""
+    legs = []
+    motors = []
+    for leg, x, y in HIPS:
+        yaw = math.atan2(y, x)
+        legs.append(f"""    <body name="{leg}_coxa" pos="{x} {y} 0" euler="0 0 {yaw!r}">
+      <inertial pos="0.02 0 0" mass="0.13" diaginertia="2e-5 2e-5 2e-5"/>
+      <joint name="{leg}_coxa_joint" axis="0 0 1" range="-1.6 1.6"/>
+      <joint name="{leg}_femur_joint" pos="0.04 0 0" axis="0 1 0" range="-1.6 1.6"/>
+      <geom type="capsule" fromto="0.04 0 0 0.12 0 0" size="0.008" contype="0" conaffinity="0"/>
+      <body name="{leg}_tibia" pos="0.12 0 0" axisangle="0 1 0 0.3">
+        <inertial pos="0.06 0 0" mass="0.07" diaginertia="2e-5 2e-5 2e-5"/>
+        <joint name="{leg}_tibia_joint" axis="0 1 0" range="-1.3 1.9" ref="0.3"/>
+        <geom name="{leg}_foot" type="sphere" pos="0.12 0 0" size="0.01"/>
+      </body>
+    </body>""")
+        motors += [f'    <motor joint="{leg}_{part}_joint" ctrlrange="-1 1" gear="1.5"/>'
+                   for part in ("coxa", "femur", "tibia")]
+    return ("<mujoco model=\"mjcf_hexapod\">\n  <worldbody>\n"
+            '    <geom name="floor" type="plane" size="2 2 0.1"/>\n'
+            '    <body name="trunk" pos="0 0 0.3">\n    <freejoint/>\n'
+            '    <geom type="box" size="0.15 0.1 0.025" mass="1.5"/>\n'
+            + "\n".join(legs) + "\n    </body>\n  </worldbody>\n  <actuator>\n" + "\n".join(motors)
+            + "\n  </actuator>\n</mujoco>\n")
+
+
 def main() -> None:
     files = {
         # 1: a vendor macro's continuous joints (no lower/upper anywhere).
@@ -103,6 +132,7 @@ def main() -> None:
                "    <parameters>$(find my_hexapod_control)/config/controllers.yaml</parameters></plugin></gazebo>"]
     files["ros2_control_hexapod.urdf.xacro"] = robot("ros2_control_hexapod", [body(), *hexapod(), *control],
                                                      ' xmlns:xacro="http://www.ros.org/wiki/xacro"')
+    files["mjcf_hexapod.xml"] = mjcf_hexapod()
     for name, text in files.items():
         (HERE / name).write_text(text, encoding="utf-8")
 
