@@ -218,11 +218,28 @@ def test_mjcf_imports_with_mujocos_kinematics(tmp_path: Path, capsys, monkeypatc
     assert code == 2 and err.count("\n") == 1 and "MuJoCo cannot load it" in err, err
 
 
+def test_a_stance_with_knees_below_the_feet_is_not_chosen(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The zero pose stands with every knee 45 mm below its foot (femur 1.2 rad down, tibia 0.6 rad up): the
+    zero-pose candidates put the knees in the ground, so the stance comes from the search, every joint above the
+    feet (the robot file's own chains at its unpacked pose)."""
+    path = CLASSES / "low_knees_hexapod.urdf"
+    out, _, robot_file = _import(path, tmp_path, capsys, monkeypatch)
+    assert "zero pose" not in out.splitlines()[0], out
+    robot = load_robot(robot_file).robot
+    chains = Chains.from_robot(robot)
+    unpacked = np.array([[joint.unpacked for joint in leg.joints.values()] for leg in robot.legs.values()])
+    frames = chains.frames_in_base(unpacked[None])[0]
+    assert np.allclose(frames[:, -1, 2, 3], -robot.walker.body_clearance, atol=1e-4)
+    assert (frames[:, 1:-1, 2, 3] >= -robot.walker.body_clearance - 1e-4).all()
+    assert _fk_worst(path, robot_file, FEET) < 1e-9
+
+
 @pytest.mark.slow  # imports and walks 10 s in MuJoCo
 @pytest.mark.parametrize(("name", "share"), [("continuous_hexapod", 0.6), ("rounded_rpy_hexapod", 0.6),
                                            ("rod_tibia_hexapod", 0.6), ("spawn_root_hexapod", 0.6),
                                            ("detached_feet_hexapod", 0.6), ("ros2_control_hexapod.urdf", 0.6),
-                                           ("narrow_limits_hexapod", 0.6), ("mjcf_hexapod", 0.6)])
+                                           ("narrow_limits_hexapod", 0.6), ("mjcf_hexapod", 0.6),
+                                           ("low_knees_hexapod", 0.6)])
 def test_each_class_walks_10_s(name: str, share: float, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     if name.startswith("mjcf"):
         code, _, err = run(["import", "mjcf", str(CLASSES / f"{name}.xml"), "--out", str(tmp_path)], capsys,

@@ -33,7 +33,7 @@
   up to the next joint of its leg; links moved by joints that are in no leg count as body (listed).
 * **Stance**: candidates are tried in order and the first whose walkspace (``shc workspace``'s smallest radius)
   is within 5 % of the best is taken; every leg must reach its foot, and the swing apex a fifth of the
-  clearance above it, within its limits. If the zero pose's feet stand below the hips (by at least a quarter
+  clearance above it, within its limits, with no joint below the feet (knees in the ground). If the zero pose's feet stand below the hips (by at least a quarter
   of the leg's length), the candidates are the zero pose and the body lowered to 0.9 … 0.6 of the feet's depth
   (not the zero pose itself if a leg is straight there: a singular pose). Otherwise, or if none of those is
   reachable, each foot is put 0.5, 0.4, 0.6, 0.3, 0.7 or 0.2 of the leg's length out from its hip (along the

@@ -30,6 +30,8 @@ FAR = [0.75, 0.8, 0.85, 0.9]
 """Reaches tried when none of :data:`FRACTIONS` stands (a knee limit that keeps the leg nearly straight)."""
 HEIGHTS = [round(0.05 * k, 2) for k in range(1, 15)]
 """Body heights tried with the reaches of :data:`FAR`, as shares of the leg's length (a narrow band may fit)."""
+GROUND = 1e-4
+"""A stance whose joints (the DH frames on their axes) are more than this below the feet is refused [m]."""
 MIN_SWING = 0.01
 """Smallest swing height written [m] (``walker.swing_height.min``)."""
 JOINT_SHARES = (0.3, 0.5, 0.7)
@@ -159,10 +161,11 @@ def _seeds(chains: Any) -> tuple[FloatArray, FloatArray]:
 
 def _try(chains: Any, xy: FloatArray, height: float, what: str, time_delta: float,
          seeds: tuple[FloatArray, FloatArray] | None = None, lifts: tuple[float, ...] = ()) -> Stance | None:
-    """The stance if every leg reaches it and its swing apex (:data:`SWING_SHARE` of the clearance higher, else
-    the first of ``lifts`` [m] that every leg reaches) within its limits, with its walkspace; None otherwise. The
-    IK starts from OpenSHC's initial pose (every joint at 0 within its limits), else (a zero pose far from any
-    standing pose: legs straight up) from each leg's pose of ``seeds`` whose tip is nearest its foot."""
+    """The stance if every leg reaches it with no joint below its feet, and its swing apex
+    (:data:`SWING_SHARE` of the clearance higher, else the first of ``lifts`` [m] that every leg reaches) within
+    its limits, with its walkspace; None otherwise. The IK starts from OpenSHC's initial pose (every joint at 0
+    within its limits), else (a zero pose far from any standing pose: legs straight up) from each leg's pose of
+    ``seeds`` whose tip is nearest its foot."""
     from shc_cli.model.ik import solve
     from shc_cli.model.workspace import search_workspaces, walkspace
 
@@ -180,6 +183,9 @@ def _try(chains: Any, xy: FloatArray, height: float, what: str, time_delta: floa
         q, error = solve(chains, start, targets, tolerance=1e-5, max_steps=600, dt=time_delta)
     if not (error < 1e-4).all():
         return None
+    joints_z = chains.frames_in_base(q[None])[0][:, 1:-1, 2, 3]
+    if joints_z.size and float(joints_z.min()) < -height - GROUND:
+        return None  # a knee (a joint's axis point) below the feet: the link would stand in the ground
     swing = None
     for lift in (SWING_SHARE * height, *lifts):
         apex = targets + np.array([0.0, 0.0, lift])

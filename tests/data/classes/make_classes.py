@@ -37,7 +37,7 @@ TIBIA_ROD = ('<collision><origin xyz="0.06 0 0" rpy="0 1.5707963267948966 0"/><g
 def hexapod(kind: str = "revolute", limits: str = 'lower="-1.6" upper="1.6"', femur_rpy: str = "0 0 0",
             femur_axis: str = "0 1 0", tibia_rpy: str = "0 0 0", tibia_axis: str = "0 1 0", foot: bool = True,
             base: str = "base_link", tibia_extra: str = "", foot_xyz: str = "0.12 0 0",
-            narrow: tuple[str, str, str] | None = None) -> list[str]:
+            narrow: tuple[str, str, str] | None = None, tibia_at: str = "0.08 0 0") -> list[str]:
     """Six 3-joint legs (coxa yaw, femur and tibia pitch), flat at the zero pose; a foot link with a sphere at
     the tibia's end unless ``foot`` is False."""
     lines = []
@@ -49,7 +49,7 @@ def hexapod(kind: str = "revolute", limits: str = 'lower="-1.6" upper="1.6"', fe
                         limits=coxa_limits),
                   joint(f"{leg}_femur_joint", kind, f"{leg}_coxa", f"{leg}_femur", "0.04 0 0", femur_rpy,
                         femur_axis, femur_limits),
-                  joint(f"{leg}_tibia_joint", kind, f"{leg}_femur", f"{leg}_tibia", "0.08 0 0", tibia_rpy,
+                  joint(f"{leg}_tibia_joint", kind, f"{leg}_femur", f"{leg}_tibia", tibia_at, tibia_rpy,
                         tibia_axis, tibia_limits)]
         if foot:
             lines += [link(f"{leg}_foot", 0.01, SPHERE),
@@ -110,6 +110,9 @@ def main() -> None:
     # 7: a hobby hexapod's narrow limits: the coxa ±0.6 rad, the femur 0.2-0.9 rad down, the knee 0.8-1.5 bent.
     files["narrow_limits_hexapod.urdf"] = robot("narrow_limits_hexapod", [body(), *hexapod(narrow=(
         'lower="-0.6" upper="0.6"', 'lower="0.2" upper="0.9"', 'lower="0.8" upper="1.5"'))])
+    # 9: standing at the zero pose with the knees below the feet (femur 1.2 rad down, tibia 0.6 rad up).
+    files["low_knees_hexapod.urdf"] = robot("low_knees_hexapod", [body(), *hexapod(
+        femur_rpy="0 1.2 0", tibia_rpy="0 -1.8 0", tibia_at="0.14 0 0", foot_xyz="0.08 0 0")])
     # 2: a CAD exporter: the body and the feet are children of the root through floating joints.
     detached = [link("root", 0.0), body("chassis"), joint("root_chassis", "floating", "root", "chassis", "0 0 0")]
     detached += [line for line in hexapod(base="chassis", foot=False)]
