@@ -31,21 +31,21 @@
 * **Limits**: URDF ``lower``/``upper``, ``velocity`` → ``max_vel``, the most common ``effort`` and ``velocity``
   → ``servo.stall_torque`` and ``servo.no_load_speed``. **Masses**: each joint carries the links it moves
   up to the next joint of its leg; links moved by joints that are in no leg count as body (listed).
-* **Stance**: candidates are tried in order and the first whose walkspace (``shc workspace``'s smallest radius)
-  is within 5 % of the best is taken; every leg must reach its foot, and the swing apex a fifth of the
-  clearance above it, within its limits, with no joint below the feet (knees in the ground). If the zero pose's feet stand below the hips (by at least a quarter
-  of the leg's length), the candidates are the zero pose and the body lowered to 0.9 … 0.6 of the feet's depth
-  (not the zero pose itself if a leg is straight there: a singular pose). Otherwise, or if none of those is
-  reachable, each foot is put 0.5, 0.4, 0.6, 0.3, 0.7 or 0.2 of the leg's length out from its hip (along the
-  zero pose's leg direction) with the body as many shares of a leg's length above the hips, then (a knee
-  limit that keeps the leg nearly straight) 0.75 … 0.9 out with the body 0.05 … 0.7 of it above the
-  hips; then (narrow limits) the feet where every joint is at the centre of its range, then where the first
-  three joints are at 0.3, 0.5 or 0.7 of theirs, with the swing height as high as the limits lift every foot
-  (at least 1 cm) if a fifth of the clearance is too high; a refusal names the leg and the limits that stop it.
-  ``--clearance`` and ``--reach`` fix either (a stance they ask for that a leg cannot take is refused
-  naming the leg, the joint limit and the range that stands). ``unpacked`` is the pose the IK finds there
-  from every joint at 0, else (a zero pose far from any stance: legs straight up) from each leg's pose nearest
-  its foot among :data:`SEED_POSES` spread over its joint ranges.
+* **Stance**: candidates are tried in order and the first whose walkspace (``shc workspace``'s smallest radius) is
+  within 5 % of the best is taken; every leg must reach its foot, and the swing apex a fifth of the clearance above
+  it, within its limits, with no joint below the feet (knees in the ground). If the zero pose's feet stand below the
+  hips (by at least a quarter of the leg's length), the candidates are the zero pose and the body lowered to 0.9 …
+  0.6 of the feet's depth (not the zero pose itself if a leg is straight there: a singular pose). Otherwise, or if
+  none of those is reachable, each foot is put 0.5, 0.4, 0.6, 0.3, 0.7 or 0.2 of the leg's length out from its hip
+  (along the zero pose's leg direction) with the body as many shares of a leg's length above the hips, then (a knee
+  limit that keeps the leg nearly straight) 0.75 … 0.9 out with the body 0.05 … 0.7 of it above the hips; then
+  (narrow limits) the feet where every joint is at the centre of its range, then where the first three joints are at
+  0.3, 0.5 or 0.7 of theirs, with the swing height as high as the limits lift every foot (at least 1 cm) if a fifth
+  of the clearance is too high; a refusal names the leg and the limits that stop it. ``--clearance`` and ``--reach``
+  fix either (a stance they ask for that a leg cannot take is refused naming the leg, the joint limit and the range
+  that stands). ``unpacked`` is the pose the IK finds there from every joint at 0, else (a zero pose far from any
+  stance: legs straight up) from each leg's pose nearest its foot among :data:`SEED_POSES` spread over its joint
+  ranges.
 """
 from __future__ import annotations
 
