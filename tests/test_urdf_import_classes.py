@@ -178,21 +178,25 @@ def test_narrow_joint_limits_stand_where_the_joints_centres_put_the_feet(tmp_pat
     assert "femur at its lower limit 0.45 rad, tibia at its upper limit 1.3 rad" in err, err
 
 
-def test_mjcf_imports_with_mujocos_kinematics(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    """``shc import mjcf``: two hinges in one body, euler and axis-angle frames and a knee ``ref``; every foot
-    sphere (MuJoCo's geom_xpos, in the trunk's frame) where the robot file's chains put it at random joint
-    vectors (angles from MuJoCo's qpos0); a file MuJoCo refuses is one line."""
+@pytest.mark.parametrize(("name", "torque"), [("mjcf_hexapod", 1.5), ("mjcf_quadruped", 23.7)])
+def test_mjcf_imports_with_mujocos_kinematics(name: str, torque: float, tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                              monkeypatch) -> None:
+    """``shc import mjcf``: two hinges in one body, euler and axis-angle frames and a knee ``ref`` (the hexapod);
+    default classes, a childclass, straight legs at qpos0 and position actuators (the quadruped). Every foot
+    sphere (MuJoCo's geom_xpos, in the trunk's frame) is where the robot file's chains put it at random joint
+    vectors (angles from MuJoCo's qpos0); the effort is the motor's ctrlrange × gear (1 × 1.5), or the
+    position actuators' forcerange (the most common, 23.7); a file MuJoCo refuses is one line."""
     mujoco = pytest.importorskip("mujoco")
-    path = CLASSES / "mjcf_hexapod.xml"
+    path = CLASSES / f"{name}.xml"
     code, out, err = run(["import", "mjcf", str(path), "--out", str(tmp_path)], capsys, monkeypatch)
     assert code == 0, err
     assert "largest tip difference to MuJoCo's (mj_kinematics)" in out
-    robot_file = tmp_path / "robots" / "mjcf_hexapod.toml"
-    assert robot_file.read_text().startswith("# Imported by `shc import mjcf` from mjcf_hexapod.xml")
+    robot_file = tmp_path / "robots" / f"{name}.toml"
+    assert robot_file.read_text().startswith(f"# Imported by `shc import mjcf` from {name}.xml")
     robot = load_robot(robot_file).robot
     chains = Chains.from_robot(robot)
     data = tomllib.loads(robot_file.read_text())
-    assert data["servo"]["stall_torque"] == 1.5  # ctrlrange 1 × gear 1.5
+    assert data["servo"]["stall_torque"] == torque
     model = mujoco.MjModel.from_xml_path(str(path))
     state = mujoco.MjData(model)
     rng = np.random.default_rng(5)
@@ -239,7 +243,7 @@ def test_a_stance_with_knees_below_the_feet_is_not_chosen(tmp_path: Path, capsys
                                            ("rod_tibia_hexapod", 0.6), ("spawn_root_hexapod", 0.6),
                                            ("detached_feet_hexapod", 0.6), ("ros2_control_hexapod.urdf", 0.6),
                                            ("narrow_limits_hexapod", 0.6), ("mjcf_hexapod", 0.6),
-                                           ("low_knees_hexapod", 0.6)])
+                                           ("low_knees_hexapod", 0.6), ("mjcf_quadruped", 0.5)])
 def test_each_class_walks_10_s(name: str, share: float, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     if name.startswith("mjcf"):
         code, _, err = run(["import", "mjcf", str(CLASSES / f"{name}.xml"), "--out", str(tmp_path)], capsys,

@@ -82,12 +82,67 @@ def mjcf_hexapod() -> str:
     </body>""")
         motors += [f'    <motor joint="{leg}_{part}_joint" ctrlrange="-1 1" gear="1.5"/>'
                    for part in ("coxa", "femur", "tibia")]
-    return ("<mujoco model=\"mjcf_hexapod\">\n  <worldbody>\n"
+    return ("<mujoco model=\"mjcf_hexapod\">\n  <compiler angle=\"radian\"/>\n  <worldbody>\n"
             '    <geom name="floor" type="plane" size="2 2 0.1"/>\n'
             '    <body name="trunk" pos="0 0 0.3">\n    <freejoint/>\n'
             '    <geom type="box" size="0.15 0.1 0.025" mass="1.5"/>\n'
             + "\n".join(legs) + "\n    </body>\n  </worldbody>\n  <actuator>\n" + "\n".join(motors)
             + "\n  </actuator>\n</mujoco>\n")
+
+
+def mjcf_quadruped() -> str:
+    """11: a quadruped in the style of MuJoCo Menagerie's (written here, not copied): default classes with a
+    childclass, legs straight down at qpos0, the knee limited to a bent range, foot sphere geoms of a class on the
+    calf bodies, visual geoms that do not collide, position actuators with a forcerange."""
+    legs, motors = [], []
+    for leg, x, y in [("FR", 0.19, -0.047), ("FL", 0.19, 0.047), ("RR", -0.19, -0.047), ("RL", -0.19, 0.047)]:
+        side = -1.0 if y < 0 else 1.0
+        legs.append(f"""      <body name="{leg}_hip" pos="{x} {y} 0">
+        <inertial pos="0 {0.01 * side} 0" mass="0.68" diaginertia="4e-4 5e-4 4e-4"/>
+        <joint name="{leg}_hip_joint" class="abduction"/>
+        <geom class="visual" type="cylinder" size="0.045 0.02" quat="1 1 0 0"/>
+        <body name="{leg}_thigh" pos="0 {0.08 * side} 0">
+          <inertial pos="0 0 -0.03" mass="1.0" diaginertia="5e-3 5e-3 1e-3"/>
+          <joint name="{leg}_thigh_joint" class="hip"/>
+          <geom class="visual" type="box" size="0.015 0.012 0.1" pos="0 0 -0.1"/>
+          <body name="{leg}_calf" pos="0 0 -0.213">
+            <inertial pos="0 0 -0.1" mass="0.2" diaginertia="1e-3 1e-3 3e-5"/>
+            <joint name="{leg}_calf_joint" class="knee"/>
+            <geom class="visual" type="capsule" fromto="0 0 0 0 0 -0.2" size="0.01"/>
+            <geom name="{leg}_foot" class="foot" pos="0 0 -0.213"/>
+          </body>
+        </body>
+      </body>""")
+        motors += [f'    <position class="{kind}" name="{leg}_{part}" joint="{leg}_{part}_joint"/>'
+                   for part, kind in (("hip", "abduction"), ("thigh", "hip"), ("calf", "knee"))]
+    return f"""<mujoco model="mjcf_quadruped">
+  <compiler angle="radian"/>
+  <default>
+    <default class="dog">
+      <joint axis="0 1 0" damping="0.5"/>
+      <position kp="100" forcerange="-23.7 23.7"/>
+      <default class="abduction"><joint axis="1 0 0" range="-0.86 0.86"/><position ctrlrange="-0.86 0.86"/></default>
+      <default class="hip"><joint range="-0.69 4.5"/><position ctrlrange="-0.69 4.5"/></default>
+      <default class="knee"><joint range="-2.82 -0.89"/><position forcerange="-35.55 35.55" ctrlrange="-2.82 -0.89"/>
+      </default>
+      <default class="visual"><geom contype="0" conaffinity="0" group="2"/></default>
+      <default class="foot"><geom type="sphere" size="0.023" friction="0.8 0.02 0.01"/></default>
+    </default>
+  </default>
+  <worldbody>
+    <geom name="floor" type="plane" size="5 5 0.1"/>
+    <body name="trunk" pos="0 0 0.45" childclass="dog">
+      <freejoint/>
+      <inertial pos="0.02 0 0" mass="5.2" diaginertia="0.015 0.05 0.055"/>
+      <geom type="box" size="0.19 0.05 0.055"/>
+{chr(10).join(legs)}
+    </body>
+  </worldbody>
+  <actuator>
+{chr(10).join(motors)}
+  </actuator>
+</mujoco>
+"""
 
 
 def main() -> None:
@@ -136,6 +191,7 @@ def main() -> None:
     files["ros2_control_hexapod.urdf.xacro"] = robot("ros2_control_hexapod", [body(), *hexapod(), *control],
                                                      ' xmlns:xacro="http://www.ros.org/wiki/xacro"')
     files["mjcf_hexapod.xml"] = mjcf_hexapod()
+    files["mjcf_quadruped.xml"] = mjcf_quadruped()
     for name, text in files.items():
         (HERE / name).write_text(text, encoding="utf-8")
 
