@@ -243,7 +243,7 @@ def test_a_stance_with_knees_below_the_feet_is_not_chosen(tmp_path: Path, capsys
                                            ("rod_tibia_hexapod", 0.6), ("spawn_root_hexapod", 0.6),
                                            ("detached_feet_hexapod", 0.6), ("ros2_control_hexapod.urdf", 0.6),
                                            ("narrow_limits_hexapod", 0.6), ("mjcf_hexapod", 0.6),
-                                           ("low_knees_hexapod", 0.6), ("mjcf_quadruped", 0.5)])
+                                           ("low_knees_hexapod", 0.6), ("mjcf_quadruped", 0.6)])
 def test_each_class_walks_10_s(name: str, share: float, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     if name.startswith("mjcf"):
         code, _, err = run(["import", "mjcf", str(CLASSES / f"{name}.xml"), "--out", str(tmp_path)], capsys,
