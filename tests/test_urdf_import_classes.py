@@ -230,6 +230,17 @@ def test_a_stance_with_knees_below_the_feet_is_not_chosen(tmp_path: Path, capsys
     assert _fk_worst(path, robot_file, FEET) < 1e-9
 
 
+def test_import_urdf_given_an_mjcf_file_imports_it_as_mjcf(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The file says what it is: a ``<mujoco>`` file given to ``shc import urdf`` goes through the MJCF import."""
+    pytest.importorskip("mujoco")
+    code, out, err = run(["import", "urdf", str(CLASSES / "mjcf_quadruped.xml"), "--out", str(tmp_path)], capsys,
+                         monkeypatch)
+    assert code == 0, err
+    assert "is MJCF (a <mujoco> file)" in out and "largest tip difference to MuJoCo's" in out, out
+    text = (tmp_path / "robots" / "mjcf_quadruped.toml").read_text()
+    assert text.startswith("# Imported by `shc import mjcf` from mjcf_quadruped.xml")
+
+
 @pytest.mark.slow  # each searches every stance before refusing
 def test_refusals_name_the_leg_and_the_limits(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """Limits narrower still (femur 0.45–0.65, knee 1.1–1.3: no foot lifts 1 cm) and the spawn frame kept as the

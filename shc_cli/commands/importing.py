@@ -26,6 +26,10 @@ def import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tip: 
     body link that is shc's base_link (None: the import decides)."""
     from shc_cli.interop.urdf_import import import_urdf as convert
 
+    if _is_mjcf(file):  # the file says which it is: an MJCF given to import urdf is imported as MJCF
+        typer.echo(f"note: {file.name} is MJCF (a <mujoco> file): imported as shc import mjcf does")
+        import_mjcf(file, out, name, legs, tip, clearance, reach, snap, forward, base)
+        return
     mappings = {}
     for item in arguments or []:
         key, sep, value = item.partition("=")
@@ -45,6 +49,18 @@ def import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tip: 
     if result.pose_path is not None:
         typer.echo(f"wrote {result.pose_path}")
     typer.echo(f"wrote {result.robot_path}")
+
+
+def _is_mjcf(file: Path) -> bool:
+    """Whether ``file``'s first element is ``<mujoco>`` (an MJCF file, whatever its name)."""
+    import re
+
+    if not file.is_file():
+        return False
+    with file.open("rb") as handle:
+        head = handle.read(4096).decode("utf-8", errors="replace")
+    head = re.sub(r"<\?.*?\?>|<!--.*?-->", "", head, flags=re.DOTALL)
+    return re.match(r"\s*<mujoco[\s>/]", head) is not None
 
 
 def import_mjcf(file: Path, out: Path | None, name: str | None, legs: str, tip: list[str] | None,
