@@ -49,8 +49,9 @@ def _chains(tree: dict) -> Chains:  # type: ignore[type-arg]
 
 
 def _import_text(text: str, tmp_path: Path, **options):  # type: ignore[no-untyped-def]
-    from shc_cli.interop.urdf_import import TipSpec, import_tree
+    from shc_cli.interop.urdf_import import import_tree
     from shc_cli.interop.urdf_import_source import parse_urdf
+    from shc_cli.interop.urdf_import_tree import TipSpec
 
     path = tmp_path / "robot.urdf"
     path.write_text(text)
@@ -204,7 +205,7 @@ def test_leg_ids_by_position_clockwise_from_front_right(count: int, expected: li
 
 
 def test_joint_names_drop_what_a_legs_joints_share() -> None:
-    from shc_cli.interop.urdf_import import joint_names
+    from shc_cli.interop.urdf_import_tree import joint_names
 
     assert joint_names([["AR_coxa_joint", "AR_femur_joint"], ["AL_coxa_joint", "AL_femur_joint"]]) == \
         [["coxa", "femur"], ["coxa", "femur"]]

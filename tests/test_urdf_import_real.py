@@ -76,8 +76,8 @@ def _fk_worst(urdf_text: str, path: Path, robot_file: Path, yaw: float = 0.0, sa
 
 
 @pytest.mark.parametrize("name", list(DESCRIPTIONS))
-def test_third_party_descriptions_import_without_options_with_their_kinematics(
-        name: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+def test_third_party_descriptions_import_without_options_with_their_kinematics(  # type: ignore[no-untyped-def]
+        name: str, tmp_path: Path, capsys, monkeypatch) -> None:
     from shc_cli.interop.urdf_import_source import read_source
 
     path, legs = DESCRIPTIONS[name]
@@ -243,7 +243,7 @@ def test_a_leg_straight_ahead_turns_forward_a_quarter(tmp_path: Path, capsys, mo
     assert _fk_worst(path.read_text(), path, robot_file, yaw=math.pi / 2) < 1e-6
     code, out, err, robot_file = _import(path, tmp_path / "kept", capsys, monkeypatch, "--forward", "+x",
                                          "--clearance", "0.1", "--reach", "0.5")
-    assert code == 0, err
+    assert code == 0 and robot_file is not None, err
     assert "shc's forward is" not in out and "turned" not in robot_file.read_text()
 
 
