@@ -429,6 +429,7 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
     if imported.refusal is not None:
         raise _fail(file, *imported.refusal)
     imported.notes += [*attached, *source.warnings]
+    imported.tree["description"] = f"imported from {file.name} by shc import {command}"
     _finish(imported, clearance, reach, file)
     imported.tree["templates"], imported.tree["legs"] = factor_legs(imported.tree["legs"])
     imported.tree["hardware"] = servo_table(
