@@ -516,12 +516,40 @@ def import_urdf(
     arg: Annotated[list[str] | None, typer.Option(help="xacro argument NAME=VALUE. Repeatable.")] = None,
     forward: Annotated[str | None, typer.Option(help="base_link axis the robot walks along: +x, +y, -x or -y "
                                                      "[default: +x, or +y if a leg is straight ahead].")] = None,
+    base: Annotated[str | None, typer.Option(help="Body link that is shc's base_link [default: base_link, else the "
+                                                  "root, else (a massless root) where the legs meet].")] = None,
 ) -> None:
     """Turn a legged robot's URDF or xacro into an shc robot file (legs, limits, masses, a standing pose and the
     servo map of [hardware.servos])."""
     from shc_cli.commands.importing import import_urdf as run
 
-    run(file, out, name, legs, tip, clearance, reach, snap, arg, forward)
+    run(file, out, name, legs, tip, clearance, reach, snap, arg, forward, base)
+
+
+@import_app.command("mjcf")
+def import_mjcf(
+    file: Annotated[Path, typer.Argument(help="MJCF (MuJoCo XML) file of a legged robot.", metavar="FILE.xml")],
+    out: Annotated[Path | None, typer.Option(help="Folder for robots/NAME.toml "
+                                                  "[default: imported/NAME].")] = None,
+    name: Annotated[str | None, typer.Option(help="Robot name [default: the file's name].")] = None,
+    legs: Annotated[str, typer.Option(help="'auto' (every chain to a leaf body) or the tip bodies BODY,… or "
+                                           "ID=BODY,… in leg order.")] = "auto",
+    tip: Annotated[list[str] | None, typer.Option(help="Tip body (glob pattern), optionally with the tip point in "
+                                                       "its frame: BODY@X,Y,Z [m]. Repeatable.")] = None,
+    clearance: Annotated[float | None, typer.Option(help="Body clearance [m] [default: from the zero pose].")] = None,
+    reach: Annotated[float | None, typer.Option(help="Stance distance from the hip, as a share of the leg's "
+                                                     "length [default: from the zero pose].")] = None,
+    snap: Annotated[float, typer.Option(help="Snap angles this close to a multiple of pi/2 [rad].")] = 0.0,
+    forward: Annotated[str | None, typer.Option(help="Body axis the robot walks along: +x, +y, -x or -y "
+                                                     "[default: +x, or +y if a leg is straight ahead].")] = None,
+    base: Annotated[str | None, typer.Option(help="Body that is shc's base_link [default: the robot's root "
+                                                  "body].")] = None,
+) -> None:
+    """Turn a legged robot's MJCF into an shc robot file, read by MuJoCo's own loader (the same rules, checks and
+    servo map as import urdf)."""
+    from shc_cli.commands.importing import import_mjcf as run
+
+    run(file, out, name, legs, tip, clearance, reach, snap, forward, base)
 
 
 hw_app = typer.Typer(help="Bring a robot's servos up: find them, check where they stand, jog each joint to confirm "

@@ -49,8 +49,9 @@ def _chains(tree: dict) -> Chains:  # type: ignore[type-arg]
 
 
 def _import_text(text: str, tmp_path: Path, **options):  # type: ignore[no-untyped-def]
-    from shc_cli.interop.urdf_import import TipSpec, import_tree
+    from shc_cli.interop.urdf_import import import_tree
     from shc_cli.interop.urdf_import_source import parse_urdf
+    from shc_cli.interop.urdf_import_tree import TipSpec
 
     path = tmp_path / "robot.urdf"
     path.write_text(text)
@@ -204,7 +205,7 @@ def test_leg_ids_by_position_clockwise_from_front_right(count: int, expected: li
 
 
 def test_joint_names_drop_what_a_legs_joints_share() -> None:
-    from shc_cli.interop.urdf_import import joint_names
+    from shc_cli.interop.urdf_import_tree import joint_names
 
     assert joint_names([["AR_coxa_joint", "AR_femur_joint"], ["AL_coxa_joint", "AL_femur_joint"]]) == \
         [["coxa", "femur"], ["coxa", "femur"]]
@@ -442,8 +443,9 @@ def test_bullet_import_validates_has_a_workspace_and_walks(bullet_import, tmp_pa
 
 def test_flat_copy_of_a_package_resolves_includes_beside_the_file(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
                                                                   monkeypatch) -> None:
-    """shared/reference/bullet_syropod holds the package's files in one folder: robot/macros.xacro is found
-    beside bullet.xacro; $(find bullet_syropod) is the folder named so above the file."""
+    """A copy of the package's files in one folder: robot/macros.xacro is found beside bullet.xacro; $(find
+    bullet_syropod) is the folder named so above the file. Renamed, the package is found nowhere: the include is
+    still found beside the file, and the meshes left as package://bullet_syropod are named in a note."""
     flat = tmp_path / "bullet_syropod"
     flat.mkdir()
     for name in ("bullet.xacro", "macros.xacro"):
@@ -454,10 +456,10 @@ def test_flat_copy_of_a_package_resolves_includes_beside_the_file(tmp_path: Path
     assert (tmp_path / "out" / "robots" / "bullet_flat.toml").is_file()
     renamed = tmp_path / "elsewhere"
     flat.rename(renamed)
-    code, _, err = run(["import", "urdf", str(renamed / "bullet.xacro"), "--out", str(tmp_path / "out2")],
-                         capsys, monkeypatch)
-    assert code == 2
-    assert err.count("\n") == 1 and "$(find bullet_syropod)" in err
+    code, out, err = run(["import", "urdf", str(renamed / "bullet.xacro"), "--out", str(tmp_path / "out2"),
+                          "--tip", BULLET_TIP], capsys, monkeypatch)
+    assert code == 0, err
+    assert "$(find bullet_syropod): no folder 'bullet_syropod'" in out and "in <mesh>" in out, out
 
 
 # -- bad input: one line, exit 2, nothing written ------------------------------------------------------------------
@@ -469,16 +471,11 @@ def _prismatic() -> str:
     return robot_urdf([leg])
 
 
-def _continuous() -> str:
-    return robot_urdf([LegSpec("p", [Element("continuous", (0.1, -0.1, 0.0))], sphere=(0.0, 0.0, 0.0))])
-
-
 @pytest.mark.parametrize(("content", "message"), [
     (None, "file not found"),
     ("<robot name='x'><link name='a'>", "malformed XML"),
     (robot_urdf([LegSpec("p", [Element("fixed", (0.1, 0.0, 0.0))])]), "no legs found"),
     (_prismatic(), "is prismatic (it slides)"),
-    (_continuous(), "is continuous (it has no limits)"),
     (robot_urdf([LegSpec("p", [Element("revolute", (0.1, -0.1, 0.0), lower=0.5, upper=0.5)])]),
      "has lower 0.5 >= upper 0.5"),
 ])
@@ -493,29 +490,41 @@ def test_bad_urdfs_are_one_line_and_exit_2(content: str | None, message: str, tm
     assert not (tmp_path / "out").exists()
 
 
-def test_nearly_parallel_axes_are_snapped_within_a_milliradian(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
-                                                                monkeypatch) -> None:
-    """Femur and tibia axes 2e-5 rad apart in their common plane (a pitch of 2e-5 rad): they meet 4 km away. The
-    import snaps 1e-3 rad without being asked and says so; 0.003 rad apart is a one-line refusal naming --snap."""
-    leg = LegSpec("p", [Element("revolute", (0.1, -0.1, 0.0), (0.0, 0.0, -math.pi / 2)),
-                        Element("revolute", (0.04, 0.0, 0.0), (math.pi / 2, 0.0, 0.0)),
-                        Element("revolute", (0.08, 0.0, 0.0), (0.0, 2e-5, 0.0))],
-                  sphere=(0.1, 0.0, 0.0))
-    path = tmp_path / "robot.urdf"
-    path.write_text(robot_urdf([leg]))
+def _tilted_leg(tilt: float, femur: float = 0.08, tibia: float = 0.1) -> LegSpec:
+    """Femur and tibia axes ``tilt`` rad apart in their common plane (a pitch of the knee frame)."""
+    return LegSpec("p", [Element("revolute", (0.1, -0.1, 0.0), (0.0, 0.0, -math.pi / 2)),
+                         Element("revolute", (0.04, 0.0, 0.0), (math.pi / 2, 0.0, 0.0)),
+                         Element("revolute", (femur, 0.0, 0.0), (0.0, tilt, 0.0))], sphere=(tibia, 0.0, 0.0))
+
+
+def test_nearly_parallel_axes_are_snapped_when_the_tips_hardly_move(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                     monkeypatch) -> None:
+    """Femur and tibia axes 2e-5 rad apart meet 4 km away: the import snaps without being asked and says so; 0.003
+    rad apart (3.14 for pi is 0.0016) is snapped too (the tip moves tilt × tibia = 0.3 mm, under 0.5 % of the
+    0.22 m leg); 0.015 rad on 0.2 m links moves it 3 mm, more than 0.5 % of 0.44 m: one line naming the --snap
+    that accepts it, which then imports."""
     from shc_cli.interop.urdf_import import import_urdf
 
+    path = tmp_path / "robot.urdf"
+    path.write_text(robot_urdf([_tilted_leg(2e-5)]))
     result = import_urdf(path, tmp_path / "out", legs="p_link2", clearance=0.05, reach=0.9)
     assert result.fk_error < 1e-9 and result.snap == pytest.approx(2e-5, rel=0.01)
     assert 1e-7 < result.fk_error_unsnapped < 2e-5 * 0.2
     assert any("2e-05 rad from parallel" in note and "snapped" in note for note in result.notes)
-    tilted = Element("revolute", (0.08, 0.0, 0.0), (0.0, 0.003, 0.0))
-    path.write_text(robot_urdf([LegSpec("p", [*leg.elements[:2], tilted], sphere=(0.1, 0.0, 0.0))]))
+    path.write_text(robot_urdf([_tilted_leg(0.003)]))
+    result = import_urdf(path, tmp_path / "out1", legs="p_link2", clearance=0.05, reach=0.9)
+    assert result.fk_error < 1e-9 and result.fk_error_unsnapped == pytest.approx(0.003 * 0.1, rel=0.02)
+    assert any("0.003 rad from parallel" in note and "within 0.005 rad" in note and "0.0003 m at most" in note
+               for note in result.notes), result.notes
+    path.write_text(robot_urdf([_tilted_leg(0.015, femur=0.2, tibia=0.2)]))
     code, _, err = run(["import", "urdf", str(path), "--out", str(tmp_path / "out2"), "--legs", "p_link2"],
                        capsys, monkeypatch)
     assert code == 2
-    assert err.count("\n") == 1 and "from parallel" in err and "--snap 0.006" in err, err
+    assert err.count("\n") == 1 and "0.015 rad from parallel" in err and "--snap 0.02" in err, err
     assert not (tmp_path / "out2").exists()
+    code, _, err = run(["import", "urdf", str(path), "--out", str(tmp_path / "out2"), "--legs", "p_link2",
+                          "--snap", "0.02", "--clearance", "0.1", "--reach", "0.8"], capsys, monkeypatch)
+    assert code == 0, err
 
 
 @given(mass=st.floats(0.011, 50.0), size=st.floats(1e-4, 2.0), legs=st.integers(1, 8))

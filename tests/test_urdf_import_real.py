@@ -392,7 +392,7 @@ def test_legs_straight_up_at_the_zero_pose_stand_from_the_seeds(tmp_path: Path, 
     code, _, err = run(["plan", str(robot_file), "--duration", "2", "--no-plots", "--out", str(tmp_path / "run")],
                        capsys, monkeypatch)
     assert code == 0, err
-    import shc_cli.interop.urdf_import as urdf_import
+    import shc_cli.interop.urdf_import_stance as urdf_import
 
     monkeypatch.setattr(urdf_import, "_seeds", lambda chains: None)  # OpenSHC's initial pose alone: no stance
     code, _, err, _ = _import(path, tmp_path / "unseeded", capsys, monkeypatch)

@@ -13,6 +13,9 @@ Each rule is a class of description seen in the wild, not one robot:
 * **Forward**: a body frame whose +x points at a leg (legs straight ahead and behind) is turned so that the legs
   pair up left and right: a quarter turn, or (legs all round, as an octopod's every 45°) halfway between two
   neighbouring legs.
+* **Continuous joints** (a vendor's actuator macro writes every joint so unless limits are passed) are revolute
+  joints without limits: they get :data:`WHOLE_TURN` (−π … π), inside which the stance search and the walk
+  choose their angles, and a note names them.
 * **Placeholders**: inertial data no real robot has (a total mass below :data:`TINY_MASS`; most links with a
   radius of gyration beyond twice the leg's length; every link the same mass) and one joint speed limit below
   :data:`SLOW` (or at least :data:`FAST`) rad/s everywhere, and one effort limit far beyond what the robot's weight
@@ -54,6 +57,27 @@ STRONG = 20.0
 every joint, is a placeholder (1000 N·m on a 2.5 kg robot)."""
 SERVO_MASS = 0.07
 """Mass of one hobby servo with its bracket, used for placeholder masses [kg] (AX-12A 54.6 g + bracket)."""
+
+
+WHOLE_TURN = (-math.pi, math.pi)
+"""Limits given to a continuous joint [rad]: one whole turn, centred on the URDF's zero."""
+
+
+def open_continuous(joints: list[Any]) -> list[str]:
+    """Make every continuous joint revolute with :data:`WHOLE_TURN` limits (its effort and velocity kept); returns
+    their names."""
+    import yourdfpy
+
+    names = []
+    for joint in joints:
+        if joint.type == "continuous":
+            given = joint.limit
+            joint.type = "revolute"
+            joint.limit = yourdfpy.Limit(effort=getattr(given, "effort", None),
+                                         velocity=getattr(given, "velocity", None), lower=WHOLE_TURN[0],
+                                         upper=WHOLE_TURN[1])
+            names.append(joint.name)
+    return names
 
 
 def stub_joints(joints: list[Any]) -> dict[str, str]:

@@ -3,14 +3,17 @@
 ``$(find PKG)`` has no ROS package index to ask here, so it is resolved from the file's own folders: the
 nearest folder above the file (the file's own folder included) that is named ``PKG`` or holds a
 ``package.xml`` naming ``PKG``, or a folder ``PKG`` beside one of those folders (a ``src/`` of a catkin or
-colcon workspace). An included file that does not exist under the resolved path is looked for by name beside
-the file that includes it (a package's files copied flat into one folder, as ``shared/reference/bullet_syropod``).
+colcon workspace). A package found nowhere becomes ``package://PKG`` (ROS's own spelling): the import goes on,
+and a note names the package and the elements that held it (a ros2_control parameter file is nothing
+geometric); an include from it is refused with one line. An included file that does not exist under the
+resolved path is looked for by name beside the file that includes it (a package's files copied flat into one
+folder).
 
 With ``--snap TOL``, angles in ``<origin rpy>`` within TOL of a multiple of π/2 are snapped to it before
 parsing (``1.57`` meant as π/2), and so are joint axes within TOL of a frame axis (their small components go).
 It moves the tips (by up to TOL × the leg's length), so ``shc import urdf`` snaps only when two axes meant to be
-parallel are not quite (the common normal of nearly parallel axes is far away, and the DH offsets with it): by
-0.001 rad on its own, more only when asked.
+parallel are not quite (the common normal of nearly parallel axes is far away, and the DH offsets with it): on
+its own only as far as :data:`shc_cli.interop.urdf_import.SNAP_STEPS` and ``SNAP_MOVE`` allow.
 """
 
 from __future__ import annotations
@@ -45,6 +48,8 @@ class Source:
     text: str
     snapped_text: str
     snap: float
+    warnings: tuple[str, ...] = ()
+    """What could not be resolved and was left (a package of a ``$(find PKG)`` found nowhere)."""
 
 
 def _fail(path: Path, problem: str, fix: str, line: int | None = None) -> SpecError:
@@ -65,8 +70,9 @@ def find_package(name: str, start: Path) -> Path | None:
 
 
 @contextlib.contextmanager
-def _xacro_hooks(path: Path) -> Iterator[None]:
-    """Patch xacro's ``$(find)`` and include-path resolution for the duration of one expansion."""
+def _xacro_hooks(path: Path, missing: dict[str, Path]) -> Iterator[None]:
+    """Patch xacro's ``$(find)`` and include-path resolution for the duration of one expansion; packages found
+    nowhere go to ``missing`` (``{name: folder searched from}``) and become ``package://NAME``."""
     import xacro
     import xacro.substitution_args as substitution
 
@@ -74,8 +80,8 @@ def _xacro_hooks(path: Path) -> Iterator[None]:
         current = Path(xacro.filestack[-1]) if xacro.filestack and xacro.filestack[-1] else path
         found = find_package(package, current.resolve().parent)
         if found is None:
-            raise _fail(path, f"$(find {package}): no folder '{package}' (or package.xml naming it) above "
-                        f"{current.parent}", f"put the file inside the package's folder, named {package}")
+            missing.setdefault(package, current.parent)
+            return f"{MISSING}{package}"
         return str(found)
 
     original_find, original_abs = substitution._eval_find, xacro.abs_filename_spec
@@ -95,11 +101,22 @@ def _xacro_hooks(path: Path) -> Iterator[None]:
         substitution._eval_find, xacro.abs_filename_spec = original_find, original_abs
 
 
-def expand_xacro(path: Path, args: dict[str, str]) -> str:
-    """The URDF text of a xacro file (``args``: xacro arguments ``name:=value``)."""
+MISSING = "package://"
+"""What ``$(find PKG)`` of a package found nowhere becomes (``package://PKG``)."""
+
+
+def _find_failure(path: Path, package: str, folder: Path) -> SpecError:
+    return _fail(path, f"$(find {package}): no folder '{package}' (or package.xml naming it) above {folder}",
+                 f"put the file inside the package's folder, named {package}")
+
+
+def expand_xacro(path: Path, args: dict[str, str]) -> tuple[str, list[str]]:
+    """The URDF text of a xacro file (``args``: xacro arguments ``name:=value``) and notes on packages found
+    nowhere (module docstring)."""
     import xacro
 
-    with _xacro_hooks(path):
+    missing: dict[str, Path] = {}
+    with _xacro_hooks(path, missing):
         try:
             document = xacro.process_file(str(path), mappings=dict(args))
         except SpecError:
@@ -109,10 +126,34 @@ def expand_xacro(path: Path, args: dict[str, str]) -> str:
             if isinstance(cause, SpecError):
                 raise cause from None
             message = " ".join(str(error).split()) or type(error).__name__
+            for package, folder in missing.items():
+                if f"{MISSING}{package}" in message:  # an include from a package found nowhere
+                    raise _find_failure(path, package, folder) from None
             raise _fail(path, f"xacro: {message}", "fix the xacro file, or give xacro arguments with --arg NAME=VALUE")\
                 from None
     text: str = document.toprettyxml(indent="  ")
-    return text
+    return text, [_missing_note(document, package, folder) for package, folder in missing.items()]
+
+
+def _missing_note(document: Any, package: str, folder: Path) -> str:
+    """The note on a package found nowhere: which elements hold ``package://PKG`` (geometry or not)."""
+    marker = f"{MISSING}{package}"
+    holders: list[str] = []
+
+    def visit(node: Any, parent: str) -> None:
+        for child in node.childNodes:
+            if child.nodeType == child.TEXT_NODE and marker in child.data:
+                holders.append(parent)
+            elif child.nodeType == child.ELEMENT_NODE:
+                if any(marker in attribute.value for attribute in child.attributes.values()):
+                    holders.append(child.tagName)
+                visit(child, child.tagName)
+
+    visit(document, "")
+    places = ", ".join(f"<{tag}>" for tag in dict.fromkeys(holders)) or "nothing in the URDF"
+    geometric = " (a mesh: the import reads one only for a tip on a knee axis)" if "mesh" in holders else ""
+    return (f"$(find {package}): no folder '{package}' (or package.xml naming it) above {folder}: left as "
+            f"{marker}, in {places}{geometric}")
 
 
 def snap_rpy(text: str, tolerance: float) -> tuple[str, float]:
@@ -173,8 +214,9 @@ def _known_geometry(text: str) -> str:
     return ET.tostring(root, encoding="unicode")
 
 
-def read_source(path: Path, args: dict[str, str], snap: float) -> Source:
-    """Read ``path`` (``.xacro`` expanded, anything else as URDF) and snap its rpy values.
+def read_source(path: Path, args: dict[str, str], snap: float, given: str | None = None) -> Source:
+    """Read ``path`` (``.xacro`` expanded, anything else as URDF; ``given``: its URDF text, made from another
+    format) and snap its rpy values.
 
     Raises:
         SpecError: missing file, xacro failure or malformed XML (one line).
@@ -182,8 +224,11 @@ def read_source(path: Path, args: dict[str, str], snap: float) -> Source:
     require()
     if not path.is_file():
         raise _fail(path, "file not found", "check the path")
-    if path.suffix == ".xacro" or ".xacro" in path.suffixes:
-        text = expand_xacro(path, args)
+    warnings: list[str] = []
+    if given is not None:
+        text = given
+    elif path.suffix == ".xacro" or ".xacro" in path.suffixes:
+        text, warnings = expand_xacro(path, args)
     else:
         text = path.read_text(encoding="utf-8", errors="replace")
     try:
@@ -195,7 +240,7 @@ def read_source(path: Path, args: dict[str, str], snap: float) -> Source:
     except ValueError as error:
         raise _fail(path, f"an rpy value is not a number: {error}", "write three numbers, e.g. rpy=\"0 0 1.5708\"")\
             from None
-    return Source(path, text, snapped, largest)
+    return Source(path, text, snapped, largest, tuple(warnings))
 
 
 def parse_urdf(path: Path, text: str) -> Any:
