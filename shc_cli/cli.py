@@ -518,12 +518,13 @@ def import_urdf(
                                                      "[default: +x, or +y if a leg is straight ahead].")] = None,
     base: Annotated[str | None, typer.Option(help="Body link that is shc's base_link [default: base_link, else the "
                                                   "root, else (a massless root) where the legs meet].")] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing robot (and pose) file in --out.")] = False,
 ) -> None:
     """Turn a legged robot's URDF or xacro into an shc robot file (legs, limits, masses, a standing pose and the
     servo map of [hardware.servos])."""
     from shc_cli.commands.importing import import_urdf as run
 
-    run(file, out, name, legs, tip, clearance, reach, snap, arg, forward, base)
+    run(file, out, name, legs, tip, clearance, reach, snap, arg, forward, base, overwrite)
 
 
 @import_app.command("mjcf")
@@ -544,12 +545,13 @@ def import_mjcf(
                                                      "[default: +x, or +y if a leg is straight ahead].")] = None,
     base: Annotated[str | None, typer.Option(help="Body that is shc's base_link [default: the robot's root "
                                                   "body].")] = None,
+    overwrite: Annotated[bool, typer.Option(help="Replace an existing robot (and pose) file in --out.")] = False,
 ) -> None:
     """Turn a legged robot's MJCF into an shc robot file, read by MuJoCo's own loader (the same rules, checks and
     servo map as import urdf)."""
     from shc_cli.commands.importing import import_mjcf as run
 
-    run(file, out, name, legs, tip, clearance, reach, snap, forward, base)
+    run(file, out, name, legs, tip, clearance, reach, snap, forward, base, overwrite)
 
 
 hw_app = typer.Typer(help="Bring a robot's servos up: find them, check where they stand, jog each joint to confirm "

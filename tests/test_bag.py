@@ -317,3 +317,22 @@ def test_import_refuses_a_file_like_out(tmp_path: Path, capsys, monkeypatch) -> 
                        capsys, monkeypatch)
     assert code == 2 and "--out is the folder that will hold robots/, gaits/ and poses/" in err
     assert not (tmp_path / "X").exists()
+
+
+def test_import_urdf_refuses_an_existing_robot_file_without_overwrite(tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
+                                                                      monkeypatch) -> None:
+    """The one output rule (issue 42.6): a second import into the same folder replaced the robot file silently."""
+    from .conftest import ROOT
+
+    urdf = ROOT / "tests" / "data" / "robots" / "hexapod_olli_io.urdf"
+    out = tmp_path / "imported"
+    code, _, err = run(["import", "urdf", str(urdf), "--out", str(out)], capsys, monkeypatch)
+    assert code == 0, err
+    [robot_file] = (out / "robots").glob("*.toml")
+    robot_file.write_text(robot_file.read_text() + "# edited by hand\n")
+    code, _, err = run(["import", "urdf", str(urdf), "--out", str(out)], capsys, monkeypatch)
+    assert code == 2 and err.count("\n") == 1 and f"{robot_file}: already exists (add --overwrite" in err, err
+    assert robot_file.read_text().endswith("# edited by hand\n")
+    code, _, err = run(["import", "urdf", str(urdf), "--out", str(out), "--overwrite"], capsys, monkeypatch)
+    assert code == 0, err
+    assert not robot_file.read_text().endswith("# edited by hand\n")

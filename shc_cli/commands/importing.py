@@ -24,7 +24,7 @@ def import_openshc(robot: Path, gait: Path | None, auto_pose: Path | None, out: 
 
 def import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tip: list[str] | None,
                 clearance: float | None, reach: float | None, snap: float, arguments: list[str] | None,
-                forward: str | None = None, base: str | None = None) -> None:
+                forward: str | None = None, base: str | None = None, overwrite: bool = False) -> None:
     """A URDF or xacro → an shc robot file with its servo map; ``arguments`` are xacro's ``NAME=VALUE``, ``forward``
     the base_link axis the robot walks along (``+x``, ``+y``, ``-x``, ``-y``; None: the import decides), ``base`` the
     body link that is shc's base_link (None: the import decides)."""
@@ -35,7 +35,7 @@ def import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tip: 
         refuse_file_like(out, "robots/NAME.toml (NAME: --name or the URDF's robot name)", out.parent)
     if _is_mjcf(file):  # the file says which it is: an MJCF given to import urdf is imported as MJCF
         typer.echo(f"note: {file.name} is MJCF (a <mujoco> file): imported as shc import mjcf does")
-        import_mjcf(file, out, name, legs, tip, clearance, reach, snap, forward, base)
+        import_mjcf(file, out, name, legs, tip, clearance, reach, snap, forward, base, overwrite)
         return
     mappings = {}
     for item in arguments or []:
@@ -47,7 +47,7 @@ def import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tip: 
     if forward is not None and forward not in turns:
         raise SpecError([Issue(None, None, "--forward", f"'{forward}' is not an axis", "give +x, +y, -x or -y")])
     result = convert(file, out, name, legs, tip, clearance, reach, snap, mappings,
-                     None if forward is None else turns[forward], base)
+                     None if forward is None else turns[forward], base, overwrite=overwrite)
     for note in result.notes:
         typer.echo(f"note: {note}")
     typer.echo(f"forward kinematics: largest tip difference to the URDF {result.fk_error:.2g} m at 200 random joint "
@@ -72,7 +72,7 @@ def _is_mjcf(file: Path) -> bool:
 
 def import_mjcf(file: Path, out: Path | None, name: str | None, legs: str, tip: list[str] | None,
                 clearance: float | None, reach: float | None, snap: float, forward: str | None = None,
-                base: str | None = None) -> None:
+                base: str | None = None, overwrite: bool = False) -> None:
     """An MJCF file → an shc robot file with its servo map (MuJoCo's loader; the URDF import's rules)."""
     from shc_cli.interop.mjcf_import import import_mjcf as convert
     from shc_cli.outputs import refuse_file_like
@@ -83,7 +83,7 @@ def import_mjcf(file: Path, out: Path | None, name: str | None, legs: str, tip: 
     if forward is not None and forward not in turns:
         raise SpecError([Issue(None, None, "--forward", f"'{forward}' is not an axis", "give +x, +y, -x or -y")])
     result, mujoco_error, notes = convert(file, out, name, legs, tip, clearance, reach, snap,
-                                          None if forward is None else turns[forward], base)
+                                          None if forward is None else turns[forward], base, overwrite=overwrite)
     for note in [*notes, *result.notes]:
         typer.echo(f"note: {note}")
     typer.echo(f"forward kinematics: largest tip difference to MuJoCo's (mj_kinematics) {mujoco_error:.2g} m at 200 "

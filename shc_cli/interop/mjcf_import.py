@@ -260,7 +260,7 @@ def _world(data: Any, body: int) -> FloatArray:
 def import_mjcf(file: Path, out: Path | None = None, name: str | None = None, legs: str = "auto",
                 tips: list[str] | None = None, clearance: float | None = None, reach: float | None = None,
                 snap: float = 0.0, forward: float | None = None,
-                base: str | None = None) -> tuple[Any, float, list[str]]:
+                base: str | None = None, overwrite: bool = False) -> tuple[Any, float, list[str]]:
     """Write ``OUT/robots/NAME.toml`` from an MJCF file (module docstring): the URDF import's result, the largest
     tip difference to MuJoCo's forward kinematics [m] and the conversion's notes."""
     from shc_cli.interop.urdf_import import import_urdf
@@ -269,7 +269,7 @@ def import_mjcf(file: Path, out: Path | None = None, name: str | None = None, le
     model = load(file)
     converted = convert(file, model)
     result = import_urdf(file, out, name, legs, tips, clearance, reach, snap, None, forward, base,
-                         given=converted.urdf, command="mjcf")
+                         given=converted.urdf, command="mjcf", overwrite=overwrite)
     robot = load_robot(result.robot_path).robot
     error = mujoco_fk_error(model, converted, robot, result.tips, result.base_frame, result.yaw)
     return result, error, converted.notes

@@ -373,16 +373,19 @@ class Result:
 def import_urdf(file: Path, out: Path | None = None, name: str | None = None, legs: str = "auto",
                 tips: list[str] | None = None, clearance: float | None = None, reach: float | None = None,
                 snap: float = 0.0, args: dict[str, str] | None = None, forward: float | None = None,
-                base: str | None = None, given: str | None = None, command: str = "urdf") -> Result:
+                base: str | None = None, given: str | None = None, command: str = "urdf",
+                overwrite: bool = False) -> Result:
     """Write ``OUT/robots/NAME.toml`` (its ``[hardware.servos]`` the servo map, to check) from a URDF or xacro
     file; check the robot
     (``shc validate``'s checks) and its forward kinematics against the URDF before returning.
 
     A URDF that yourdfpy reads but whose numbers or structure the import cannot use (a link outside the tree, a
     zero-length chain, values the robot model refuses) is one line naming the file (found by
-    ``tests/test_fuzz_inputs.py``)."""
+    ``tests/test_fuzz_inputs.py``). An existing robot (or pose) file is refused unless ``overwrite``, before anything
+    is written (the output rule of every command)."""
     try:
-        return _import_urdf(file, out, name, legs, tips, clearance, reach, snap, args, forward, base, given, command)
+        return _import_urdf(file, out, name, legs, tips, clearance, reach, snap, args, forward, base, given, command,
+                            overwrite)
     except (ValueError, LookupError, ArithmeticError) as error:  # pydantic's ValidationError is a ValueError
         lines = str(error).strip().splitlines()
         raise _fail(file, f"cannot import it: {type(error).__name__}: {lines[0] if lines else ''}",
@@ -391,8 +394,9 @@ def import_urdf(file: Path, out: Path | None = None, name: str | None = None, le
 
 def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips: list[str] | None,
                  clearance: float | None, reach: float | None, snap: float, args: dict[str, str] | None,
-                 forward: float | None, base: str | None, given: str | None, command: str) -> Result:
-    from shc_cli.outputs import write_text
+                 forward: float | None, base: str | None, given: str | None, command: str,
+                 overwrite: bool) -> Result:
+    from shc_cli.outputs import refuse_existing, write_text
     from shc_cli.spec.loading import load_gait, load_robot
     from shc_cli.validation import check_robot
 
@@ -442,6 +446,7 @@ def _import_urdf(file: Path, out: Path | None, name: str | None, legs: str, tips
     robot_path = out / "robots" / f"{robot_name}.toml"
     text = _header(file, imported, snap, source.snap, command) + with_check_note(dump_toml(tree))
     pose_path = out / "poses" / sway[0] if sway is not None else None
+    refuse_existing([path for path in (robot_path, pose_path) if path is not None], overwrite)
     with tempfile.TemporaryDirectory() as folder:  # checked before anything is written
         draft = Path(folder) / "robots" / robot_path.name
         draft.parent.mkdir()
