@@ -67,7 +67,12 @@ def test_continuous_joints_are_revolute_with_a_whole_turn(tmp_path: Path, capsys
     assert "18 leg joints are continuous in the URDF" in out and "-3.142 … 3.142 rad" in out
     data = tomllib.loads(robot_file.read_text())
     joints = data["templates"]["leg"]["joints"]
-    assert all((j["min"], j["max"]) == (-math.pi, math.pi) for j in joints.values())
+    # a whole turn, as far as the servo map's servo reaches with the zero in the middle of its ticks
+    from shc_cli.interop.servo_map import servo_angle_range
+
+    low, high = servo_angle_range(data["hardware"]["model"])
+    assert all((j["min"], j["max"]) == (low, high) for j in joints.values())
+    assert -math.pi <= low < -2.5 and 2.5 < high <= math.pi  # an AX-12A here: 300° about its middle
     assert _fk_worst(path, robot_file, FEET) < 1e-9
 
 

@@ -38,6 +38,19 @@ def guess_model(stall_torque: float | None) -> str:
     return "MX-106"
 
 
+def servo_angle_range(model_name: str) -> tuple[float, float]:
+    """The joint angles [rad] a servo of ``model_name`` reaches with the zero at the middle of its range and direction
+    +1, as the import's servo map writes it: ticks 0 … resolution − 1 (``validation.servo_range_problem``'s rule,
+    rounded inward to 0.1 mrad)."""
+    import math
+
+    from shc_cli.hardware.models import MODELS
+
+    model = MODELS[model_name]
+    return (math.ceil(-model.centre / model.ticks_per_radian * 1e4) / 1e4,
+            math.floor((model.resolution - 1 - model.centre) / model.ticks_per_radian * 1e4) / 1e4)
+
+
 def servo_table(legs: dict[str, list[str]], stall_torque: float | None = None,
                 names: dict[str, str] | None = None) -> dict[str, Any]:
     """The ``[hardware]`` table for ``legs`` (``{leg id: [joint, …]}`` in file order).

@@ -61,7 +61,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from shc_cli.errors import SpecError
-from shc_cli.interop.servo_map import servo_table, with_check_note
+from shc_cli.interop.servo_map import guess_model, servo_angle_range, servo_table, with_check_note
 from shc_cli.interop.urdf_import_clean import (
     ON_AXIS,
     SERVO_MASS,
@@ -224,11 +224,16 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
     if found_placeholders.torque is not None:
         servo["stall_torque"] = found_placeholders.torque
     legs_out: dict[str, Any] = {}
+    low, high = servo_angle_range(guess_model(servo.get("stall_torque")))
+    narrowed: list[str] = []
     for chain in chains:
         joints = {}
         for joint_name, joint, row, mass in zip(chain.names, chain.joints, chain.rows, chain.masses, strict=True):
             entry: dict[str, Any] = {**_dh_values(row), "min": float(joint.limit.lower or 0.0),
                                      "max": float(joint.limit.upper or 0.0)}
+            if entry["min"] < low or entry["max"] > high:
+                narrowed.append(f"{chain.leg_id}_{joint_name} {entry['min']:g}..{entry['max']:g}")
+                entry["min"], entry["max"] = max(entry["min"], low), min(entry["max"], high)
             if found_placeholders.speed is not None:
                 entry["max_vel"] = found_placeholders.speed
             elif joint.limit.velocity:
@@ -238,6 +243,12 @@ def import_tree(model: Any, file: Path, name: str, legs: str = "auto", tips: lis
         assert chain.base is not None
         legs_out[chain.leg_id] = {"base": _dh_values(chain.base),
                                   "foot_radius": _round(chain.sphere, 6), "joints": joints}
+    if narrowed:
+        guessed = guess_model(servo.get("stall_torque"))
+        notes.append(f"{len(narrowed)} joint limits wider than one turn of the servo map's {guessed} "
+                     f"({low:.4f}..{high:.4f} rad) narrowed to it ({', '.join(narrowed[:3])}"
+                     f"{', …' if len(narrowed) > 3 else ''} rad): the servo model is a guess; a multi-turn actuator "
+                     "takes hardware.model = \"generic\" and the URDF's limits")
     gait = GAITS.get(len(chains), "wave")
     from shc_cli.spec.loading import load_gait
 
