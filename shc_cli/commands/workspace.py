@@ -84,7 +84,7 @@ def render_table(report: WorkspaceReport, width: int | None = None) -> str:
     for first in range(0, len(bearings), per_block):
         lines += ["", *_block(report, bearings[first:first + per_block])]
     lines.append(f"walkspace area {report.walkspace_area():.4f} m², stride {report.walkspace_stride():.4f} m "
-                 "(the OpenSHC paper's Table II figure)")
+                 "(measured as the OpenSHC paper's Table II does for Bullet)")
     lines.append(f"time to max stride {report.limits.time_to_max_stride:.3f} s, "
                  f"stance radius {report.limits.stance_radius:.4f} m")
     return "\n".join(lines)
