@@ -72,6 +72,15 @@ def _tight(figure: Any) -> None:
     figure.set_layout_engine(None)
 
 
+def fitted_title(axes: Any, text: str, fontsize: float = 10.0) -> None:
+    """``axes.set_title(text)`` wrapped to the figure's width (a long title was cut at the figure's edges: the
+    Pareto plot's "…40 complete"): lines of at most the characters of ``fontsize`` that fit across the figure."""
+    import textwrap
+
+    columns = int(axes.figure.get_figwidth() * 72.0 / (0.6 * fontsize))  # 72 points an inch; a glyph ≈ 0.6 em
+    axes.set_title(textwrap.fill(text, max(20, columns - 4)), fontsize=fontsize)
+
+
 SWING_COLOUR = "black"
 """Gait diagrams (paper Fig. 5): a leg in swing is a black bar, in stance white (left blank); start-up is grey."""
 STANCE_COLOUR = "white"

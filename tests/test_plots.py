@@ -192,3 +192,32 @@ def test_pareto_projection_of_three_objectives_draws_no_front_line(tmp_path: Pat
     labels = _legend_texts(figures["pareto_cot__mean_speed_mps.png"])
     assert any("on the 3-objective Pareto front" in label for label in labels)
     assert "non-dominated in cot and mean_speed_mps (1)" in labels
+
+
+def _inside_figure(figure: Any, text: Any) -> bool:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(figure)  # a closed pyplot figure keeps only a base canvas
+    canvas.draw()
+    box = text.get_window_extent(renderer=canvas.get_renderer())
+    return bool(box.x0 >= 0.0 and box.x1 <= figure.bbox.width and box.y1 <= figure.bbox.height)
+
+
+def test_a_long_pareto_title_is_wrapped_inside_the_figure(tmp_path: Path, figures: dict[str, Any]) -> None:
+    """Issue 42 point 14: "bullet_flat: stability_margin_median_m vs displacement_speed_mps, 40 complete trials" was
+    cut at both edges of the figure."""
+    from shc_cli.domain.optimize.plots import plot_parallel, plot_pareto_pairs
+    from shc_cli.spec.study import Study
+
+    study = Study(path=tmp_path / "s.toml", name="bullet_flat", description="", robot="bullet", engine="mujoco",
+                  seeds=(0,), skip=0.0, trials=None, fixed={}, space=[],
+                  objectives={"displacement_speed_mps": "maximize", "stability_margin_median_m": "maximize"},
+                  constraints=[], sampler="nsga2", sampler_seed=1, population=None)
+    rows = [{"trial": n, "state": "complete", "feasible": True, "displacement_speed_mps": 0.1 * n,
+             "stability_margin_median_m": 0.2 - 0.01 * n} for n in range(40)]
+    plot_pareto_pairs(study, rows, rows[:3], tmp_path)
+    plot_parallel(study, rows, rows[:3], tmp_path / "parallel.png")
+    for name in ("pareto_displacement_speed_mps__stability_margin_median_m.png", "parallel.png"):
+        axes = figures[name].axes[0]
+        assert "40 complete trials" in axes.get_title().replace("\n", " ") or name == "parallel.png"
+        assert _inside_figure(figures[name], axes.title), f"{name}: {axes.get_title()!r} is cut"
