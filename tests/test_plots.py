@@ -197,7 +197,7 @@ def test_pareto_projection_of_three_objectives_draws_no_front_line(tmp_path: Pat
 def _inside_figure(figure: Any, text: Any) -> bool:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    canvas = FigureCanvasAgg(figure)  # a closed pyplot figure keeps only a base canvas
+    canvas: Any = FigureCanvasAgg(figure)  # a closed pyplot figure keeps only a base canvas
     canvas.draw()
     box = text.get_window_extent(renderer=canvas.get_renderer())
     return bool(box.x0 >= 0.0 and box.x1 <= figure.bbox.width and box.y1 <= figure.bbox.height)
@@ -221,3 +221,55 @@ def test_a_long_pareto_title_is_wrapped_inside_the_figure(tmp_path: Path, figure
         axes = figures[name].axes[0]
         assert "40 complete trials" in axes.get_title().replace("\n", " ") or name == "parallel.png"
         assert _inside_figure(figures[name], axes.title), f"{name}: {axes.get_title()!r} is cut"
+
+
+def _walk_series(n: int = 200) -> tuple[list[dict[str, Any]], list[Any]]:
+    """An analysed run by hand: a tripod whose measured contacts drop to one foot for 20 cycles (a stance foot
+    chattering at a transition), with the CoM and ZMP a margin inside the feet otherwise."""
+    from types import SimpleNamespace
+
+    t = np.arange(n) * 0.01
+    feet = np.zeros((n, 6, 3))
+    feet[:, :, 0] = np.array([0.3, 0.0, -0.3, -0.3, 0.0, 0.3]) + 0.001 * np.arange(n)[:, None]
+    feet[:, :, 1] = np.array([-0.2, -0.3, -0.2, 0.2, 0.3, 0.2])
+    contact = np.tile(np.array([True, False, True, False, True, False]), (n, 1))
+    contact[100:120] = [True, False, False, False, False, False]
+    com = np.column_stack([0.001 * np.arange(n), np.zeros(n), np.full(n, 0.2)])
+    margin = np.where(contact.sum(axis=1) < 3, -0.33, 0.1)
+    series = {"rows": np.arange(n), "margin": margin, "zmp": com[:, :2] + 0.01, "zmp_margin": margin - 0.01,
+              "feet": feet, "com": com, "contact": contact, "tracks": None,
+              "cycles": {"height": np.zeros(0), "roll_rate": np.zeros(0), "pitch_rate": np.zeros(0)}}
+    result = {"run": "walk", "robot": "athena", "gait": "tripod", "step_frequency_hz": 1.0, "_series": series}
+    return [result], [SimpleNamespace(t=t, power=None, summary=SimpleNamespace(terrain="flat"))]
+
+
+def test_margins_are_not_drawn_where_fewer_than_three_feet_touch(tmp_path: Path, figures: dict[str, Any]) -> None:
+    """Issue 42 point 14: ATHENA's stability plot showed CoM margin spikes of −0.33 m on a run that did not fall —
+    the samples where the contact sensors had one or two feet down (a point or a segment: no support polygon, the
+    margin is minus the distance to it). They are shaded and named instead."""
+    from shc_cli.plots import plot_analysis
+
+    results, runs = _walk_series()
+    plot_analysis(results, runs, tmp_path)
+    axes = figures["stability.png"].axes[0]
+    com = next(line for line in axes.get_lines() if line.get_label() == "walk: CoM")
+    drawn = com.get_ydata()
+    assert np.isnan(drawn[100:120]).all() and np.nanmin(drawn) == pytest.approx(0.1)
+    assert axes.get_ylim()[0] > -0.1  # the −0.33 m samples do not set the axis
+    assert "walk: fewer than 3 feet in contact (10 % of the window; margins not drawn)" in _legend_texts(
+        figures["stability.png"])
+
+
+def test_the_centre_of_mass_is_drawn_over_the_zmp(tmp_path: Path, figures: dict[str, Any]) -> None:
+    """The ZMP plot's "centre of mass" line was invisible under the ZMP's line: the ZMP is dots, the CoM a black
+    line on top."""
+    from matplotlib.colors import to_rgba
+
+    from shc_cli.plots import plot_analysis
+
+    results, runs = _walk_series()
+    plot_analysis(results, runs, tmp_path)
+    lines = {line.get_label(): line for line in figures["zmp_walk.png"].axes[0].get_lines()}
+    com, zmp = lines["centre of mass"], lines["ZMP (eq. 32), one dot per cycle"]
+    assert com.get_zorder() > zmp.get_zorder() and to_rgba(com.get_color()) == to_rgba("black")
+    assert zmp.get_linestyle() == "None" and zmp.get_marker() == "."
