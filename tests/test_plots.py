@@ -273,3 +273,29 @@ def test_the_centre_of_mass_is_drawn_over_the_zmp(tmp_path: Path, figures: dict[
     com, zmp = lines["centre of mass"], lines["ZMP (eq. 32), one dot per cycle"]
     assert com.get_zorder() > zmp.get_zorder() and to_rgba(com.get_color()) == to_rgba("black")
     assert zmp.get_linestyle() == "None" and zmp.get_marker() == "."
+
+
+def test_fits_joint_grids_say_their_time_axis(tmp_path: Path, figures: dict[str, Any]) -> None:
+    """Issue 42 point 14: fit's position and torque grids (one panel per joint) had no time label; the bottom panel
+    of every column shows the times (the one above an empty cell too)."""
+    from types import SimpleNamespace
+
+    from shc_cli.domain.fit.outputs import plot_fit
+
+    n, joints = 50, 7  # two rows of five: columns 3–5 end above an empty cell
+    wave = np.sin(np.linspace(0.0, 3.0, n))[:, None] * np.ones((1, joints))
+    recording = SimpleNamespace(position=wave, torque=wave, current=None, power=None, dt=0.01,
+                                path=tmp_path / "run")
+    simulated = SimpleNamespace(channel=lambda _: wave * 0.9, power=np.full(n, 10.0))
+    plot_fit(recording, simulated, simulated, [f"j{k}" for k in range(joints)], tmp_path,  # type: ignore[arg-type]
+             "01_run")
+    for name in ("01_run_position.png", "01_run_torque.png"):
+        figure = figures[name]
+        assert figure._supxlabel is not None and figure._supxlabel.get_text() == "time [s]", name
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        FigureCanvasAgg(figure).draw()
+        shown = [axis for axis in figure.axes if axis.axison and any(
+            label.get_visible() and label.get_text() for label in axis.get_xticklabels())]
+        assert len(shown) == 5, name  # one per column: j5, j6 in row 2 and j2, j3, j4 above the empty cells
+        assert _inside_figure(figure, figure._supxlabel), name
