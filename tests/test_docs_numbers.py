@@ -5,6 +5,7 @@ robot file, a controller fix) fails here until the README says the new one; the 
 from __future__ import annotations
 
 import json
+import os
 import re
 from pathlib import Path
 
@@ -86,3 +87,18 @@ def test_the_workspace_line_does_not_call_another_robots_figure_the_papers(
     assert code == 0, err
     last = next(line for line in out.splitlines() if line.startswith("walkspace area"))
     assert "Table II figure" not in last and last.endswith("(measured as the OpenSHC paper's Table II does for Bullet)")
+
+
+def test_a_piped_workspace_table_of_many_bearings_is_wrapped(capsys: pytest.CaptureFixture[str],
+                                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 42 point 14: `shc workspace --bearings 72` in a pipe printed 770-character lines; it prints blocks of
+    eight bearings (the default table, which stays whole)."""
+    monkeypatch.delenv("COLUMNS", raising=False)
+    monkeypatch.setattr("shutil.get_terminal_size", lambda fallback=(0, 0): os.terminal_size(fallback))  # a pipe
+    code, out, err = run(["workspace", "athena", "--bearings", "72"], capsys, monkeypatch)
+    assert code == 0, err
+    lines = out.splitlines()
+    assert max(len(line) for line in lines) <= 121 and sum(line.startswith("leg ") for line in lines) == 9
+    code, out, err = run(["workspace", "athena"], capsys, monkeypatch)
+    assert code == 0, err
+    assert sum(line.startswith("leg ") for line in out.splitlines()) == 1

@@ -51,17 +51,20 @@ def _option_issue(option: str, problem: str, fix: str) -> Issue:
     return Issue(None, None, option, problem, fix)
 
 
-def terminal_width() -> int | None:
-    """Columns of the terminal (or ``$COLUMNS``); ``None`` when printing to a pipe or file (no wrapping)."""
+def terminal_width() -> int:
+    """Columns of the terminal (or ``$COLUMNS``); :data:`PIPE_WIDTH` when printing to a pipe or file (a 5° grid
+    was one 770-character line per row)."""
     import shutil
 
     columns = shutil.get_terminal_size((0, 0)).columns
-    return columns if columns > 0 else None
+    return columns if columns > 0 else PIPE_WIDTH
 
 
 LABEL_WIDTH = 49
 """Characters before the first per-bearing column of the workspace table."""
 CELL_WIDTH = 9
+PIPE_WIDTH = LABEL_WIDTH + 8 * CELL_WIDTH
+"""The table's width in a pipe: blocks of eight bearings, OpenSHC's 45° grid (the default table, unwrapped)."""
 
 
 def render_table(report: WorkspaceReport, width: int | None = None) -> str:
