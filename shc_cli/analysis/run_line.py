@@ -28,8 +28,9 @@ GENERIC_SERVOS = "note: generic servos — power is indicative"
 
 
 SLIP_SHARE = 0.15
-"""Foot slip (per foot, while in contact) per metre walked above which the line warns: 0.05–0.09 on the bundled
-robots walking flat ground (bullet 0.064, athena 0.075), 0.18–0.26 on the imported PhantomX of docs/your-robot.md."""
+"""Foot slip (per foot, while in contact) per metre walked above which the line warns: below 0.10 for every bundled
+robot walking 10 s on flat ground (bullet 0.064, athena 0.075, octopod 0.025; tests/test_walk_warnings.py), 0.26 for
+the imported PhantomX of docs/your-robot.md on AX-12A servos."""
 
 
 def generic_servos(robot_servo_model: str | None) -> bool:
