@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import re
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -54,13 +55,17 @@ def api_words(text: str) -> str:
 
 
 def _api_errors(function: Callable[P, T]) -> Callable[P, T]:
-    """``function`` with its output errors naming the API's arguments, not the CLI's options."""
+    """``function`` with its output errors naming the API's arguments, not the CLI's options — when a user's code
+    calls it; shc's own commands call the same functions and keep the CLI's words (``--overwrite``)."""
 
     @functools.wraps(function)
     def wrapped(*args: P.args, **kwargs: P.kwargs) -> T:
         try:
             return function(*args, **kwargs)
         except OutputError as error:
+            caller = str(sys._getframe(1).f_globals.get("__name__", ""))
+            if caller == "shc_cli" or caller.startswith("shc_cli."):
+                raise
             raise OutputError(api_words(str(error))) from None
 
     return wrapped

@@ -240,11 +240,18 @@ def test_the_emulator_process_reads_and_writes_tables_logs_packets_and_injects_f
     control-table bytes, the packets heard, a fault with the packet count at that moment, a servo unplugged."""
     from dynamixel_sdk import COMM_RX_TIMEOUT, COMM_SUCCESS, PacketHandler, PortHandler
 
+    class Unhurried(PortHandler):  # type: ignore[misc]
+        """The SDK's port with a reply timeout of 2 s instead of ≈ 34 ms: the emulator is a process of its own, which
+        a loaded machine leaves unscheduled for longer than that (a read timed out at load 13; issue 42)."""
+
+        def setPacketTimeout(self, packet_length: int) -> None:
+            self.setPacketTimeoutMillis(2000.0)
+
     with EmulatorProcess({1: "MX-106", 2: "MX-106"}) as bus:
         assert bus.ids() == [1, 2] and bus.packet_count() == 0
         assert bus.table(1, 7) == b"\x01" and bus.table(2, 132, 4) == (2048).to_bytes(4, "little")  # id; present
         bus.poke(2, 11, bytes([1]))  # velocity mode
-        port = PortHandler(bus.port)
+        port = Unhurried(bus.port)
         assert port.openPort() and port.setBaudRate(1_000_000)
         handler = PacketHandler(2.0)
         try:
