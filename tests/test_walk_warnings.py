@@ -48,11 +48,14 @@ def test_the_imported_phantomx_on_its_ax12a_servos_warns_that_its_feet_slip(
     warning = next((part for part in line.split(", warning: ")[1:] if part.startswith("feet slip")), None)
     assert warning is not None, line
     slip, distance = (float(x) for x in re.findall(r"([0-9.]+) m", warning)[:2])
-    assert distance == pytest.approx(summary.distance_m, abs=5e-4) and slip > SLIP_SHARE * distance
+    assert distance == pytest.approx(summary.distance_m or 0.0, rel=0.02) and slip > SLIP_SHARE * distance
     # the guide quotes the warning as the run prints it
     quoted = warning.split(" → ")[0].rstrip(")") + ")"
     assert f'"warning: {quoted}"' in re.sub(r"\s+", " ", GUIDE.read_text(encoding="utf-8")), \
         f"docs/your-robot.md should quote: warning: {quoted}"
+    commands = re.sub(r"\s+", " ", (ROOT / "docs" / "commands.md").read_text(encoding="utf-8"))
+    assert f"`warning: {quoted}` (`docs/your-robot.md`'s PhantomX)" in commands, \
+        f"docs/commands.md should quote: warning: {quoted}"
 
 
 def test_a_good_walk_has_no_warning(tmp_path: Path, capsys: pytest.CaptureFixture[str],
@@ -77,6 +80,17 @@ def test_a_walk_whose_centre_of_mass_is_outside_the_feet_is_statically_unstable(
     if summary.fell:
         pytest.skip("the nose-heavy robot fell (the line says FELL, no warning)")
     assert "warning: statically unstable (median static margin -" in stdout, stdout
+
+
+def test_a_closed_path_is_not_taken_for_slipping(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    """The share is of the distance walked along the path, not of the straight line from start to end: a square
+    walked back to its start is not "feet slip … over 0.1 m"."""
+    out = tmp_path / "square"
+    code, stdout, err = run(["simulate", "--path", str(ROOT / "paths" / "square_2m.csv"), "--duration", "60", "--out",
+                             str(out), "--no-plots"], capsys, monkeypatch)
+    assert code == 0, err
+    assert "feet slip" not in stdout, stdout
 
 
 def test_a_run_without_its_log_has_no_warning(tmp_path: Path) -> None:

@@ -79,10 +79,12 @@ def simulation_line(summary: RunSummary, terrain: str, path: Path, note: str = "
 def walk_warnings(path: Path, summary: RunSummary) -> list[str]:
     """What was wrong with a walk that did not fall, from its log in ``path`` (the RUNNING window ``shc analyze``
     measures, with its figures): a negative median static margin, foot slip above :data:`SLIP_SHARE` of the
-    distance (not for a run flagged NO PROGRESS: no distance to share). Nothing when the log cannot be read."""
+    distance walked (not for a run flagged NO PROGRESS: no distance to share). Nothing when the log cannot be
+    read."""
     import numpy as np
 
-    from shc_cli.analysis.metrics import Window, edge_margin, feet_and_com, foot_slip, support_polygon, window_mask
+    from shc_cli.analysis import metrics
+    from shc_cli.analysis.progress import cycle_path_length
     from shc_cli.errors import ShcError
     from shc_cli.loop.opening import open_run
 
@@ -90,19 +92,21 @@ def walk_warnings(path: Path, summary: RunSummary) -> list[str]:
         log = open_run(path)
     except (ShcError, OSError):
         return []
-    rows = np.flatnonzero(window_mask(log, Window()))
+    rows = np.flatnonzero(metrics.window_mask(log, metrics.Window()))
     if len(rows) < 2:
         return []
-    feet, com = feet_and_com(log, rows)
+    feet, com = metrics.feet_and_com(log, rows)
     contact = log.contact[rows]
-    margins = [edge_margin(support_polygon(feet[i, down, :2]), com[i, :2]) for i, down in enumerate(contact)
-               if down.any()]
+    margins = [metrics.edge_margin(metrics.support_polygon(feet[i, down, :2]), com[i, :2])
+               for i, down in enumerate(contact) if down.any()]
     warnings = []
     if margins and (median := float(np.median(margins))) < 0.0:
         warnings.append(f"statically unstable (median static margin {median:.3f} m: the centre of mass outside the "
                         "stance feet's polygon more than half the time)")
-    distance = summary.distance_m or 0.0
-    slip = float(foot_slip(feet, contact).mean())
+    # the distance walked: the body's path sampled once per gait cycle (a turn or a closed path counts, the sway
+    # within a step does not), not the straight line from start to end (a square path back to its start has none)
+    distance = cycle_path_length(metrics.window_path(log.position[:, :2], rows), summary.step_period_cycles or 1)
+    slip = float(metrics.foot_slip(feet, contact).mean())
     if not summary.no_progress and distance > 0.0 and slip > SLIP_SHARE * distance:
         warnings.append(f"feet slip {slip:.3f} m each over {distance:.3f} m walked ({100 * slip / distance:.0f} %, "
                         f"above {100 * SLIP_SHARE:.0f} %)")
