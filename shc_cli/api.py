@@ -8,12 +8,18 @@ and its log as arrays. Exported lazily from :mod:`shc_cli`; see docs/python-api.
 
 from __future__ import annotations
 
+import functools
+import re
+import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, ParamSpec, TypeVar
+
+from shc_cli.errors import OutputError
 
 if TYPE_CHECKING:
-    from collections.abc import Callable, Sequence
+    from collections.abc import Sequence
     from typing import Unpack
 
     from shc_cli.domain.bringup.check import CheckReport
@@ -31,6 +37,39 @@ if TYPE_CHECKING:
     from shc_cli.record.summary import RunSummary
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
+
+P = ParamSpec("P")
+T = TypeVar("T")
+
+_API_WORDS = ((r"add --overwrite\b", "pass overwrite=True"), (r"--overwrite\b", "overwrite=True"),
+              (r"another --out\b", "another out"), (r"--out\b", "out"), (r"--resume\b", "resume=True"))
+"""The CLI's option names in an output error, as the API's arguments (``add --overwrite`` → ``pass
+overwrite=True``)."""
+
+
+def api_words(text: str) -> str:
+    """An error message's CLI options (``--overwrite``, ``--out``, ``--resume``) as this API's arguments."""
+    for option, argument in _API_WORDS:
+        text = re.sub(option, argument, text)
+    return text
+
+
+def _api_errors(function: Callable[P, T]) -> Callable[P, T]:
+    """``function`` with its output errors naming the API's arguments, not the CLI's options — when a user's code
+    calls it; shc's own commands call the same functions and keep the CLI's words (``--overwrite``)."""
+
+    @functools.wraps(function)
+    def wrapped(*args: P.args, **kwargs: P.kwargs) -> T:
+        try:
+            return function(*args, **kwargs)
+        except OutputError as error:
+            caller = str(sys._getframe(1).f_globals.get("__name__", ""))
+            if caller == "shc_cli" or caller.startswith("shc_cli."):
+                raise
+            raise OutputError(api_words(str(error))) from None
+
+    return wrapped
+
 
 Velocity = str | tuple[float, float, float]
 """A velocity input ``"VX,VY,WZ"`` or ``(vx, vy, wz)`` in the robot's input mode (throttle −1..1 or m/s, rad/s)
@@ -124,6 +163,7 @@ def _velocity(value: Velocity) -> str:
     return value if isinstance(value, str) else ",".join(repr(float(v)) for v in value)
 
 
+@_api_errors
 def plan(robot: str | Path = "bullet", *, gait: str | None = None, velocity: Velocity = "1,0,0",
          duration: float | None = None, commands: Path | str | None = None, out: Path | str | None = None,
          plots: bool = True, overwrite: bool = False, live: bool = False, live_port: int = 8765,
@@ -138,6 +178,7 @@ def plan(robot: str | Path = "bullet", *, gait: str | None = None, velocity: Vel
     return Run(result.path, result.summary)
 
 
+@_api_errors
 def simulate(robot: str | Path | None = None, *, config: SimulationConfig | None = None,
              progress: OnProgress | None = None, **options: Unpack[SimulationOptions]) -> Run:
     """``shc simulate``: the controller on the robot in physics; keywords are ``shc simulate``'s options
@@ -180,6 +221,7 @@ def open_run(path: Path | str) -> RunLog:
     return read(path)
 
 
+@_api_errors
 def sweep(file: Path | str, *, workers: int | None = None, executor: str = "local", scheduler: str | None = None,
           out: Path | str | None = None, resume: bool = False, overwrite: bool = False, engine: str | None = None,
           progress: OnRow | None = None) -> SweepResult:
@@ -194,6 +236,7 @@ def sweep(file: Path | str, *, workers: int | None = None, executor: str = "loca
     return SweepResult(report.path, _table(report.path / "results.csv"), report)
 
 
+@_api_errors
 def optimize(file: Path | str, *, trials: int | None = None, workers: int | None = None, executor: str = "local",
              scheduler: str | None = None, out: Path | str | None = None, resume: bool = False,
              overwrite: bool = False) -> StudyResult:
@@ -205,6 +248,7 @@ def optimize(file: Path | str, *, trials: int | None = None, workers: int | None
     return StudyResult(report.path, _table(report.path / "trials.csv"), _table(report.path / "pareto.csv"), report)
 
 
+@_api_errors
 def fit(runs: Sequence[Path | str] | Path | str, *, robot: str | Path = "bullet", params: str | list[str] | None = None,
         engine: str = "mujoco", out: Path | str | None = None, scenario: str = "WG", by: str = "model",
         max_evaluations: int = 30, seconds: float | None = None, plots: bool = True,
@@ -224,6 +268,7 @@ def fit(runs: Sequence[Path | str] | Path | str, *, robot: str | Path = "bullet"
     return run(config)
 
 
+@_api_errors
 def fit_plan(robot: str | Path = "bullet", *, out: Path | str | None = None, overwrite: bool = False) -> Path:
     """``shc fit --plan``: write the recommended excitation for a fit of ``robot``'s servos, a plan script for
     ``run-hw --commands`` (:func:`shc_cli.domain.excitation.write_plan`), to ``out`` (default ``fit-plan.toml``;

@@ -72,6 +72,15 @@ def _tight(figure: Any) -> None:
     figure.set_layout_engine(None)
 
 
+def fitted_title(axes: Any, text: str, fontsize: float = 10.0) -> None:
+    """``axes.set_title(text)`` wrapped to the figure's width (a long title was cut at the figure's edges: the
+    Pareto plot's "…40 complete"): lines of at most the characters of ``fontsize`` that fit across the figure."""
+    import textwrap
+
+    columns = int(axes.figure.get_figwidth() * 72.0 / (0.6 * fontsize))  # 72 points an inch; a glyph ≈ 0.6 em
+    axes.set_title(textwrap.fill(text, max(20, columns - 4)), fontsize=fontsize)
+
+
 SWING_COLOUR = "black"
 """Gait diagrams (paper Fig. 5): a leg in swing is a black bar, in stance white (left blank); start-up is grey."""
 STANCE_COLOUR = "white"
@@ -379,15 +388,16 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
             if len(polygon) >= 3:
                 closed = np.vstack([polygon, polygon[:1]])
                 axes.plot(closed[:, 0], closed[:, 1], color="0.75", lw=0.5)
-        axes.plot(com[:, 0], com[:, 1], lw=1.0, label="centre of mass")
-        if np.isfinite(zmp).any():
-            axes.plot(zmp[:, 0], zmp[:, 1], lw=0.6, label="ZMP (eq. 32)")
+        if np.isfinite(zmp).any():  # dots, not a line: the ZMP jumps between feet as contacts change
+            axes.plot(zmp[:, 0], zmp[:, 1], ".", ms=3.0, alpha=0.5, color="tab:orange", mew=0,
+                      label="ZMP (eq. 32), one dot per cycle")
+        axes.plot(com[:, 0], com[:, 1], lw=1.4, color="black", zorder=3, label="centre of mass")
         axes.set_aspect("equal", adjustable="datalim")
         axes.set_xlabel("x [m]")
         axes.set_ylabel("y [m]")
         axes.set_title(f"{_label(result)} ({_robots_and_gaits([result])}): ZMP and CoM over the support polygons",
                        fontsize=9)
-        axes.legend(fontsize=7)
+        axes.legend(fontsize=7, markerscale=3.0)
         _tight(figure)
         path = folder / f"zmp_{_label(result)}.png"
         _save(figure, path)
@@ -400,10 +410,16 @@ def plot_analysis(results: list[dict[str, Any]], runs: list[Any], folder: Path) 
         for result, run in margined:
             series = result["_series"]
             t = run.t[series["rows"]]
-            line = axes.plot(t, series["margin"], lw=0.7, label=f"{_label(result)}: CoM")[0]
+            few = series["contact"].sum(axis=1) < 3  # a point or a segment of feet: no polygon to have a margin to
+            line = axes.plot(t, np.where(few, np.nan, series["margin"]), lw=0.7, label=f"{_label(result)}: CoM")[0]
             if np.isfinite(series["zmp_margin"]).any():
-                axes.plot(t, series["zmp_margin"], lw=0.5, ls="--", color=line.get_color(),
+                axes.plot(t, np.where(few, np.nan, series["zmp_margin"]), lw=0.5, ls="--", color=line.get_color(),
                           label=f"{_label(result)}: ZMP")
+            if few.any():
+                axes.fill_between(t, 0.0, 1.0, where=few, step="mid", transform=axes.get_xaxis_transform(),
+                                  color=line.get_color(), alpha=0.15, lw=0,
+                                  label=f"{_label(result)}: fewer than 3 feet in contact ({100 * few.mean():.0f} % "
+                                        "of the window; margins not drawn)")
         axes.axhline(0.0, color="0.3", lw=0.6)
         written.append(_finish_time_plot(figure, axes, "margin to the support polygon [m]",
                                          folder / "stability.png", f"{_robots_and_gaits([r for r, _ in margined])}: "

@@ -79,7 +79,7 @@ def test_stdin_lines_hold_until_changed_and_the_watchdog_zeroes_the_velocity() -
     lines = io.StringIO('{"velocity": [0.5, 0, 0.1], "pose_velocity": [0, 0, 1, 0, 0, 0]}\n{"state": "ready"}\n'
                         '{"state": "flying"}\n{"gait": "wave"}\n')
     source = StdinInput(lines, watchdog_s=0.2, load_gait=lambda name: load_gait(name).gait)
-    deadline = time.monotonic() + 5.0
+    deadline = time.monotonic() + 60.0  # only a failure waits this long (a loaded machine may take seconds)
     while not source.finished and time.monotonic() < deadline:
         time.sleep(0.01)
     assert source.finished and source.next() is None  # end of input
@@ -171,7 +171,7 @@ def test_gamepad_is_found_read_and_its_loss_stops_the_robot(monkeypatch: pytest.
     monkeypatch.setattr(evdev, "InputDevice", lambda path: (_Keyboard if path.endswith("3") else _FakeGamepad)(path))
     pad = GamepadInput()  # the keyboard (no sticks) is skipped
     assert pad.device.path == "/dev/input/event7"
-    deadline = time.monotonic() + 5.0
+    deadline = time.monotonic() + 60.0  # only a failure waits this long (a loaded machine may take seconds)
     while pad.state != RobotState.PACKED and time.monotonic() < deadline:
         time.sleep(0.01)
     command = pad.next()

@@ -293,6 +293,13 @@ def test_the_api_returns_the_study_and_prints_nothing(tmp_path: Path, capsys: py
     assert (report.ran, report.complete, report.workers, report.executor) == (2, 2, 1, "local")
     assert report.feasible == sum(r["feasible"] == "True" for r in result.trials)
     assert 0.0 < report.overhead_s < report.elapsed_s
+    # the storage is closed: SQLite's write-ahead log is checkpointed into study.db, nothing beside it (issue 42)
+    assert sorted(p.name for p in out.glob("study.db*")) == ["study.db"]
+    import sqlite3
+    from contextlib import closing
+
+    with closing(sqlite3.connect(out / "study.db")) as db:  # and study.db alone holds every trial
+        assert db.execute("SELECT COUNT(*) FROM trials").fetchone() == (2,)
 
 
 @pytest.mark.slow  # whole studies of simulated trials

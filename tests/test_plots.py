@@ -194,3 +194,110 @@ def test_pareto_projection_of_three_objectives_draws_no_front_line(tmp_path: Pat
     labels = _legend_texts(figures["pareto_cot__mean_speed_mps.png"])
     assert any("on the 3-objective Pareto front" in label for label in labels)
     assert "non-dominated in cot and mean_speed_mps (1)" in labels
+
+
+def _inside_figure(figure: Any, text: Any) -> bool:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas: Any = FigureCanvasAgg(figure)  # a closed pyplot figure keeps only a base canvas
+    canvas.draw()
+    box = text.get_window_extent(renderer=canvas.get_renderer())
+    return bool(box.x0 >= 0.0 and box.x1 <= figure.bbox.width and box.y1 <= figure.bbox.height)
+
+
+def test_a_long_pareto_title_is_wrapped_inside_the_figure(tmp_path: Path, figures: dict[str, Any]) -> None:
+    """Issue 42 point 14: "bullet_flat: stability_margin_median_m vs displacement_speed_mps, 40 complete trials" was
+    cut at both edges of the figure."""
+    from shc_cli.domain.optimize.plots import plot_parallel, plot_pareto_pairs
+    from shc_cli.spec.study import Study
+
+    study = Study(path=tmp_path / "s.toml", name="bullet_flat", description="", robot="bullet", engine="mujoco",
+                  seeds=(0,), skip=0.0, trials=None, fixed={}, space=[],
+                  objectives={"displacement_speed_mps": "maximize", "stability_margin_median_m": "maximize"},
+                  constraints=[], sampler="nsga2", sampler_seed=1, population=None)
+    rows = [{"trial": n, "state": "complete", "feasible": True, "displacement_speed_mps": 0.1 * n,
+             "stability_margin_median_m": 0.2 - 0.01 * n} for n in range(40)]
+    plot_pareto_pairs(study, rows, rows[:3], tmp_path)
+    plot_parallel(study, rows, rows[:3], tmp_path / "parallel.png")
+    for name in ("pareto_displacement_speed_mps__stability_margin_median_m.png", "parallel.png"):
+        axes = figures[name].axes[0]
+        assert "40 complete trials" in axes.get_title().replace("\n", " ") or name == "parallel.png"
+        assert _inside_figure(figures[name], axes.title), f"{name}: {axes.get_title()!r} is cut"
+
+
+def _walk_series(n: int = 200) -> tuple[list[dict[str, Any]], list[Any]]:
+    """An analysed run by hand: a tripod whose measured contacts drop to one foot for 20 cycles (a stance foot
+    chattering at a transition), with the CoM and ZMP a margin inside the feet otherwise."""
+    from types import SimpleNamespace
+
+    t = np.arange(n) * 0.01
+    feet = np.zeros((n, 6, 3))
+    feet[:, :, 0] = np.array([0.3, 0.0, -0.3, -0.3, 0.0, 0.3]) + 0.001 * np.arange(n)[:, None]
+    feet[:, :, 1] = np.array([-0.2, -0.3, -0.2, 0.2, 0.3, 0.2])
+    contact = np.tile(np.array([True, False, True, False, True, False]), (n, 1))
+    contact[100:120] = [True, False, False, False, False, False]
+    com = np.column_stack([0.001 * np.arange(n), np.zeros(n), np.full(n, 0.2)])
+    margin = np.where(contact.sum(axis=1) < 3, -0.33, 0.1)
+    series = {"rows": np.arange(n), "margin": margin, "zmp": com[:, :2] + 0.01, "zmp_margin": margin - 0.01,
+              "feet": feet, "com": com, "contact": contact, "tracks": None,
+              "cycles": {"height": np.zeros(0), "roll_rate": np.zeros(0), "pitch_rate": np.zeros(0)}}
+    result = {"run": "walk", "robot": "athena", "gait": "tripod", "step_frequency_hz": 1.0, "_series": series}
+    return [result], [SimpleNamespace(t=t, power=None, summary=SimpleNamespace(terrain="flat"))]
+
+
+def test_margins_are_not_drawn_where_fewer_than_three_feet_touch(tmp_path: Path, figures: dict[str, Any]) -> None:
+    """Issue 42 point 14: ATHENA's stability plot showed CoM margin spikes of −0.33 m on a run that did not fall —
+    the samples where the contact sensors had one or two feet down (a point or a segment: no support polygon, the
+    margin is minus the distance to it). They are shaded and named instead."""
+    from shc_cli.plots import plot_analysis
+
+    results, runs = _walk_series()
+    plot_analysis(results, runs, tmp_path)
+    axes = figures["stability.png"].axes[0]
+    com = next(line for line in axes.get_lines() if line.get_label() == "walk: CoM")
+    drawn = com.get_ydata()
+    assert np.isnan(drawn[100:120]).all() and np.nanmin(drawn) == pytest.approx(0.1)
+    assert axes.get_ylim()[0] > -0.1  # the −0.33 m samples do not set the axis
+    assert "walk: fewer than 3 feet in contact (10 % of the window; margins not drawn)" in _legend_texts(
+        figures["stability.png"])
+
+
+def test_the_centre_of_mass_is_drawn_over_the_zmp(tmp_path: Path, figures: dict[str, Any]) -> None:
+    """The ZMP plot's "centre of mass" line was invisible under the ZMP's line: the ZMP is dots, the CoM a black
+    line on top."""
+    from matplotlib.colors import to_rgba
+
+    from shc_cli.plots import plot_analysis
+
+    results, runs = _walk_series()
+    plot_analysis(results, runs, tmp_path)
+    lines = {line.get_label(): line for line in figures["zmp_walk.png"].axes[0].get_lines()}
+    com, zmp = lines["centre of mass"], lines["ZMP (eq. 32), one dot per cycle"]
+    assert com.get_zorder() > zmp.get_zorder() and to_rgba(com.get_color()) == to_rgba("black")
+    assert zmp.get_linestyle() == "None" and zmp.get_marker() == "."
+
+
+def test_fits_joint_grids_say_their_time_axis(tmp_path: Path, figures: dict[str, Any]) -> None:
+    """Issue 42 point 14: fit's position and torque grids (one panel per joint) had no time label; the bottom panel
+    of every column shows the times (the one above an empty cell too)."""
+    from types import SimpleNamespace
+
+    from shc_cli.domain.fit.outputs import plot_fit
+
+    n, joints = 50, 7  # two rows of five: columns 3–5 end above an empty cell
+    wave = np.sin(np.linspace(0.0, 3.0, n))[:, None] * np.ones((1, joints))
+    recording = SimpleNamespace(position=wave, torque=wave, current=None, power=None, dt=0.01,
+                                path=tmp_path / "run")
+    simulated = SimpleNamespace(channel=lambda _: wave * 0.9, power=np.full(n, 10.0))
+    plot_fit(recording, simulated, simulated, [f"j{k}" for k in range(joints)], tmp_path,  # type: ignore[arg-type]
+             "01_run")
+    for name in ("01_run_position.png", "01_run_torque.png"):
+        figure = figures[name]
+        assert figure._supxlabel is not None and figure._supxlabel.get_text() == "time [s]", name
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        FigureCanvasAgg(figure).draw()
+        shown = [axis for axis in figure.axes if axis.axison and any(
+            label.get_visible() and label.get_text() for label in axis.get_xticklabels())]
+        assert len(shown) == 5, name  # one per column: j5, j6 in row 2 and j2, j3, j4 above the empty cells
+        assert _inside_figure(figure, figure._supxlabel), name

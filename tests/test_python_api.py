@@ -57,3 +57,22 @@ def test_errors_are_exceptions_not_exits(tmp_path: Path) -> None:
         shc_cli.simulate(scenario="XX", out=tmp_path / "x")
     with pytest.raises(shc_cli.ShcError):
         shc_cli.load_robot("no_such_robot")
+
+
+def test_an_output_error_names_the_api_argument_not_the_cli_option(tmp_path: Path,
+                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 42 point 12: a second run into the same folder said "add --overwrite", an option the API does not
+    have."""
+    import shc_cli
+    from shc_cli import api
+    from shc_cli.errors import OutputError
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "runs" / "twice").mkdir(parents=True)
+    with pytest.raises(OutputError) as refused:
+        shc_cli.plan("bullet", duration=0.5, out="runs/twice", plots=False)
+    message = str(refused.value)
+    assert message == "runs/twice: already exists (pass overwrite=True to replace it, or choose another out)"
+    assert "--" not in message
+    with pytest.raises(OutputError, match=r"already exists \(pass overwrite=True"):
+        api.fit_plan("bullet", out=tmp_path / "runs" / "twice")

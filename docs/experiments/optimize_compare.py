@@ -1,9 +1,9 @@
 """docs/experiments/optimize.md: the bullet_flat study's front vs the CoT grid, and three Pareto points re-simulated.
 
-Run (after `shc optimize studies/bullet_flat.toml --out runs/bullet_flat` and
+Run (after `shc optimize docs/experiments/bullet_flat_openshc.toml --out runs/bullet_flat_openshc` and
 `shc sweep docs/experiments/bullet_cot_10s.toml --out runs/bullet_cot_10s`):
 
-    .venv/bin/python docs/experiments/optimize_compare.py runs/bullet_flat runs/bullet_cot_10s [--recheck]
+    .venv/bin/python docs/experiments/optimize_compare.py runs/bullet_flat_openshc runs/bullet_cot_10s [--recheck]
 
 Prints (Markdown) the grid's feasible CoT–speed front and, for each of its points, the study's lowest CoT among its
 feasible trials at equal or higher speed; writes docs/experiments/img/optimize_vs_grid.png. The grid's runs get the

@@ -248,6 +248,15 @@ def feet_and_com(run: RunLog, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return feet, com
 
 
+def foot_slip(feet: np.ndarray, contact: np.ndarray) -> np.ndarray:
+    """Per foot, how far it moved horizontally between consecutive samples both in contact [m] (``feet``: (N, legs,
+    3) world positions, ``contact``: (N, legs))."""
+    both = contact[1:] & contact[:-1]
+    moved = np.linalg.norm(feet[1:, :, :2] - feet[:-1, :, :2], axis=2)
+    result: np.ndarray = (moved * both).sum(axis=0)
+    return result
+
+
 def _median_iqr(values: np.ndarray) -> tuple[float | None, float | None]:
     values = values[np.isfinite(values)]
     if len(values) == 0:
@@ -326,9 +335,7 @@ def analyze_run(run: RunLog, window: Window = Window()) -> dict[str, Any]:
     out["duty_factor_per_leg"] = {leg: float(v) for leg, v in zip(run.legs, per_leg, strict=True)}
 
     feet, com = feet_and_com(run, rows)
-    both = contact[1:] & contact[:-1]
-    moved = np.linalg.norm(feet[1:, :, :2] - feet[:-1, :, :2], axis=2)
-    slip = (moved * both).sum(axis=0)
+    slip = foot_slip(feet, contact)
     out["foot_slip_m"] = float(slip.mean())
     out["foot_slip_per_leg_m"] = {leg: float(v) for leg, v in zip(run.legs, slip, strict=True)}
 

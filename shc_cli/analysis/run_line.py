@@ -5,6 +5,10 @@ A figure of a run with too little walking (a 1 ms run, a Ctrl-C during start-up,
 anywhere) is not a number: the line says "not enough walking to measure" instead of ``CoT None`` or a mean power
 of 0.0 W, and a run flagged NO PROGRESS prints no CoT (dividing its power by a speed near zero gives a figure that
 means nothing). The air and standing scenarios (SA, WA, SG) have no walking by design: their line is the power.
+
+A walk that went somewhere but badly says so (:func:`walk_warnings`): statically unstable (the centre of mass
+outside the stance feet's support polygon more than half the time) or slipping (the feet slide more than
+:data:`SLIP_SHARE` of the distance walked) — an imported robot can walk a metre that way and look fine.
 """
 
 from __future__ import annotations
@@ -21,6 +25,12 @@ NOT_MEASURED = "not enough walking to measure"
 """What the line says for a figure the run cannot give."""
 GENERIC_SERVOS = "note: generic servos — power is indicative"
 """Appended once when the robot file gives no ``[servo]``: power and CoT then come from default servo figures."""
+
+
+SLIP_SHARE = 0.15
+"""Foot slip (per foot, while in contact) per metre walked above which the line warns: below 0.10 for every bundled
+robot walking 10 s on flat ground (bullet 0.064, athena 0.075, octopod 0.025; tests/test_walk_warnings.py), 0.26 for
+the imported PhantomX of docs/your-robot.md on AX-12A servos."""
 
 
 def generic_servos(robot_servo_model: str | None) -> bool:
@@ -58,10 +68,49 @@ def simulation_line(summary: RunSummary, terrain: str, path: Path, note: str = "
         line += ", FELL"
     elif walking:
         line += progress_note(summary)
+        if window > 0.0:
+            line += "".join(f", warning: {warning}" for warning in walk_warnings(path, summary))
     line += path_note(summary) + speed_note(summary) + note
     if generic_servos(summary.servo_model):
         line += f" ({GENERIC_SERVOS})"
     return f"{line} → {path}"
+
+
+def walk_warnings(path: Path, summary: RunSummary) -> list[str]:
+    """What was wrong with a walk that did not fall, from its log in ``path`` (the RUNNING window ``shc analyze``
+    measures, with its figures): a negative median static margin, foot slip above :data:`SLIP_SHARE` of the
+    distance walked (not for a run flagged NO PROGRESS: no distance to share). Nothing when the log cannot be
+    read."""
+    import numpy as np
+
+    from shc_cli.analysis import metrics
+    from shc_cli.analysis.progress import cycle_path_length
+    from shc_cli.errors import ShcError
+    from shc_cli.loop.opening import open_run
+
+    try:
+        log = open_run(path)
+    except (ShcError, OSError):
+        return []
+    rows = np.flatnonzero(metrics.window_mask(log, metrics.Window()))
+    if len(rows) < 2:
+        return []
+    feet, com = metrics.feet_and_com(log, rows)
+    contact = log.contact[rows]
+    margins = [metrics.edge_margin(metrics.support_polygon(feet[i, down, :2]), com[i, :2])
+               for i, down in enumerate(contact) if down.any()]
+    warnings = []
+    if margins and (median := float(np.median(margins))) < 0.0:
+        warnings.append(f"statically unstable (median static margin {median:.3f} m: the centre of mass outside the "
+                        "stance feet's polygon more than half the time)")
+    # the distance walked: the body's path sampled once per gait cycle (a turn or a closed path counts, the sway
+    # within a step does not), not the straight line from start to end (a square path back to its start has none)
+    distance = cycle_path_length(metrics.window_path(log.position[:, :2], rows), summary.step_period_cycles or 1)
+    slip = float(metrics.foot_slip(feet, contact).mean())
+    if not summary.no_progress and distance > 0.0 and slip > SLIP_SHARE * distance:
+        warnings.append(f"feet slip {slip:.3f} m each over {distance:.3f} m walked ({100 * slip / distance:.0f} %, "
+                        f"above {100 * SLIP_SHARE:.0f} %)")
+    return warnings
 
 
 def plan_line(summary: RunSummary, path: Path, note: str = "") -> str:

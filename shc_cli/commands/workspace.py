@@ -51,17 +51,20 @@ def _option_issue(option: str, problem: str, fix: str) -> Issue:
     return Issue(None, None, option, problem, fix)
 
 
-def terminal_width() -> int | None:
-    """Columns of the terminal (or ``$COLUMNS``); ``None`` when printing to a pipe or file (no wrapping)."""
+def terminal_width() -> int:
+    """Columns of the terminal (or ``$COLUMNS``); :data:`PIPE_WIDTH` when printing to a pipe or file (a 5° grid
+    was one 770-character line per row)."""
     import shutil
 
     columns = shutil.get_terminal_size((0, 0)).columns
-    return columns if columns > 0 else None
+    return columns if columns > 0 else PIPE_WIDTH
 
 
 LABEL_WIDTH = 49
 """Characters before the first per-bearing column of the workspace table."""
 CELL_WIDTH = 9
+PIPE_WIDTH = LABEL_WIDTH + 8 * CELL_WIDTH
+"""The table's width in a pipe: blocks of eight bearings, OpenSHC's 45° grid (the default table, unwrapped)."""
 
 
 def render_table(report: WorkspaceReport, width: int | None = None) -> str:
@@ -84,7 +87,7 @@ def render_table(report: WorkspaceReport, width: int | None = None) -> str:
     for first in range(0, len(bearings), per_block):
         lines += ["", *_block(report, bearings[first:first + per_block])]
     lines.append(f"walkspace area {report.walkspace_area():.4f} m², stride {report.walkspace_stride():.4f} m "
-                 "(the OpenSHC paper's Table II figure)")
+                 "(measured as the OpenSHC paper's Table II does for Bullet)")
     lines.append(f"time to max stride {report.limits.time_to_max_stride:.3f} s, "
                  f"stance radius {report.limits.stance_radius:.4f} m")
     return "\n".join(lines)

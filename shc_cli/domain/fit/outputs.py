@@ -104,9 +104,14 @@ def plot_fit(recording: Recording, before: Simulated, after: Simulated, names: l
             ax.tick_params(labelsize=6)
         for j in range(count, rows * columns):
             axes[j // columns][j % columns].axis("off")
+            if j >= columns:  # the panel above an empty one is the bottom of its column: its times are shown
+                axes[j // columns - 1][j % columns].xaxis.set_tick_params(labelbottom=True)
         axes[0][0].legend(fontsize=6)
         figure.suptitle(f"{recording.path.name}: {channel} [{UNITS[channel]}], measured and simulated", fontsize=9)
-        figure.subplots_adjust(left=0.05, right=0.99, bottom=0.04, top=0.92, wspace=0.25, hspace=0.45)
+        figure.supxlabel("time [s]", fontsize=8)
+        height = 1.8 * rows + 0.6  # [in]: room below for the tick labels and the time label, above for the titles
+        figure.subplots_adjust(left=0.05, right=0.99, bottom=0.5 / height, top=1.0 - 0.55 / height, wspace=0.25,
+                               hspace=0.45)
         path = folder / f"{stem}_{channel}.png"
         figure.savefig(path)
         plt.close(figure)

@@ -32,7 +32,7 @@ from typing import TYPE_CHECKING, Any
 from shc_cli.domain.optimize.checks import check_study
 from shc_cli.domain.optimize.evaluate import ATTRIBUTE, evaluate, metric_keys, stored
 from shc_cli.domain.optimize.outputs import write_outputs
-from shc_cli.domain.optimize.storage import STORAGE, open_study, prepare_output
+from shc_cli.domain.optimize.storage import STORAGE, close_study, open_study, prepare_output
 from shc_cli.domain.sweeps.checks import check_executor
 from shc_cli.domain.sweeps.points import clear_stop
 from shc_cli.domain.sweeps.pool import RunPool
@@ -203,11 +203,13 @@ def run_optimize(file: Path, trials: int | None = None, workers: int | None = No
                     ran += 1
                 write_outputs(spec, out, study.get_trials(deepcopy=False), figures=False)
                 coordinator += time.perf_counter() - ended
+        rows_all, front = write_outputs(spec, out, study.get_trials(deepcopy=False), figures=True)
     except KeyboardInterrupt as error:
         write_outputs(spec, out, study.get_trials(deepcopy=False), figures=False)
         done = sum(1 for t in study.get_trials(deepcopy=False) if t.state.is_finished())
         raise Interrupted(f"{done} trials finished, kept in {out / STORAGE} and {out / 'trials.csv'}; continue "
                           "with --resume", signal_name(error)) from None
-    rows_all, front = write_outputs(spec, out, study.get_trials(deepcopy=False), figures=True)
+    finally:
+        close_study(study)
     return StudyReport(spec.name, out, rows_all, front, ran, count, executor, time.perf_counter() - started,
                        coordinator)

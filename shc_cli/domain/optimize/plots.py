@@ -12,6 +12,8 @@ import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from shc_cli.plots import fitted_title
+
 if TYPE_CHECKING:
     import optuna
 
@@ -84,7 +86,7 @@ def plot_pareto_pairs(study: Study, rows: list[Row], front: list[Row], out: Path
                 axes.annotate(str(n), (x, y), textcoords="offset points", xytext=(4, 3), fontsize=6, color="tab:red")
         axes.set_xlabel(_label(study, a))
         axes.set_ylabel(_label(study, b))
-        axes.set_title(f"{study.name}: {b} vs {a}, {len(complete)} complete trials")
+        fitted_title(axes, f"{study.name}: {b} vs {a}, {len(complete)} complete trials")
         axes.grid(True, lw=0.3)
         axes.legend(fontsize=8)
         figure.tight_layout()
@@ -155,8 +157,8 @@ def plot_parallel(study: Study, rows: list[Row], front: list[Row], path: Path) -
                          ha="right")
     axes.set_yticks([])
     axes.set_ylim(-0.08, 1.1)
-    axes.set_title(f"{study.name}: {len(feasible)} feasible trials (red: Pareto front), colour = "
-                   f"{next(iter(study.objectives))}")
+    fitted_title(axes, f"{study.name}: {len(feasible)} feasible trials (red: Pareto front), colour = "
+                 f"{next(iter(study.objectives))}")
     figure.tight_layout()
     figure.savefig(path, format="png")
     plt.close(figure)
@@ -210,8 +212,8 @@ def plot_importance(study: Study, trials: list[optuna.trial.FrozenTrial], path: 
     axes.set_xlabel("importance for reaching the best 10 % of the objective (PED-ANOVA, sums to 1)")
     complete = sum(1 for t in trials if t.state.name == "COMPLETE")
     few = complete < FEW_TRIALS
-    axes.set_title(f"{study.name}: parameter importance over {complete} complete trials"
-                   + ("" if values else " (too few to tell)"))
+    fitted_title(axes, f"{study.name}: parameter importance over {complete} complete trials"
+                 + ("" if values else " (too few to tell)"))
     if values and few:
         axes.text(0.5, 0.02, f"only {complete} trials (fewer than {FEW_TRIALS}): the best 10 % is "
                   f"{max(1, complete // 10)} trial(s) — these shares are not to be trusted", transform=axes.transAxes,

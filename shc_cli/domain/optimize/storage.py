@@ -81,6 +81,26 @@ def open_study(spec: Study, out: Path, resume: bool) -> optuna.study.Study:
     except optuna.exceptions.DuplicatedStudyError:
         raise OutputError(f"{out / STORAGE}: already holds study '{spec.name}' (add --resume)") from None
     if list(d.name.lower() for d in study.directions) != directions:
+        close_storage(storage)
         raise SpecError([Issue(spec.path, None, "objectives", f"the stored study in {out / STORAGE} has other "
                                "objectives", "resume with the same study file, or choose another --out")])
+    _OPEN[id(study)] = storage
     return study
+
+
+_OPEN: dict[int, optuna.storages.RDBStorage] = {}
+"""The storage of each study :func:`open_study` opened and :func:`close_study` has not closed, by ``id(study)``."""
+
+
+def close_storage(storage: optuna.storages.RDBStorage) -> None:
+    """Close every connection to the SQLite file: the last one checkpoints the write-ahead log into ``study.db``
+    and removes ``study.db-wal`` and ``study.db-shm`` (a finished study left them beside it)."""
+    storage.remove_session()
+    storage.engine.dispose()
+
+
+def close_study(study: optuna.study.Study) -> None:
+    """Close the storage of a study :func:`open_study` opened (once; then the study is not to be used)."""
+    storage = _OPEN.pop(id(study), None)
+    if storage is not None:
+        close_storage(storage)
