@@ -37,6 +37,8 @@ from shc_cli.ros import tcpros
 
 if TYPE_CHECKING:
     from shc_cli.ros.messages import MessageTypes
+    from shc_cli.ros.remote import RemoteInput
+    from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
 
@@ -124,6 +126,9 @@ class RosNode:
         RosError: the master does not answer.
     """
 
+    goal_topic = "/move_base_simple/goal"
+    program = "shc ros"
+
     def __init__(self, name: str, types: MessageTypes, master_uri: str | None = None, host: str | None = None) -> None:
         self.name = name if name.startswith("/") else "/" + name
         self.types = types
@@ -181,6 +186,9 @@ class RosNode:
         publishers = self._call("registerSubscriber", topic, msgtype, self.uri)
         assert isinstance(publishers, list)
         self._connect_publishers(subscription, [str(p) for p in publishers])
+
+    def serve_parameters(self, robot: Robot, remote: RemoteInput) -> None:
+        """Nothing: on ROS 1 OpenSHC's dynamic parameters change through the remote's parameter adjustment."""
 
     def get_param(self, key: str) -> object:
         """A parameter (a whole tree as nested dicts) from the master's parameter server."""
