@@ -13,14 +13,18 @@ read-only parameters.
 
 from __future__ import annotations
 
+import logging
 from typing import TYPE_CHECKING, Any
 
 from shc_cli.errors import Issue, SpecError
+from shc_cli.events import event
 from shc_cli.spec.robot import ADJUSTABLE, ADJUSTABLE_WALKER
 
 if TYPE_CHECKING:
     from shc_cli.ros.remote import RemoteInput
     from shc_cli.spec.robot import Robot
+
+log = logging.getLogger(__name__)
 
 DESCRIPTIONS = {
     "step_frequency": "step frequency [Hz]",
@@ -78,3 +82,5 @@ class Parameters:
         for parameter in parameters:
             if parameter.name in self.ranges:
                 self.remote.set_parameter(parameter.name, float(parameter.value))
+                event(log, logging.INFO, "parameter", "parameter %s set to %g (ROS 2 parameter client)",
+                      parameter.name, float(parameter.value))
