@@ -35,7 +35,7 @@ def main() -> None:
     result: dict[str, Any] = {"stamps": [], "received": [], "leg_states": 0, "leg_names": []}
 
     def call(kind: Any, service: str, request: Any) -> Any:
-        client = node.create_client(kind, f"/shc/{service}")
+        client: Any = node.create_client(kind, f"/shc/{service}")
         if not client.wait_for_service(timeout_sec=60.0):
             raise SystemExit(f"no /shc/{service}")
         future = client.call_async(request)

@@ -20,6 +20,7 @@ import contextlib
 import importlib
 import logging
 import os
+import struct
 import threading
 from collections.abc import Callable
 from pathlib import Path
@@ -37,6 +38,8 @@ log = logging.getLogger(__name__)
 INSTALL = "python3 -m uv pip install --python .venv -e '.[ros2]'"
 SENSOR_TOPICS = frozenset({"/joint_states", "/imu/data", "/tip_states"})
 """Subscribed best effort (a sensor driver's QoS); everything else reliable."""
+_FLOAT64 = struct.Struct("<HHd")
+"""A std_msgs/Float64 in CDR: the encapsulation (little-endian CDR, options 0) and the value."""
 GOAL_TOPIC = "/goal_pose"
 """RViz 2's goal tool publishes there (geometry_msgs/PoseStamped)."""
 
@@ -147,6 +150,8 @@ class Ros2Node:
         qos = QoSProfile(depth=100 if topic == "/tf" else 10, reliability=ReliabilityPolicy.RELIABLE,
                          durability=DurabilityPolicy.TRANSIENT_LOCAL if latch else DurabilityPolicy.VOLATILE)
         publisher = self._node.create_publisher(self.message_class(msgtype), topic, qos)
+        if name == "std_msgs/msg/Float64":  # the per-joint commands, most of a cycle's messages: CDR by hand
+            return Publisher2(publisher, lambda message: _FLOAT64.pack(0x0100, 0, message.data))  # type: ignore[attr-defined]
         serialize = self.store.serialize_cdr
         return Publisher2(publisher, lambda message: bytes(serialize(message, name)))
 
