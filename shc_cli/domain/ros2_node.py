@@ -29,7 +29,7 @@ def run_node2(config: NodeConfig, params_file: Path | None = None,
         raise SpecError([Issue(params_file, None, "--params-file", "no such file",
                                "give a ROS 2 parameter file (shc: ros__parameters: ...)")])
     if params_file is not None:
-        _check_params_file(params_file)
+        _check_ranges(config, _check_params_file(params_file))
 
     def open_node(c: NodeConfig) -> Node:
         from shc_cli.ros2.node import Ros2Node
@@ -39,7 +39,7 @@ def run_node2(config: NodeConfig, params_file: Path | None = None,
     return run_node(config, on_ready, open_node)
 
 
-def _check_params_file(path: Path) -> None:
+def _check_params_file(path: Path) -> dict[str, object]:
     """A ROS 2 parameter file: ``NODE: ros__parameters: {name: value}`` (rcl's parser would abort the process on
     worse, so it is read here first)."""
     from ruamel.yaml import YAML
@@ -56,3 +56,23 @@ def _check_params_file(path: Path) -> None:
                                              for v in tree.values()):
         raise SpecError([Issue(path, None, "--params-file", "not a ROS 2 parameter file",
                                "write NODE: ros__parameters: {name: value} (NODE: the node's name, or /**)")])
+    values: dict[str, object] = {}
+    for parameters in tree.values():
+        values.update(parameters["ros__parameters"])
+    return values
+
+
+def _check_ranges(config: NodeConfig, values: dict[str, object]) -> None:
+    """A dynamic parameter's start value outside the robot's range refuses the start before anything is written
+    (the node would refuse it too, with the run directory begun)."""
+    from shc_cli.errors import Issue, SpecError
+    from shc_cli.ros2.parameters import adjustable
+    from shc_cli.spec.loading import load_robot
+
+    ranges = adjustable(load_robot(config.robot).robot)
+    for name, value in values.items():
+        if name in ranges:
+            _, low, high = ranges[name]
+            if not isinstance(value, int | float) or isinstance(value, bool) or not low <= value <= high:
+                raise SpecError([Issue(None, None, f"--params-file: {name}", f"outside its range [{low:g}, "
+                                       f"{high:g}]", "give a value in the robot's range")])
