@@ -49,7 +49,13 @@ def main() -> None:
         return {"value": value, "successful": bool(answer.successful), "reason": str(answer.reason),
                 "time": time.monotonic()}
 
-    names = call(ListParameters, "list_parameters", ListParameters.Request()).result.names
+    names: list[str] = []
+    deadline = time.monotonic() + 60
+    while "swing_height" not in names:  # the services come up with the node, its parameters once the robot is read
+        if time.monotonic() > deadline:
+            raise SystemExit(f"/shc declared no swing_height (parameters: {names})")
+        time.sleep(0.2)
+        names = list(call(ListParameters, "list_parameters", ListParameters.Request()).result.names)
     result["parameters"] = sorted(names)
     described = call(DescribeParameters, "describe_parameters", DescribeParameters.Request(names=["swing_height"]))
     descriptor = described.descriptors[0]
@@ -84,8 +90,14 @@ def main() -> None:
     velocity.publish(walk)
     start = time.monotonic()
     inside = low + 0.75 * (high - low)
+    sent = start
     while time.monotonic() - start < seconds:
         rclpy.spin_once(node, timeout_sec=0.02)
+        if time.monotonic() - sent > 0.5:  # and at a rate, as syropod_remote (shc's subscriptions are volatile)
+            sent = time.monotonic()
+            system.publish(Int8(data=1))
+            state.publish(Int8(data=2))
+            velocity.publish(walk)
         if "in_range" not in result and time.monotonic() - start > seconds / 2:
             result["in_range"] = set_swing(inside)
             result["in_range"]["wall"] = time.time()

@@ -137,7 +137,7 @@ def test_a_raw_dds_reader_of_another_vendor_reads_desired_joint_states_from_the_
     env = dict(ros2_env, FASTDDS_DEFAULT_PROFILES_FILE=str(NO_TYPE_PROPAGATION))
     node = _node(env, 30, tmp_path / "run")
     wire = tmp_path / "wire.json"
-    reader = subprocess.Popen([sys.executable, str(ROOT / "tests" / "ros2_dds_reader.py"), "12", str(wire)],
+    reader = subprocess.Popen([sys.executable, str(ROOT / "tests" / "ros2_dds_reader.py"), "20", str(wire)],
                               env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     remote = subprocess.run([sys.executable, "-c", _OPERATIONAL], env=env, cwd=ROOT, capture_output=True,
                             text=True, timeout=120)
@@ -165,9 +165,9 @@ rclpy.init()
 node = rclpy.create_node("operational")
 qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 pub = node.create_publisher(Int8, "/syropod_remote/system_state", qos)
-pub.publish(Int8(data=1))
-end = time.monotonic() + 10
-while time.monotonic() < end:
+end = time.monotonic() + 20
+while time.monotonic() < end:  # as syropod_remote, at a rate (the node's command subscriptions are volatile)
+    pub.publish(Int8(data=1))
     rclpy.spin_once(node, timeout_sec=0.1)
 """
 
