@@ -62,8 +62,9 @@ def main() -> None:
     low, high = descriptor.floating_point_range[0].from_value, descriptor.floating_point_range[0].to_value
     result["swing_range"] = [low, high]
     result["swing_description"] = descriptor.description
-    got = call(GetParameters, "get_parameters", GetParameters.Request(names=["swing_height", "step_frequency"]))
-    result["swing_height"], result["step_frequency"] = (v.double_value for v in got.values)
+    wanted = ["swing_height", "step_frequency", "virtual_stiffness"]
+    got = call(GetParameters, "get_parameters", GetParameters.Request(names=wanted))
+    result.update({name: v.double_value for name, v in zip(wanted, got.values, strict=True)})
     result["out_of_range"] = set_swing(high + 0.05)
 
     reliable = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)

@@ -74,7 +74,9 @@ def _finish(node: subprocess.Popen[str]) -> tuple[str, str]:
 def test_an_rclpy_driver_walks_shc_ros2_reads_its_topics_and_sets_its_parameters(ros2_env: dict[str, str],
                                                                                    tmp_path: Path) -> None:
     run = tmp_path / "run"
-    node = _node(ros2_env, 45, run)
+    params = tmp_path / "params.yaml"  # a start value from a ROS 2 parameter file
+    params.write_text("/**:\n  ros__parameters:\n    virtual_stiffness: 35.0\n")
+    node = _node(ros2_env, 45, run, "--params-file", str(params))
     seen = tmp_path / "driver.json"
     driver = subprocess.run([sys.executable, str(ROOT / "tests" / "ros2_driver.py"), "24", str(seen)],
                             env=ros2_env, cwd=ROOT, capture_output=True, text=True, timeout=240)
@@ -93,6 +95,7 @@ def test_an_rclpy_driver_walks_shc_ros2_reads_its_topics_and_sets_its_parameters
     spec = robot.walker.swing_height
     assert r["swing_range"] == [spec.min, spec.max]
     assert r["swing_height"] == spec.default and r["step_frequency"] == robot.walker.step_frequency.default
+    assert r["virtual_stiffness"] == 35.0 != robot.admittance.virtual_stiffness.default
     assert not r["out_of_range"]["successful"] and "out of range" in r["out_of_range"]["reason"]
     assert r["in_range"]["successful"], r["in_range"]
     # ... and the accepted set changed the running controller: the swing apex is the new swing height
