@@ -21,6 +21,8 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from shc_cli.api import load_robot
 
@@ -194,3 +196,25 @@ def test_without_the_ros2_extra_shc_ros2_says_how_to_install_it(tmp_path: Path) 
     assert done.stderr.strip().splitlines() == ["error: shc ros2 needs ROS 2's rclpy: install the ros2 extra "
                                                 "(python3 -m uv pip install --python .venv -e '.[ros2]')"]
     assert not list(tmp_path.glob("run*"))
+
+
+def test_openshc_leg_state_hashes_as_the_issue_measured_it_from_a_colcon_build() -> None:
+    """The .msg files shipped (shc_cli/ros2/msg) are OpenSHC's: rosbags' RIHS01 of LegState is the hash the
+    colcon-built package advertised (RIHS01_82c8f902…c079), and TipState's fields are OpenSHC's."""
+    from shc_cli.ros2.node import store2
+
+    store = store2()
+    digest = store.hash_rihs01("syropod_highlevel_controller/msg/LegState")
+    assert digest == LEG_STATE_HASH and digest.startswith("RIHS01_82c8f902") and digest.endswith("c079")
+    fields = [name for name, _ in store.get_msgdef("syropod_highlevel_controller/msg/TipState").fields]
+    assert fields == ["header", "name", "wrench", "step_plane"]
+
+
+@given(st.floats(allow_nan=False))
+def test_the_per_joint_commands_hand_written_cdr_is_rosbags_cdr(value: float) -> None:
+    from rosbags.typesys.stores.ros2_kilted import std_msgs__msg__Float64 as Float64
+
+    from shc_cli.ros2.node import _FLOAT64, store2
+
+    expected = bytes(store2().serialize_cdr(Float64(data=value), "std_msgs/msg/Float64"))
+    assert _FLOAT64.pack(0x0100, 0, value) == expected

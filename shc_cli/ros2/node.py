@@ -17,6 +17,7 @@ publishers match. An executor thread serves the subscriptions and the parameter 
 from __future__ import annotations
 
 import contextlib
+import functools
 import importlib
 import logging
 import os
@@ -56,6 +57,7 @@ def _rclpy() -> Any:
     return rclpy
 
 
+@functools.cache
 def store2() -> Any:
     """rosbags' ROS 2 Kilted type store with OpenSHC's messages (their definitions in ``shc_cli/ros2/msg``)."""
     from rosbags.typesys import Stores, get_types_from_msg, get_typestore
