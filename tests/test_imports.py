@@ -127,7 +127,7 @@ LAYERS: dict[str, int] = {
     "shc_cli.control": 2,
     "shc_cli.backends": 3, "shc_cli.hardware": 3,
     "shc_cli.validation": 4, "shc_cli.loop": 4, "shc_cli.analysis": 4, "shc_cli.interop": 4, "shc_cli.ros": 4,
-    "shc_cli.live": 4, "shc_cli.plots": 4, "shc_cli.study_plots": 4,
+    "shc_cli.ros2": 4, "shc_cli.live": 4, "shc_cli.plots": 4, "shc_cli.study_plots": 4,
     "shc_cli.domain": 5, "shc_cli.replay": 5, "shc_cli.view": 5,
     "shc_cli.api": 6,
     "shc_cli.commands": 7,
