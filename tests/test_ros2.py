@@ -44,16 +44,20 @@ def ros2_env(tmp_path: Path) -> Iterator[dict[str, str]]:
             pytest.fail("rclpy or cyclonedds missing: .ci/run must install the ros2 extra and cyclonedds")
         pytest.skip("the ros2 extra is not installed (python3 -m uv pip install --python .venv -e '.[ros2]')")
     shm = Path("/dev/shm")
-    before = set(shm.glob("fastdds_*")) if shm.is_dir() else set()
+    before = _fastdds_files(shm)
     env = dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", ROS_DOMAIN_ID=str(random.randint(1, 100)),
                ROS_LOG_DIR=str(tmp_path / "ros_log"), ROS_HOME=str(tmp_path / "ros_home"), PYTHONPATH=str(ROOT))
     env.pop("ROS_LOCALHOST_ONLY", None)
     try:
         yield env
     finally:
-        if shm.is_dir():
-            for leftover in set(shm.glob("fastdds_*")) - before:
-                leftover.unlink(missing_ok=True)
+        for leftover in _fastdds_files(shm) - before:
+            leftover.unlink(missing_ok=True)
+
+
+def _fastdds_files(shm: Path) -> set[Path]:
+    """Fast DDS's shared-memory segments, port files and their semaphores."""
+    return {*shm.glob("fastdds_*"), *shm.glob("sem.fastdds_*")} if shm.is_dir() else set()
 
 
 def _node(env: dict[str, str], seconds: float, out: Path, *extra: str) -> subprocess.Popen[str]:
