@@ -181,6 +181,48 @@ while time.monotonic() < end:  # as syropod_remote, at a rate (the node's comman
 """
 
 
+_GOAL = """
+import time, rclpy
+from geometry_msgs.msg import PoseStamped
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from std_msgs.msg import Int8
+rclpy.init()
+node = rclpy.create_node("rviz2_goal_tool")
+qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+system = node.create_publisher(Int8, "/syropod_remote/system_state", qos)
+state = node.create_publisher(Int8, "/syropod_remote/robot_state", qos)
+goal = node.create_publisher(PoseStamped, "/goal_pose", qos)
+start, sent = time.monotonic(), False
+while time.monotonic() - start < 25:
+    system.publish(Int8(data=1))
+    state.publish(Int8(data=2))
+    if not sent and goal.get_subscription_count() and time.monotonic() - start > 8:
+        message = PoseStamped()
+        message.header.frame_id = "odom"
+        message.pose.position.x = 0.3
+        goal.publish(message)
+        sent = True
+    rclpy.spin_once(node, timeout_sec=0.1)
+assert sent
+"""
+
+
+@pytest.mark.slow
+def test_a_goal_from_rviz2s_goal_tool_is_walked_to(ros2_env: dict[str, str], tmp_path: Path) -> None:
+    """RViz 2's goal tool publishes geometry_msgs/msg/PoseStamped on /goal_pose: the node walks there (the path
+    follower of ``shc ros``'s /move_base_simple/goal)."""
+    node = _node(ros2_env, 40, tmp_path / "run")
+    tool = subprocess.run([sys.executable, "-c", _GOAL], env=ros2_env, cwd=ROOT, capture_output=True, text=True,
+                          timeout=120)
+    assert tool.returncode == 0, tool.stderr[-2000:]
+    node.send_signal(2)
+    _finish(node)
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    (waypoint,) = summary["waypoints"]
+    assert (waypoint["x"], waypoint["y"]) == (0.3, 0.0) and waypoint["reached"]
+    assert summary["odometry_pose"][0] == pytest.approx(0.3, abs=0.03)
+
+
 def test_params_file_out_of_range_refuses_the_start_in_one_line(tmp_path: Path) -> None:
     params = tmp_path / "params.yaml"
     params.write_text("shc:\n  ros__parameters:\n    swing_height: 0.5\n")
