@@ -127,6 +127,7 @@ class RosNode:
     """
 
     goal_topic = "/move_base_simple/goal"
+    """Where a goal pose arrives: RViz's "2D Nav Goal" (:mod:`shc_cli.ros.path_remote`)."""
     program = "shc ros"
 
     def __init__(self, name: str, types: MessageTypes, master_uri: str | None = None, host: str | None = None) -> None:

@@ -22,14 +22,15 @@ from typing import Any
 from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
 from shc_cli.events import event
 from shc_cli.loop.path_input import PathInput
+from shc_cli.ros.node import RosNode
 from shc_cli.ros.remote import RemoteInput
 from shc_cli.ros.transport import Node
 from shc_cli.spec.path import Path2D, Waypoint
 
 log = logging.getLogger(__name__)
 
-GOAL_TOPIC = "/move_base_simple/goal"
-"""Where a goal pose arrives (RViz's 2D Nav Goal publishes there)."""
+GOAL_TOPIC = RosNode.goal_topic
+"""Where a goal pose arrives on ROS 1 (RViz's 2D Nav Goal publishes there)."""
 PATH_TOPIC = "path"
 """A ``nav_msgs/Path`` arrives on ``<node name>/path`` (``/shc/path``)."""
 
