@@ -223,6 +223,62 @@ def test_a_goal_from_rviz2s_goal_tool_is_walked_to(ros2_env: dict[str, str], tmp
     assert summary["odometry_pose"][0] == pytest.approx(0.3, abs=0.03)
 
 
+_WALK = """
+import sys, time, rclpy
+from geometry_msgs.msg import Twist
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from std_msgs.msg import Int8
+rclpy.init()
+node = rclpy.create_node("remote")
+qos = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+system = node.create_publisher(Int8, "/syropod_remote/system_state", qos)
+state = node.create_publisher(Int8, "/syropod_remote/robot_state", qos)
+velocity = node.create_publisher(Twist, "/syropod_remote/desired_velocity", qos)
+walk = Twist()
+walk.linear.x = 1.0
+start = time.monotonic()
+while time.monotonic() - start < float(sys.argv[1]):
+    system.publish(Int8(data=1))
+    state.publish(Int8(data=2))
+    velocity.publish(walk)
+    rclpy.spin_once(node, timeout_sec=0.1)
+"""
+
+
+@pytest.mark.slow
+def test_shc_ros2_drives_the_servos_of_an_emulated_bus_and_shuts_down_on_ctrl_c(ros2_env: dict[str, str],
+                                                                                 tmp_path: Path) -> None:
+    """``--backend bus`` as ``shc ros``'s: no torque before OPERATIONAL, the servos walk, Ctrl-C shuts the robot down
+    to PACKED and releases the torque."""
+    import time
+
+    from shc_cli.hardware.emulator_process import EmulatorProcess
+    from shc_cli.loop.runread import read_run
+
+    ids = sorted(s.id for s in load_robot("bullet").hardware.servos.values())
+    run = tmp_path / "run"
+    with EmulatorProcess({i: "MX-106" for i in ids}) as bus:
+        node = subprocess.Popen([*SHC, "ros2", "bullet", "--backend", "bus", "--port", bus.port, "--out", str(run)],
+                                env={**ros2_env, "PYTHONUNBUFFERED": "1"}, cwd=ROOT, stdout=subprocess.PIPE,
+                                stderr=subprocess.PIPE, text=True)
+        try:
+            time.sleep(3.0)
+            assert {int(bus.torque_on(i)) for i in ids} == {0}  # not OPERATIONAL yet: the servos are left alone
+            remote = subprocess.run([sys.executable, "-c", _WALK, "20"], env=ros2_env, cwd=ROOT,
+                                    capture_output=True, text=True, timeout=120)
+            assert remote.returncode == 0, remote.stderr[-2000:]
+            assert {int(bus.torque_on(i)) for i in ids} == {1}
+        finally:
+            node.send_signal(2)
+            _finish(node)
+        assert {int(bus.torque_on(i)) for i in ids} == {0}  # released after the shut-down
+        assert all(abs(bus.position(i) - 2048) <= 3 for i in ids)  # back where it started (0 rad)
+    summary = json.loads((run / "summary.json").read_text())
+    assert summary["backend"] == "bus" and summary["fault"] is None and summary["final_state"] == "PACKED"
+    log = read_run(run)
+    assert (log.walk_state == "MOVING").any()
+
+
 def test_params_file_out_of_range_refuses_the_start_in_one_line(tmp_path: Path) -> None:
     params = tmp_path / "params.yaml"
     params.write_text("shc:\n  ros__parameters:\n    swing_height: 0.5\n")
