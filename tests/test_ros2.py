@@ -144,9 +144,9 @@ def test_a_raw_dds_reader_of_another_vendor_reads_desired_joint_states_from_the_
     the node runs with Fast DDS's type propagation off (tests/data/fastdds_no_type_propagation.xml, a standard Fast
     DDS profile): the types then match by name, as between DDS vendors before XTypes."""
     env = dict(ros2_env, FASTDDS_DEFAULT_PROFILES_FILE=str(NO_TYPE_PROPAGATION))
-    node = _node(env, 30, tmp_path / "run")
+    node = _node(env, 45, tmp_path / "run")
     wire = tmp_path / "wire.json"
-    reader = subprocess.Popen([sys.executable, str(ROOT / "tests" / "ros2_dds_reader.py"), "20", str(wire)],
+    reader = subprocess.Popen([sys.executable, str(ROOT / "tests" / "ros2_dds_reader.py"), "32", str(wire)],
                               env=env, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     remote = subprocess.run([sys.executable, "-c", _OPERATIONAL], env=env, cwd=ROOT, capture_output=True,
                             text=True, timeout=120)
@@ -174,7 +174,7 @@ rclpy.init()
 node = rclpy.create_node("operational")
 qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 pub = node.create_publisher(Int8, "/syropod_remote/system_state", qos)
-end = time.monotonic() + 20
+end = time.monotonic() + 30
 while time.monotonic() < end:  # as syropod_remote, at a rate (the node's command subscriptions are volatile)
     pub.publish(Int8(data=1))
     rclpy.spin_once(node, timeout_sec=0.1)
@@ -193,10 +193,10 @@ system = node.create_publisher(Int8, "/syropod_remote/system_state", qos)
 state = node.create_publisher(Int8, "/syropod_remote/robot_state", qos)
 goal = node.create_publisher(PoseStamped, "/goal_pose", qos)
 start, sent = time.monotonic(), False
-while time.monotonic() - start < 25:
+while time.monotonic() - start < 40:
     system.publish(Int8(data=1))
     state.publish(Int8(data=2))
-    if not sent and goal.get_subscription_count() and time.monotonic() - start > 8:
+    if not sent and goal.get_subscription_count() and time.monotonic() - start > 18:
         message = PoseStamped()
         message.header.frame_id = "odom"
         message.pose.position.x = 0.3
@@ -211,7 +211,7 @@ assert sent
 def test_a_goal_from_rviz2s_goal_tool_is_walked_to(ros2_env: dict[str, str], tmp_path: Path) -> None:
     """RViz 2's goal tool publishes geometry_msgs/msg/PoseStamped on /goal_pose: the node walks there (the path
     follower of ``shc ros``'s /move_base_simple/goal)."""
-    node = _node(ros2_env, 40, tmp_path / "run")
+    node = _node(ros2_env, 55, tmp_path / "run")
     tool = subprocess.run([sys.executable, "-c", _GOAL], env=ros2_env, cwd=ROOT, capture_output=True, text=True,
                           timeout=120)
     assert tool.returncode == 0, tool.stderr[-2000:]
@@ -277,6 +277,46 @@ def test_shc_ros2_drives_the_servos_of_an_emulated_bus_and_shuts_down_on_ctrl_c(
     assert summary["backend"] == "bus" and summary["fault"] is None and summary["final_state"] == "PACKED"
     log = read_run(run)
     assert (log.walk_state == "MOVING").any()
+
+
+_JOINT_STATES = """
+import time, rclpy
+from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Int8
+import sys
+names = sys.argv[1].split(",")
+rclpy.init()
+node = rclpy.create_node("hardware_interface")
+joints = node.create_publisher(JointState, "/joint_states", qos_profile_sensor_data)
+system = node.create_publisher(Int8, "/syropod_remote/system_state", QoSProfile(depth=10,
+                               reliability=ReliabilityPolicy.RELIABLE))
+start = time.monotonic()
+while time.monotonic() - start < 25:
+    message = JointState(name=names, position=[0.1 + 0.01 * k for k in range(len(names))])
+    joints.publish(message)
+    system.publish(Int8(data=1))
+    rclpy.spin_once(node, timeout_sec=0.02)
+"""
+
+
+@pytest.mark.slow
+def test_shc_ros2_starts_from_the_joints_a_hardware_node_measures(ros2_env: dict[str, str], tmp_path: Path) -> None:
+    """OpenSHC waits at start-up for /joint_states to give every joint and starts from them (less the offsets):
+    a hardware node publishing best effort, as sensor drivers do, with joints far from the defaults (0)."""
+    robot = load_robot("bullet")
+    names = [f"{leg}_{joint}_joint" for leg, spec in robot.legs.items() for joint in spec.joints]
+    node = _node(ros2_env, 30, tmp_path / "run")
+    hardware = subprocess.run([sys.executable, "-c", _JOINT_STATES, ",".join(reversed(names))], env=ros2_env,
+                              cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert hardware.returncode == 0, hardware.stderr[-2000:]
+    node.send_signal(2)
+    _finish(node)
+    first = next(csv.DictReader((tmp_path / "run" / "joints.csv").open()))
+    for k, name in enumerate(reversed(names)):  # published by name, in another order than the robot's
+        leg, joint = name.removesuffix("_joint").split("_", 1)
+        expected = 0.1 + 0.01 * k - robot.legs[leg].joints[joint].offset
+        assert float(first[name.removesuffix("_joint")]) == pytest.approx(expected, abs=1e-6)
 
 
 def test_params_file_out_of_range_refuses_the_start_in_one_line(tmp_path: Path) -> None:

@@ -202,7 +202,8 @@ def _run_outputs_only(node: Node, config: NodeConfig, robot: Robot, gait: Gait, 
     from shc_cli.loop.runlog import RunWriter
     from shc_cli.loop.session import execute
 
-    controller = Controller(robot, gait, pose_sets=pose_sets)
+    # OpenSHC starts from the measured joints when /joint_states gives them all (shc ros2; shc ros: the defaults)
+    controller = Controller(robot, gait, joints=node.measured_joints(robot), pose_sets=pose_sets)
     writer = RunWriter(directory, robot, config.overwrite)
     writer.write_robot(robot)
     record = PlanRecord(controller)
