@@ -333,6 +333,15 @@ def test_params_file_out_of_range_refuses_the_start_in_one_line(tmp_path: Path) 
     assert not list(tmp_path.glob("run*"))  # refused before anything is written
 
 
+def test_the_parameter_server_robot_is_refused_before_the_node_starts(tmp_path: Path) -> None:
+    hide = ("import sys; sys.modules['rclpy'] = None; from shc_cli.cli import main; "
+            f"sys.argv = ['shc', 'ros2', 'server', '--out', {str(tmp_path / 'run')!r}]; main()")
+    done = subprocess.run([sys.executable, "-c", hide], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2  # rclpy hidden: refused before any ROS 2 node could be made
+    assert done.stderr.strip().splitlines() == ["error: robot: 'server' reads ROS 1's parameter server (give a robot "
+                                                "file (shc import openshc converts OpenSHC's parameters))"]
+
+
 def test_without_the_ros2_extra_shc_ros2_says_how_to_install_it(tmp_path: Path) -> None:
     hide = ("import sys; sys.modules['rclpy'] = None; from shc_cli.cli import main; "
             f"sys.argv = ['shc', 'ros2', '--duration', '1', '--out', {str(tmp_path / 'run')!r}]; main()")

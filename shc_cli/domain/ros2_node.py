@@ -22,9 +22,12 @@ def run_node2(config: NodeConfig, params_file: Path | None = None,
     Raises:
         ShcError: bad input, the ``ros2`` extra missing, a parameter file that does not read (one line).
     """
-    from shc_cli.domain.ros_node import run_node
+    from shc_cli.domain.ros_node import SERVER, run_node
     from shc_cli.errors import Issue, SpecError
 
+    if config.robot == SERVER:  # refused before the node joins the network
+        raise SpecError([Issue(None, None, "robot", "'server' reads ROS 1's parameter server",
+                               "give a robot file (shc import openshc converts OpenSHC's parameters)")])
     if params_file is not None and not params_file.is_file():
         raise SpecError([Issue(params_file, None, "--params-file", "no such file",
                                "give a ROS 2 parameter file (shc: ros__parameters: ...)")])

@@ -130,11 +130,7 @@ def _robot(node: Node, config: NodeConfig, directory: Path) -> tuple[Robot, Gait
 
     source = config.robot
     if source == SERVER:
-        if not isinstance(node, RosNode):
-            from shc_cli.errors import Issue, SpecError
-
-            raise SpecError([Issue(None, None, "robot", "'server' reads ROS 1's parameter server",
-                                   "give a robot file (shc import openshc converts OpenSHC's parameters)")])
+        assert isinstance(node, RosNode)  # ROS 1's parameter server (shc ros2 refuses 'server' before its node)
         source = str(_robot_from_server(node, config.namespace, Path(tempfile.mkdtemp(prefix="shc-ros-"))))
     inputs = load_inputs(source, None, "0,0,0", None, None, default_s=1.0)
     gaits: dict[str, Gait] = {}
