@@ -2,8 +2,9 @@
 ``/desired_joint_states`` as it is on the wire: topic ``rt/desired_joint_states``, type
 ``sensor_msgs::msg::dds_::JointState_`` (ROS 2's naming of the IDL type).
 
-``python tests/ros2_dds_reader.py SECONDS OUT.json``: reads for SECONDS and writes the samples' joint names, the
-last positions and the count. ROS_DOMAIN_ID from the environment; loopback only (no multicast leaves the machine).
+``python tests/ros2_dds_reader.py COUNT SECONDS OUT.json``: reads until COUNT samples came (at most SECONDS) and
+writes the samples' joint names, the last positions and the count. ROS_DOMAIN_ID from the environment; loopback
+only (no multicast leaves the machine).
 """
 
 import json
@@ -47,7 +48,7 @@ class JointState_(IdlStruct, typename="sensor_msgs::msg::dds_::JointState_"):
 
 
 def main() -> None:
-    seconds, out = float(sys.argv[1]), sys.argv[2]
+    wanted, seconds, out = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
     os.environ["CYCLONEDDS_URI"] = LOOPBACK
     participant = DomainParticipant(int(os.environ["ROS_DOMAIN_ID"]))
     # ROS 2's representation is XCDR1 (offered beside XCDR2); types match by name and layout
@@ -59,7 +60,7 @@ def main() -> None:
     reader = DataReader(participant, Topic(participant, "rt/desired_joint_states", JointState_), qos=qos)
     count, last = 0, None
     end = time.monotonic() + seconds
-    while time.monotonic() < end:
+    while time.monotonic() < end and count < wanted:
         for sample in reader.take(N=100):
             if isinstance(sample, JointState_):
                 count, last = count + 1, cast(Any, sample)
