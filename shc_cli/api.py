@@ -349,3 +349,12 @@ def ros_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) 
     from shc_cli.domain.ros_node import run_node
 
     return run_node(config, on_ready)
+
+
+def ros2_node(config: NodeConfig, params_file: Path | None = None,
+              on_ready: Callable[[str], None] | None = None) -> RunResult:
+    """``shc ros2``: OpenSHC's node on ROS 2 (``shc ros``'s session on an rclpy node) until its duration or a
+    signal; the finished run."""
+    from shc_cli.domain.ros2_node import run_node2
+
+    return run_node2(config, params_file, on_ready)

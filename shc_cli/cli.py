@@ -301,6 +301,45 @@ def ros(
 
 
 @app.command()
+def ros2(
+    robot: Annotated[str, typer.Argument(help="Robot file or bundled robot name.")] = "bullet",
+    backend: Annotated[str, typer.Option(help="none, mujoco, pybullet or bus: as shc ros.")] = "none",
+    name: Annotated[str, typer.Option(help="Node name (/NAMESPACE/NAME sets the namespace).")] = "/shc",
+    duration: Annotated[float | None, typer.Option(help="Stop after this many seconds (default: until Ctrl-C).")]
+    = None,
+    params_file: Annotated[Path | None, typer.Option(help="ROS 2 parameter file (NODE: ros__parameters: ...) "
+                                                          "with start values of the dynamic parameters.")] = None,
+    individual: Annotated[bool, typer.Option(help="Publish /<LEG>_<joint>_joint/command (Float64, + offset).")]
+    = True,
+    combined: Annotated[bool, typer.Option(help="Publish /desired_joint_states.")] = True,
+    out: Annotated[Path | None, typer.Option(help="Run directory (default runs/<timestamp>-ros).")] = None,
+    overwrite: Annotated[bool, typer.Option(help=OVERWRITE_HELP)] = False,
+    live: LiveOption = False,
+    live_port: LivePortOption = 8765,
+    path: PathOption = None,
+    port: Annotated[list[str] | None, typer.Option(metavar="DEV", help="--backend bus: serial device of a servo "
+                                                                       "bus; once per bus, bus 0 first.")] = None,
+    baud: Annotated[int | None, typer.Option(help="--backend bus: baud rate [default: hardware.baud].")] = None,
+    dry_run: Annotated[bool, typer.Option(help="--backend bus: no current-limit, torque-enable or goal writes.")]
+    = False,
+    stop_state: Annotated[str, typer.Option(help="--backend bus: state to shut down to when the node stops.")]
+    = "packed",
+    on_fault: Annotated[str, typer.Option(help="--backend bus: on a servo fault, hold or torque-off.")]
+    = "torque-off",
+    on_stop: Annotated[str, typer.Option(help="--backend bus: after the shut-down, hold or torque-off.")]
+    = "torque-off",
+) -> None:
+    """Run as OpenSHC's node on ROS 2 (the ros2 extra): shc ros's topics under ROS 2 types, ROS 2 parameters."""
+    from shc_cli.commands.ros2 import run_ros2
+    from shc_cli.domain.ros_node import NodeConfig
+
+    run_ros2(NodeConfig(robot=robot, backend=backend, name=name, duration=duration, out=out,  # type: ignore[arg-type]
+                        individual=individual, combined=combined, overwrite=overwrite, live=live,
+                        live_port=live_port, path=path, ports=tuple(port or ()), baud=baud, dry_run=dry_run,
+                        stop_state=stop_state, on_fault=on_fault, on_stop=on_stop), params_file)
+
+
+@app.command()
 def analyze(
     runs: Annotated[list[Path], typer.Argument(help="Run directories from plan or simulate.")],
     json_output: Annotated[bool, typer.Option("--json", help="Print JSON only (an object, or a list for several).")]

@@ -44,6 +44,7 @@ EXEMPT: dict[str, str] = {
     "rosbag record": "needs ROS 1 and a running OpenSHC",
     "optuna-dashboard": "serves a page until Ctrl-C",
     "taplo check": "taplo is an editor tool, not installed here (tests/test_robot_files.py checks the schema)",
+    "shc ros2": "needs the ros2 extra and a ROS 2 peer (tests/test_ros2.py drives it with an rclpy node)",
     "shc ros": "needs a ROS 1 master (tests/test_ros_session.py runs it against Debian's roscore)",
     "rosparam": "needs a ROS 1 master (tests/test_ros_node.py reads rosparam values)",
     "rostopic pub": "needs a ROS 1 master and shc ros running (tests/test_path_ros.py publishes a goal with it)",

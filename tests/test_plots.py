@@ -296,7 +296,7 @@ def test_fits_joint_grids_say_their_time_axis(tmp_path: Path, figures: dict[str,
         assert figure._supxlabel is not None and figure._supxlabel.get_text() == "time [s]", name
         from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-        FigureCanvasAgg(figure).draw()
+        FigureCanvasAgg(figure).draw()  # type: ignore[no-untyped-call,unused-ignore]
         shown = [axis for axis in figure.axes if axis.axison and any(
             label.get_visible() and label.get_text() for label in axis.get_xticklabels())]
         assert len(shown) == 5, name  # one per column: j5, j6 in row 2 and j2, j3, j4 above the empty cells

@@ -10,9 +10,9 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from shc_cli.loop.summary import RunSummary
 
 from shc_cli.analysis.run_line import SLIP_SHARE, walk_warnings
+from shc_cli.record.summary import RunSummary
 
 from .conftest import ROOT
 from .test_cli import run
@@ -107,9 +107,8 @@ def test_no_bundled_robot_slips_on_flat_ground(robot: str, tmp_path: Path, capsy
     code, stdout, err = run(["simulate", robot, "--duration", "10", "--out", str(out), "--no-plots"], capsys,
                             monkeypatch)
     assert code == 0, err
-    from shc_cli.loop.opening import open_run
-
     from shc_cli.analysis.metrics import analyze_log
+    from shc_cli.domain.stored_run import open_run
 
     result = analyze_log(open_run(out))
     assert result["foot_slip_m"] < 0.10 * result["distance_m"], result["foot_slip_m"] / result["distance_m"]

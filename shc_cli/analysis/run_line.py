@@ -85,8 +85,8 @@ def walk_warnings(path: Path, summary: RunSummary) -> list[str]:
 
     from shc_cli.analysis import metrics
     from shc_cli.analysis.progress import cycle_path_length
+    from shc_cli.domain.stored_run import open_run
     from shc_cli.errors import ShcError
-    from shc_cli.loop.opening import open_run
 
     try:
         log = open_run(path)

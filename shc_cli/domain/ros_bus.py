@@ -32,7 +32,7 @@ if TYPE_CHECKING:
     from shc_cli.hardware.bus import BusState, ServoBus
     from shc_cli.loop.run_loop import LoopResult
     from shc_cli.record.summary import RunSummary
-    from shc_cli.ros.node import RosNode
+    from shc_cli.ros.transport import Node
     from shc_cli.spec.autopose import AutoPoseSet
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
@@ -40,7 +40,7 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 
-def run_on_bus(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
+def run_on_bus(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
                gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     """Run the node on the servos until a stop; returns the finished run directory (``summary.fault`` names a
     servo fault).

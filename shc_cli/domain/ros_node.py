@@ -26,6 +26,7 @@ from shc_cli.domain.ros_config import NodeConfig as NodeConfig
 if TYPE_CHECKING:
     from shc_cli.record.summary import RunSummary
     from shc_cli.ros.node import RosNode
+    from shc_cli.ros.transport import Node
     from shc_cli.spec.autopose import AutoPoseSet
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
@@ -33,9 +34,12 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 
-def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) -> RunResult:
+def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None,
+             open_node: Callable[[NodeConfig], Node] | None = None) -> RunResult:
     """Run the node until its duration passes, a signal, or ``rosnode kill``; returns the finished run directory.
-    ``on_ready`` is told one line when the node is registered and waits for the remote.
+    ``on_ready`` is told one line when the node is registered and waits for the remote. ``open_node`` makes the
+    node (default: ROS 1's, :class:`~shc_cli.ros.node.RosNode`; ``shc ros2`` gives ROS 2's): the session, the
+    remote, the outputs and the loop are the same on either.
 
     Raises:
         ShcError: bad input, or no ROS master (one line), before anything is written.
@@ -49,7 +53,7 @@ def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) 
         from shc_cli.spec.path import load_path
 
         load_path(config.path)
-    node = RosNode(config.name, MessageTypes(), config.master_uri)
+    node: Node = RosNode(config.name, MessageTypes(), config.master_uri) if open_node is None else open_node(config)
     try:
         robot, gait, pose_sets, gaits = _robot(node, config, directory)
         return _run(node, config, robot, gait, pose_sets, gaits, directory, on_ready)
@@ -57,14 +61,16 @@ def run_node(config: NodeConfig, on_ready: Callable[[str], None] | None = None) 
         node.close()
 
 
-def _robot(node: RosNode, config: NodeConfig,
+def _robot(node: Node, config: NodeConfig,
            directory: Path) -> tuple[Robot, Gait, dict[str, AutoPoseSet], dict[str, Gait]]:
     """The robot, its gait and auto-pose sets, and the gaits ``gait_selection`` can choose."""
     import tempfile
 
     from shc_cli.loop.run_inputs import load_inputs
+    from shc_cli.ros.node import RosNode
 
     if config.robot == SERVER:  # the server's robot as shc files, read, then removed (the run keeps robot.toml)
+        assert isinstance(node, RosNode)  # ROS 1's parameter server (shc ros2 refuses 'server' before its node)
         with tempfile.TemporaryDirectory(prefix="shc-ros-") as folder:
             source = str(_robot_from_server(node, config.namespace, Path(folder)))
             inputs = load_inputs(source, None, "0,0,0", None, None, default_s=1.0)
@@ -129,7 +135,7 @@ def _robot_from_server(node: RosNode, namespace: str, folder: Path) -> Path:
     return path
 
 
-def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
+def _run(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
          gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     if config.backend == "none":
         return _run_outputs_only(node, config, robot, gait, pose_sets, gaits, directory, on_ready)
@@ -140,7 +146,7 @@ def _run(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets:
     return _run_simulated(node, config, robot, gait, pose_sets, gaits, directory, on_ready)
 
 
-def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
+def _run_outputs_only(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
                       gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     """Backend none: the controller's targets are taken as reached (OpenSHC with a hardware node of the user's)."""
     from shc_cli.backends.kinematic import KinematicBackend
@@ -151,7 +157,8 @@ def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gai
     from shc_cli.loop.session import execute
     from shc_cli.record.runlog import RunWriter
 
-    controller = Controller(robot, gait, pose_sets=pose_sets)
+    # OpenSHC starts from the measured joints when /joint_states gives them all (shc ros2; shc ros: the defaults)
+    controller = Controller(robot, gait, joints=node.measured_joints(robot), pose_sets=pose_sets)
     writer = RunWriter(directory, robot, config.overwrite)
     writer.write_robot(robot)
     record = PlanRecord(controller)
@@ -180,7 +187,7 @@ def _run_outputs_only(node: RosNode, config: NodeConfig, robot: Robot, gait: Gai
     return RunResult(path, summary)
 
 
-def _run_simulated(node: RosNode, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
+def _run_simulated(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
                    gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     """A physics engine: the robot simulated in real time, its measured joints, IMU, foot forces and power published
     (``/joint_states``, ``/imu/data``, ``/<LEG>/foot_force``, ``/shc/power``) — OpenSHC's Gazebo set-up without

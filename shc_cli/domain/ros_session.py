@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from shc_cli.control.controller import Controller
     from shc_cli.domain.ros_config import NodeConfig
-    from shc_cli.ros.node import RosNode
+    from shc_cli.ros.transport import Node
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
 
@@ -21,7 +21,7 @@ class NodeSession:
     conditions (``sensors``: a simulated robot's sensors are published, ``joint_states``: a servo bus's measured
     joints, whose bus keeps the period: the clock only measures)."""
 
-    def __init__(self, node: RosNode, config: NodeConfig, robot: Robot, controller: Controller,
+    def __init__(self, node: Node, config: NodeConfig, robot: Robot, controller: Controller,
                  gaits: dict[str, Gait], sensors: bool, joint_states: bool = False) -> None:
         from shc_cli.loop.pacing import WallClock
         from shc_cli.ros.outputs import NodeOutputs
@@ -32,6 +32,7 @@ class NodeSession:
         self.requested: Callable[[], bool] = lambda: False
         self.limit = None if config.duration is None else time.monotonic() + config.duration
         self.remote = RemoteInput(node, robot, gaits, stopped=self.stopped)
+        node.serve_parameters(robot, self.remote)
         self.path = load_path(config.path) if config.path is not None else None
         self.source = RemotePath(self.remote, controller, self.path)
         self.source.subscribe(node)
@@ -58,8 +59,8 @@ class NodeSession:
         """An observer that ends the run when the duration has passed."""
         return "end" if self.limit is not None and time.monotonic() >= self.limit else None
 
-    def ready(self, node: RosNode, config: NodeConfig, robot: Robot, gait: Gait,
+    def ready(self, node: Node, config: NodeConfig, robot: Robot, gait: Gait,
               on_ready: Callable[[str], None] | None) -> None:
         if on_ready is not None:
-            on_ready(f"shc ros: {robot.name} / {gait.name} as node {node.name} on {node.master_uri} (backend "
+            on_ready(f"{node.program}: {robot.name} / {gait.name} as node {node.name} on {node.master_uri} (backend "
                      f"{config.backend}); waiting for /syropod_remote/system_state OPERATIONAL; Ctrl-C stops")

@@ -36,7 +36,11 @@ from shc_cli.errors import ShcError
 from shc_cli.ros import tcpros
 
 if TYPE_CHECKING:
+    import numpy as np
+
     from shc_cli.ros.messages import MessageTypes
+    from shc_cli.ros.remote import RemoteInput
+    from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
 
@@ -124,6 +128,10 @@ class RosNode:
         RosError: the master does not answer.
     """
 
+    goal_topic = "/move_base_simple/goal"
+    """Where a goal pose arrives: RViz's "2D Nav Goal" (:mod:`shc_cli.ros.path_remote`)."""
+    program = "shc ros"
+
     def __init__(self, name: str, types: MessageTypes, master_uri: str | None = None, host: str | None = None) -> None:
         self.name = name if name.startswith("/") else "/" + name
         self.types = types
@@ -181,6 +189,14 @@ class RosNode:
         publishers = self._call("registerSubscriber", topic, msgtype, self.uri)
         assert isinstance(publishers, list)
         self._connect_publishers(subscription, [str(p) for p in publishers])
+
+    def measured_joints(self, robot: Robot) -> np.ndarray | None:
+        """None: ``shc ros`` starts from the joints' defaults (OpenSHC's wait for ``/joint_states`` is ``shc ros2``'s
+        so far)."""
+        return None
+
+    def serve_parameters(self, robot: Robot, remote: RemoteInput) -> None:
+        """Nothing: on ROS 1 OpenSHC's dynamic parameters change through the remote's parameter adjustment."""
 
     def get_param(self, key: str) -> object:
         """A parameter (a whole tree as nested dicts) from the master's parameter server."""

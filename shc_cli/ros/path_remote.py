@@ -24,12 +24,13 @@ from shc_cli.events import event
 from shc_cli.loop.path_input import PathInput
 from shc_cli.ros.node import RosNode
 from shc_cli.ros.remote import RemoteInput
+from shc_cli.ros.transport import Node
 from shc_cli.spec.path import Path2D, Waypoint
 
 log = logging.getLogger(__name__)
 
-GOAL_TOPIC = "/move_base_simple/goal"
-"""Where a goal pose arrives (RViz's 2D Nav Goal publishes there)."""
+GOAL_TOPIC = RosNode.goal_topic
+"""Where a goal pose arrives on ROS 1 (RViz's 2D Nav Goal publishes there)."""
 PATH_TOPIC = "path"
 """A ``nav_msgs/Path`` arrives on ``<node name>/path`` (``/shc/path``)."""
 
@@ -66,10 +67,10 @@ class RemotePath:
         self._out: CycleOutput | None = None
         self._cycles = 0
 
-    def subscribe(self, node: RosNode) -> None:
-        """Subscribe ``<node>/path`` and the goal topic."""
+    def subscribe(self, node: Node) -> None:
+        """Subscribe ``<node>/path`` and the node's goal topic (ROS 1 :data:`GOAL_TOPIC`, ROS 2 ``/goal_pose``)."""
         node.subscribe(f"{node.name}/{PATH_TOPIC}", "nav_msgs/Path", self._on_path)
-        node.subscribe(GOAL_TOPIC, "geometry_msgs/PoseStamped", self._on_goal)
+        node.subscribe(node.goal_topic, "geometry_msgs/PoseStamped", self._on_goal)
 
     def _on_path(self, message: Any) -> None:
         with self._lock:

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field, replace
 
 from shc_cli.control.controller import Command, RobotState
 from shc_cli.control.pose import PoseReset
-from shc_cli.ros.node import RosNode
+from shc_cli.ros.transport import Node
 from shc_cli.spec.gait import Gait
 from shc_cli.spec.robot import ADJUSTABLE, Robot
 
@@ -53,6 +53,7 @@ class _State:
     secondary_leg: int = -1
     toggles: list[int] = field(default_factory=list)
     tip_velocity: dict[int, tuple[float, float, float]] = field(default_factory=dict)
+    set_values: dict[str, float] = field(default_factory=dict)
 
 
 class RemoteInput:
@@ -65,7 +66,7 @@ class RemoteInput:
         stopped: tells whether the run was asked to stop (a wait while SUSPENDED ends then).
     """
 
-    def __init__(self, node: RosNode, robot: Robot, gaits: dict[str, Gait], stopped: Callable[[], bool]) -> None:
+    def __init__(self, node: Node, robot: Robot, gaits: dict[str, Gait], stopped: Callable[[], bool]) -> None:
         self._robot, self._gaits, self._stopped = robot, gaits, stopped
         self._legs = list(robot.legs)
         self._state = _State()
@@ -78,7 +79,7 @@ class RemoteInput:
         self._values = {name: _adjustable(robot, name) for name in ADJUSTABLE}
         self.subscribe(node)
 
-    def subscribe(self, node: RosNode) -> None:
+    def subscribe(self, node: Node) -> None:
         """Subscribe every remote topic."""
         s = self._state
 
@@ -144,6 +145,11 @@ class RemoteInput:
                 self._leg_state[index] = value
                 s.toggles.append(index)
 
+    def set_parameter(self, name: str, value: float) -> None:
+        """Set a dynamic parameter from the next latched cycle on (a ROS 2 parameter set; ``value`` in range)."""
+        with self._lock:
+            self._state.set_values[name] = value
+
     def latch(self) -> None:
         """Take the messages received so far as the next cycle's command (called right after publishing)."""
         with self._lock:
@@ -169,6 +175,11 @@ class RemoteInput:
                 self._values[name] = (value, low, high, step)
                 parameters[name] = value
         s.adjustments = 0
+        for name, value in s.set_values.items():  # a parameter client's sets (shc ros2), already in range
+            _, low, high, step = self._values[name]
+            self._values[name] = (value, low, high, step)
+            parameters[name] = value
+        s.set_values = {}
         toggle = None
         if s.toggles:
             index = s.toggles.pop(0)
