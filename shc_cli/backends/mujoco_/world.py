@@ -40,7 +40,7 @@ from shc_cli.backends.mujoco_ import substeps as substeps_kernels
 from shc_cli.backends.mujoco_.gl import import_for_physics
 from shc_cli.backends.mujoco_.mjcf import RESTITUTION_THRESHOLD_MPS, Options, robot_mjcf, velocity_stiffness
 from shc_cli.backends.servo import ServoModel
-from shc_cli.backends.terrain import Terrain
+from shc_cli.backends.terrain import Terrain, robot_scale
 from shc_cli.errors import BackendError
 from shc_cli.events import NOTICE, event
 from shc_cli.model.body import leg_names
@@ -82,7 +82,7 @@ class MujocoWorld:
         self.substeps = substeps
         self.physics_time = 0.0
         """Wall time spent inside ``mj_step`` [s]."""
-        self.terrain = Terrain(terrain, seed, diagonal="mujoco")
+        self.terrain = Terrain(terrain, seed, diagonal="mujoco", scale=robot_scale(robot.walker.body_clearance))
         stand = stand and not fixed_base
         self.fixed_base = fixed_base
         height = spawn_height(robot, self.terrain, initial_joints, fixed_base, stand)

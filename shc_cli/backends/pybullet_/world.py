@@ -23,6 +23,7 @@ from shc_cli.backends.pybullet_.quiet import quiet_stdout
 from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
 from shc_cli.backends.pybullet_.urdf import robot_urdf
 from shc_cli.backends.servo import ServoModel
+from shc_cli.backends.terrain import robot_scale
 from shc_cli.errors import BackendError
 from shc_cli.model.body import GRAVITY
 from shc_cli.model.chains import JointSlots
@@ -105,7 +106,8 @@ class World:
         p.setTimeStep(self.timestep, physicsClientId=c)
         p.setPhysicsEngineParameter(numSolverIterations=SOLVER_ITERATIONS, deterministicOverlappingPairs=1,
                                     physicsClientId=c)
-        self.terrain = build_terrain(c, terrain, friction, restitution, seed)
+        self.terrain = build_terrain(c, terrain, friction, restitution, seed,
+                                     robot_scale(robot.walker.body_clearance))
         self.stand: int | None = None
         self._load_robot(fixed_base, initial_joints, friction, restitution, stand and not fixed_base)
 
