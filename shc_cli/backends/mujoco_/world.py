@@ -281,6 +281,17 @@ class MujocoWorld:
             return self.terrain.height_above(position)
         return float(distance)
 
+    def cast_rays(self, origin: np.ndarray, directions: np.ndarray, reach: float) -> np.ndarray:
+        """Distances [m] from ``origin`` along each unit direction ``(n, 3)`` to a terrain geom (group 0; ``nan``:
+        nothing within ``reach``), in one ``mj_multiRay``."""
+        n = len(directions)
+        geoms, distances = np.empty(n, dtype=np.int32), np.empty(n)
+        self.mujoco.mj_multiRay(self.model, self.data, np.asarray(origin, dtype=float),
+                                np.ascontiguousarray(directions, dtype=float).ravel(), RAY_GROUPS, 1, -1, geoms,
+                                distances, None, n, reach)
+        distances[(geoms < 0) | (distances < 0.0) | (distances > reach)] = np.nan
+        return distances
+
     def close(self) -> None:
         """Nothing to free but the references."""
         self.stand = None

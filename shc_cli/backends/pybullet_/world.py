@@ -329,6 +329,34 @@ class World:
             start = hit[3][2] - 0.001
         return self.terrain.height_above(position)
 
+    def cast_rays(self, origin: np.ndarray, directions: np.ndarray, reach: float) -> np.ndarray:
+        """Distances [m] from ``origin`` along each unit direction ``(n, 3)`` to the terrain (``nan``: nothing
+        within ``reach``), in one ``rayTestBatch``; a ray that hits the robot is cast again from just beyond the hit
+        (up to 7 times), so the rays see only the terrain, as :meth:`_ray_height` does, and the physics is untouched."""
+        p, c = self.p, self.client
+        directions = np.asarray(directions, dtype=float)
+        start = np.array(np.broadcast_to(np.asarray(origin, dtype=float), directions.shape))
+        travelled = np.zeros(len(directions))
+        result = np.full(len(directions), np.nan)
+        todo = np.arange(len(directions))
+        for _ in range(8):
+            left = reach - travelled[todo]
+            ends = start[todo] + directions[todo] * left[:, None]
+            hits = p.rayTestBatch(start[todo].tolist(), ends.tolist(), physicsClientId=c)
+            body = np.array([hit[0] for hit in hits])
+            fraction = np.array([hit[2] for hit in hits], dtype=float)
+            terrain = (body >= 0) & (body != self.body)
+            result[todo[terrain]] = travelled[todo[terrain]] + fraction[terrain] * left[terrain]
+            robot = body == self.body
+            if not robot.any():
+                break
+            again = todo[robot]
+            step = fraction[robot] * left[robot] + 0.001
+            travelled[again] += step
+            start[again] += directions[again] * step[:, None]
+            todo = again
+        return result
+
     def close(self) -> None:
         self.p.disconnect(physicsClientId=self.client)
 
