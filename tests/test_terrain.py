@@ -370,3 +370,35 @@ def test_building_prints_nothing(capfd: pytest.CaptureFixture[str], client: int,
     for text in ("blocks", "ramp:10", f"heightfield:{field_csv}"):
         build_terrain(client, parse_terrain(text), friction=0.8, restitution=0.0, seed=0)
     assert capfd.readouterr().out == ""
+
+
+@pytest.mark.slow  # two short simulations
+@pytest.mark.parametrize("engine", ["mujoco", "pybullet"])
+def test_simulate_starts_on_a_raised_platform(tmp_path: Path, engine: str, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The robot spawns on the 0.9 m start platform of stairs-down:0.05,0.3 (18 drops of 0.05 m), stands up and walks
+    without falling: its body stays about its clearance above the platform, not 0.9 m up in the air."""
+    import json
+
+    from .test_cli import run
+
+    code, _, err = run(["simulate", "bullet", "--engine", engine, "--terrain", "stairs-down:0.05,0.3", "--duration",
+                        "1", "--no-plots", "--out", str(tmp_path / "run")], capsys, monkeypatch)
+    assert code == 0, err
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["terrain"] == "stairs-down:0.05,0.3" and not summary["fell"]
+    import csv
+
+    with (tmp_path / "run" / "log.csv").open() as file:
+        last = list(csv.DictReader(file))[-1]
+    z, height = float(last["z"]), float(last["height"])
+    assert 0.9 + 0.1 < z < 0.9 + 0.35, z  # Bullet's body clearance 0.20 m above the platform's 0.9 m
+    assert z - height == pytest.approx(0.9, abs=0.01)  # the engine's height ray lands on the platform
+
+
+def test_bad_level_terrain_is_one_line_and_exit_2(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    from .test_cli import run
+
+    code, _, err = run(["simulate", "bullet", "--terrain", "gaps:2", "--out", str(tmp_path / "run")], capsys,
+                       monkeypatch)
+    assert code == 2
+    assert err.strip().splitlines() == [err.strip()] and "gaps difficulty 2 is outside [0, 1]" in err
