@@ -1,6 +1,6 @@
 """The simulated depth sensor's cost: µs per scan (the engine's ray casts, then the map update) and per control cycle.
 
-    .venv/bin/python benchmarks/bench_height_map.py [--robot bullet] [--repeat 30]
+    .venv/bin/python benchmarks/bench_height_map.py [--robot bullet] [--repeat 30] [--resolution 16,12] [--rate 10]
 
 For each engine and terrain the robot is held in the air at the origin (its sensor sees the terrain ahead); one
 scan is the robot file's ``[perception]`` rays (default 32 × 24) cast at once (MuJoCo ``mj_multiRay``, PyBullet
@@ -29,9 +29,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--robot", default="bullet")
     parser.add_argument("--repeat", type=int, default=30)
+    parser.add_argument("--resolution", help="rays across,down instead of the robot file's, e.g. 16,12")
+    parser.add_argument("--rate", type=float, help="scans per second instead of the robot file's")
     args = parser.parse_args()
     robot = load_robot(resolve("robots", args.robot)).robot
     spec = robot.perception or Perception()
+    if args.resolution:
+        columns, rows = (int(n) for n in args.resolution.split(","))
+        spec = spec.model_copy(update={"resolution": (columns, rows)})
+    if args.rate:
+        spec = spec.model_copy(update={"rate": args.rate})
     sensor = DepthSensor(spec)
     joints = Chains.from_robot(robot).default_joints()
     print(f"{args.robot}: {sensor.count} rays a scan at {spec.rate:g} Hz, control period {robot.time_delta:g} s")
