@@ -143,7 +143,8 @@ def simulate(
     commands: CommandsOption = None,
     path: PathOption = None,
     terrain: Annotated[
-        str, typer.Option(help="flat, ramp:DEG, blocks[:LOW,HIGH[,SIZE]], stairs:RISE,RUN or heightfield:FILE[,SCALE]")
+        str, typer.Option(help="flat, ramp:DEG, blocks[:LOW,HIGH[,SIZE]], stairs[-down]:RISE,RUN, "
+                               "heightfield:FILE[,SCALE] or slope|steps|obstacles|stones|gaps:D (docs/terrains.md)")
     ] = "flat",
     scenario: Annotated[str, typer.Option(help="WG walk ground, SG stance ground, WA walk air, SA stance air.")] = "WG",
     physics_rate: Annotated[float, typer.Option(help=SIMULATE["physics_rate"].cli_help)] = 400.0,

@@ -90,7 +90,9 @@ def test_mjcf_is_deterministic() -> None:
     assert robot_mjcf(robot, terrain, options) == robot_mjcf(robot, Terrain(parse_terrain("blocks"), seed=3), options)
 
 
-@pytest.mark.parametrize("text", ["flat", "ramp:10", "ramp:30", "blocks", "stairs:0.05,0.3", "heightfield"])
+@pytest.mark.parametrize("text", ["flat", "ramp:10", "ramp:30", "blocks", "stairs:0.05,0.3", "heightfield",
+                                  "stairs-down:0.15,0.3", "slope:0.5", "steps:1", "obstacles:1", "stones:1",
+                                  "gaps:0.7"])
 def test_mujoco_rays_hit_height_at(text: str, field_csv: Path) -> None:
     """MuJoCo's terrain geoms are where :meth:`Terrain.height_at` says (1 mm), away from vertical faces; its height
     field follows MuJoCo's triangulation (the other diagonal than PyBullet's)."""
@@ -112,7 +114,7 @@ def test_mujoco_rays_hit_height_at(text: str, field_csv: Path) -> None:
         ys = rng.uniform(-(ny - 1) * spec.cell / 2.0, (ny - 1) * spec.cell / 2.0, 400)
         points = list(zip(xs, ys, strict=True))
     else:
-        points = list(zip(rng.uniform(-1.0, LANDING_END_X + 1.0, 400), rng.uniform(-HALF_WIDTH - 0.5,
+        points = list(zip(rng.uniform(-2.5, LANDING_END_X + 1.0, 400), rng.uniform(-HALF_WIDTH - 0.5,
                                                                                       HALF_WIDTH + 0.5, 400),
                           strict=True))
     hit = np.zeros(1, dtype=np.int32)
@@ -120,7 +122,8 @@ def test_mujoco_rays_hit_height_at(text: str, field_csv: Path) -> None:
     for x, y in points:
         near_face = any(abs(terrain.height_at(x + dx, y + dy) - terrain.height_at(x, y)) > 0.0
                         for dx in (-0.002, 0.002) for dy in (-0.002, 0.002))
-        if spec.kind in ("blocks", "stairs") and near_face:  # stay 2 mm away from vertical faces
+        boxed = terrain.spec.kind in ("blocks", "stairs", "stairs-down", "stones", "gaps")
+        if boxed and near_face:  # stay 2 mm away from vertical faces
             continue
         distance = mujoco.mj_ray(world.model, world.data, np.array([x, y, 20.0]), np.array([0.0, 0.0, -1.0]),
                                  RAY_GROUPS, 1, -1, hit)

@@ -23,9 +23,11 @@ from shc_cli.backends.terrain import (
     FEATURE_START_X,
     HALF_WIDTH,
     LANDING_END_X,
+    PLATFORM_START_X,
     Terrain,
     TerrainSpec,
     parse_terrain,
+    robot_scale,
 )
 from shc_cli.errors import SpecError
 
@@ -50,7 +52,7 @@ def ray_height(c: int, x: float, y: float) -> float:
 def sample_points(n: int = 1500, seed: int = 1) -> np.ndarray:
     """Points over the start area, the features, the landings and beyond their sides."""
     rng = np.random.default_rng(seed)
-    return np.column_stack([rng.uniform(-1.0, LANDING_END_X + 1.0, n), rng.uniform(-2.0, 2.0, n)])
+    return np.column_stack([rng.uniform(-2.5, LANDING_END_X + 1.0, n), rng.uniform(-2.0, 2.0, n)])
 
 
 def on_slope(spec: TerrainSpec, x: float, y: float) -> bool:
@@ -124,6 +126,14 @@ def test_parse_png_heightfields(tmp_path: Path) -> None:
         ("heightfield:no/such/file.csv", "not found"),
         ("heightfield:field.txt", "neither .csv nor .png"),
         ("heightfield", "heightfield takes 1 value"),
+        ("stairs-down:0.05", "stairs-down takes 2 values"),
+        ("stairs-down:0.05,0.01", "stair run 0.01 m"),
+        ("stairs-dwn:0.05,0.3", "did you mean 'stairs-down'"),
+        ("slope", "slope takes 1 value"),
+        ("steps:1.5", "steps difficulty 1.5 is outside [0, 1]"),
+        ("gaps:-0.1", "outside [0, 1]"),
+        ("stones:hard", "stones difficulty 'hard' is not a number"),
+        ("obstacles:0.2,0.3", "obstacles takes 1 value"),
     ],
 )
 def test_bad_terrains_are_one_line(text: str, expected: str) -> None:
@@ -186,11 +196,58 @@ def test_analytic_heights() -> None:
     assert blocks.height_at(6.05, 0.0) == 0.0
 
 
+BULLET = robot_scale(0.20)
+"""The default Bullet's scale of the level terrains (body clearance 0.20 m over 0.5 m)."""
+
+
+def test_level_terrains_follow_legged_gym() -> None:
+    """legged_gym's numbers (terrain.py) × body_clearance / 0.5, worked by hand for the Bullet (× 0.4)."""
+    assert pytest.approx(0.4) == BULLET
+    slope = Terrain(parse_terrain("slope:0.5"), seed=0, scale=BULLET)
+    assert (slope.spec.kind, slope.spec.text) == ("ramp", "slope:0.5")
+    assert slope.spec.degrees == pytest.approx(11.459156)
+    assert slope.height_at(1.5, 0.0) == pytest.approx(math.tan(0.2))  # 0.4·0.5 rad, not scaled
+    assert Terrain(parse_terrain("slope:0"), seed=0).boxes() == []
+    steps = Terrain(parse_terrain("steps:1"), seed=0, scale=BULLET)
+    assert (steps.spec.rise, steps.spec.run) == pytest.approx((0.092, 0.124))  # 0.23·0.4, 0.31·0.4
+    assert steps.height_at(0.5 + 2.5 * 0.124, 0.0) == pytest.approx(3 * 0.092)
+    obstacles = Terrain(parse_terrain("obstacles:0.5"), seed=2, scale=BULLET)
+    assert obstacles.block_heights is not None and obstacles.spec.size == pytest.approx(0.4)
+    assert set(np.round(obstacles.block_heights.ravel(), 9)) == {0.0, 0.03, 0.06}  # h = 0.15·0.4, h/2, none
+    stones = Terrain(parse_terrain("stones:1"), seed=0, scale=BULLET)
+    assert (stones.spec.size, stones.spec.gap, stones.spec.depth) == pytest.approx((0.03, 0.04, 0.4))
+    gaps = Terrain(parse_terrain("gaps:0.5"), seed=0, scale=BULLET)
+    assert (gaps.spec.size, gaps.spec.gap, gaps.spec.depth) == pytest.approx((0.4, 0.2, 0.4))
+    # the first gap is x in [0.5, 0.7), the first piece [0.7, 1.1), the second gap [1.1, 1.3)
+    assert [gaps.height_at(x, 0.0) for x in (0.45, 0.6, 0.9, 1.2, 1.4)] == pytest.approx([0.4, 0, 0.4, 0, 0.4])
+    assert Terrain(parse_terrain("gaps:0"), seed=0, scale=BULLET).height_at(3.0, 0.0) == pytest.approx(0.4)
+
+
+def test_stairs_down_start_on_a_platform() -> None:
+    stairs = Terrain(parse_terrain("stairs-down:0.15,0.3"), seed=0)
+    top = 18 * 0.15  # ⌊5.5 / 0.3⌋ = 18 drops of 0.15 m
+    assert stairs.start_height == pytest.approx(top)
+    assert [stairs.height_at(x, 0.0) for x in (PLATFORM_START_X, 0.0, 0.499, 0.5, 0.85, 5.9, 7.0)] == pytest.approx(
+        [top, top, top, top - 0.15, top - 0.3, 0.0, 0.0])
+    assert stairs.height_at(PLATFORM_START_X - 0.01, 0.0) == 0.0 and stairs.height_at(0.0, HALF_WIDTH + 0.01) == 0.0
+    boxes = stairs.boxes()
+    assert len(boxes) == 18 and boxes[0].size[2] == pytest.approx(top) and boxes[-1].size[2] == pytest.approx(0.15)
+
+
+@pytest.mark.parametrize("text", ["stairs-down:0.05,0.3", "stones:0", "stones:1", "gaps:1"])
+def test_raised_start_platform_is_flat(text: str) -> None:
+    terrain = Terrain(parse_terrain(text), seed=5, scale=BULLET)
+    assert terrain.start_height > 0.0
+    for x in np.linspace(PLATFORM_START_X, 0.4999, 40):
+        for y in np.linspace(-HALF_WIDTH, HALF_WIDTH, 9):
+            assert terrain.height_at(float(x), float(y)) == terrain.start_height
+
+
 @pytest.mark.parametrize("text", ["flat", "ramp:10", "ramp:30", "blocks", "blocks:0,0.2,0.05", "stairs:0.05,0.3",
-                                  "stairs:0.12,0.25", "heightfield"])
+                                  "stairs:0.12,0.25", "heightfield", "slope:1", "steps:1", "obstacles:1"])
 def test_start_area_is_flat(text: str, field_csv: Path) -> None:
     spec = parse_terrain(f"heightfield:{field_csv}" if text == "heightfield" else text)
-    terrain = Terrain(spec, seed=5)
+    terrain = Terrain(spec, seed=5, scale=BULLET)
     for x in np.linspace(-1.0, 0.3999, 40):
         for y in np.linspace(-2.0, 2.0, 9):
             assert terrain.height_at(float(x), float(y)) == 0.0
@@ -200,10 +257,12 @@ def test_start_area_is_flat(text: str, field_csv: Path) -> None:
 
 
 @pytest.mark.parametrize("text", ["flat", "ramp:10", "ramp:5", "ramp:45", "blocks", "blocks:0,0.2,0.05",
-                                  "stairs:0.05,0.3", "stairs:0.12,0.25", "heightfield"])
+                                  "stairs:0.05,0.3", "stairs:0.12,0.25", "heightfield", "stairs-down:0.15,0.3",
+                                  "slope:0.5", "steps:0.5", "obstacles:1", "stones:0.5", "stones:1", "gaps:0.7"])
 def test_rays_hit_height_at(client: int, text: str, field_csv: Path) -> None:
     spec = parse_terrain(f"heightfield:{field_csv},1,0.1" if text == "heightfield" else text)
-    terrain = build_terrain(client, spec, friction=0.8, restitution=0.0, seed=11)
+    terrain = build_terrain(client, spec, friction=0.8, restitution=0.0, seed=11, scale=BULLET)
+    spec = terrain.spec
     slope_tolerance = 1.02 * MM / math.cos(math.radians(spec.degrees))
     for x, y in sample_points():
         hit, expected = ray_height(client, x, y), terrain.height_at(x, y)
@@ -311,3 +370,35 @@ def test_building_prints_nothing(capfd: pytest.CaptureFixture[str], client: int,
     for text in ("blocks", "ramp:10", f"heightfield:{field_csv}"):
         build_terrain(client, parse_terrain(text), friction=0.8, restitution=0.0, seed=0)
     assert capfd.readouterr().out == ""
+
+
+@pytest.mark.slow  # two short simulations
+@pytest.mark.parametrize("engine", ["mujoco", "pybullet"])
+def test_simulate_starts_on_a_raised_platform(tmp_path: Path, engine: str, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """The robot spawns on the 0.9 m start platform of stairs-down:0.05,0.3 (18 drops of 0.05 m), stands up and walks
+    without falling: its body stays about its clearance above the platform, not 0.9 m up in the air."""
+    import json
+
+    from .test_cli import run
+
+    code, _, err = run(["simulate", "bullet", "--engine", engine, "--terrain", "stairs-down:0.05,0.3", "--duration",
+                        "1", "--no-plots", "--out", str(tmp_path / "run")], capsys, monkeypatch)
+    assert code == 0, err
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["terrain"] == "stairs-down:0.05,0.3" and not summary["fell"]
+    import csv
+
+    with (tmp_path / "run" / "log.csv").open() as file:
+        last = list(csv.DictReader(file))[-1]
+    z, height = float(last["z"]), float(last["height"])
+    assert 0.9 + 0.1 < z < 0.9 + 0.35, z  # Bullet's body clearance 0.20 m above the platform's 0.9 m
+    assert z - height == pytest.approx(0.9, abs=0.01)  # the engine's height ray lands on the platform
+
+
+def test_bad_level_terrain_is_one_line_and_exit_2(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    from .test_cli import run
+
+    code, _, err = run(["simulate", "bullet", "--terrain", "gaps:2", "--out", str(tmp_path / "run")], capsys,
+                       monkeypatch)
+    assert code == 2
+    assert err.strip().splitlines() == [err.strip()] and "gaps difficulty 2 is outside [0, 1]" in err

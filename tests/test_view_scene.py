@@ -111,6 +111,15 @@ def test_terrain_shapes_follow_the_summary(tmp_path) -> None:  # type: ignore[no
     assert scene.terrain_shapes(RunSummary(terrain="heightfield:/nowhere.csv")).mesh is None
 
 
+def test_level_terrains_are_drawn_at_the_robots_scale() -> None:
+    from shc_cli.spec.loading import load_robot, resolve
+
+    bullet = load_robot(resolve("robots", "bullet")).robot  # body clearance 0.20 m: × 0.4 of legged_gym's
+    steps = scene.terrain_shapes(RunSummary(terrain="steps:1", seed=0), bullet)
+    assert abs(steps.boxes[0].size[2] - 0.092) < 1e-9  # the rise, (0.05 + 0.18) m × 0.4
+    assert abs(steps.boxes[0].size[0] - 0.124) < 1e-9  # the run, 0.31 m × 0.4
+
+
 def _synthetic_run(robot: Robot, rows: int = 400) -> object:
     """A run that walks a circle: forward 0.2 m/s while turning 0.5 rad/s, legs in the default joints."""
     from pathlib import Path

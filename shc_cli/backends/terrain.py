@@ -25,7 +25,12 @@ import numpy as np
 
 from shc_cli.errors import Issue, SpecError
 
-TerrainKind = Literal["flat", "ramp", "blocks", "stairs", "heightfield"]
+TerrainKind = Literal["flat", "ramp", "blocks", "stairs", "stairs-down", "heightfield", "stones", "gaps", "slope",
+                      "steps", "obstacles"]
+LEVEL_KINDS = ("slope", "steps", "obstacles", "stones", "gaps")
+"""legged_gym's kinds, ``NAME:D`` with a difficulty D in [0, 1], scaled to the robot (:func:`robot_scale`)."""
+RAISED_KINDS = ("stairs-down", "stones", "gaps")
+"""Terrains whose start is a raised platform (x from :data:`PLATFORM_START_X` to :data:`FEATURE_START_X`)."""
 
 START_END_X = 0.4
 """The start area x < START_END_X [m] is flat at z = 0 on every terrain (the robot starts at the origin)."""
@@ -39,6 +44,11 @@ LANDING_END_X = 10.0
 """Where the flat top landing of ramps and stairs ends (a drop to z = 0 beyond) [m]."""
 HALF_WIDTH = 1.5
 """Ramps, stairs and the block field span |y| <= HALF_WIDTH [m]."""
+PLATFORM_START_X = -2.0
+"""The raised start platform of :data:`RAISED_KINDS` begins here (a drop to z = 0 behind it) [m]."""
+REFERENCE_CLEARANCE = 0.5
+"""Body height [m] of the robot legged_gym's terrain numbers are made for (ANYmal C stands ≈ 0.5 m high): a level
+terrain's lengths and heights are legged_gym's × ``body_clearance / REFERENCE_CLEARANCE`` (:func:`robot_scale`)."""
 
 DEFAULT_BLOCK_LOW = 0.04
 """Default lowest block height [m] (ATHENA's rough-terrain trials)."""
@@ -61,8 +71,10 @@ DEFAULT_CELL = 0.05
 MAX_HEIGHTFIELD_SAMPLES = 250_000
 """Largest height field (e.g. 500 × 500): PyBullet needs ~2.5 s for this many samples, 19 s for 1200 × 1200."""
 
-_SYNTAX = "flat, ramp:DEG, blocks[:LOW,HIGH[,SIZE]], stairs:RISE,RUN or heightfield:FILE[,SCALE[,CELL]]"
-_KINDS: tuple[TerrainKind, ...] = ("flat", "ramp", "blocks", "stairs", "heightfield")
+_SYNTAX = ("flat, ramp:DEG, blocks[:LOW,HIGH[,SIZE]], stairs:RISE,RUN, stairs-down:RISE,RUN, "
+           "heightfield:FILE[,SCALE[,CELL]] or slope|steps|obstacles|stones|gaps:D")
+_KINDS: tuple[TerrainKind, ...] = ("flat", "ramp", "blocks", "stairs", "stairs-down", "heightfield", "slope", "steps",
+                                   "obstacles", "stones", "gaps")
 GROUND_RGBA = (0.82, 0.82, 0.80, 1.0)
 """Colour of the ground plane (red, green, blue, alpha)."""
 FEATURE_RGBA = (0.62, 0.55, 0.47, 1.0)
@@ -74,7 +86,8 @@ class TerrainSpec:
     """A parsed ``--terrain`` value; only the fields of its ``kind`` matter.
 
     Attributes:
-        kind: ``flat``, ``ramp``, ``blocks``, ``stairs`` or ``heightfield``.
+        kind: ``flat``, ``ramp``, ``blocks``, ``stairs``, ``stairs-down``, ``heightfield``, ``stones``, ``gaps``
+            or one of :data:`LEVEL_KINDS` (resolved to geometry for a robot by :func:`resolve`).
         text: The text it was parsed from (for messages and run logs).
         degrees: Ramp slope [deg].
         low: Lowest block height [m].
@@ -87,6 +100,10 @@ class TerrainSpec:
         cell: Distance between height-field samples [m].
         heights: Height-field samples [m] after scaling, ``heights[i][j]`` at x index i (along +x) and
             y index j (along +y), i.e. the file's columns and its rows from the bottom line up.
+        level: Difficulty of a level kind, in [0, 1].
+        choices: Block heights drawn from these [m] instead of uniformly from [low, high] (``obstacles``).
+        gap: Gap between stones, or width of a gap [m].
+        depth: Height of the stones' and gaps' platform above the ground [m].
     """
 
     kind: TerrainKind
@@ -101,6 +118,10 @@ class TerrainSpec:
     scale: float = DEFAULT_CSV_SCALE
     cell: float = DEFAULT_CELL
     heights: tuple[tuple[float, ...], ...] = ()
+    level: float = 0.0
+    choices: tuple[float, ...] = ()
+    gap: float = 0.0
+    depth: float = 0.0
 
     def __str__(self) -> str:
         return self.text
@@ -162,18 +183,55 @@ def parse_terrain(text: str) -> TerrainSpec:
         return TerrainSpec("ramp", stripped, degrees=degrees)
     if name == "blocks":
         return _parse_blocks(stripped, rest)
-    if name == "stairs":
-        rise_text, run_text = _parameters("stairs", rest, (2,), "stairs:RISE,RUN in metres, e.g. stairs:0.05,0.3")
-        rise = _number(rise_text, "stair rise", "stairs:0.05,0.3")
-        run = _number(run_text, "stair run", "stairs:0.05,0.3")
+    if name in ("stairs", "stairs-down"):
+        example = f"{name}:0.05,0.3"
+        rise_text, run_text = _parameters(name, rest, (2,), f"{name}:RISE,RUN in metres, e.g. {example}")
+        rise = _number(rise_text, "stair rise", example)
+        run = _number(run_text, "stair run", example)
         if not 0.0 < rise <= MAX_FEATURE_HEIGHT:
             raise _error(f"stair rise {rise:g} m is outside (0, {MAX_FEATURE_HEIGHT:g}] m",
-                         "give the rise in metres, e.g. stairs:0.05,0.3")
+                         f"give the rise in metres, e.g. {example}")
         if not 0.05 <= run <= FEATURE_END_X - FEATURE_START_X:
             raise _error(f"stair run {run:g} m is outside [0.05, {FEATURE_END_X - FEATURE_START_X:g}] m",
-                         "give the tread depth in metres, e.g. stairs:0.05,0.3")
-        return TerrainSpec("stairs", stripped, rise=rise, run=run)
+                         f"give the tread depth in metres, e.g. {example}")
+        return TerrainSpec(name, stripped, rise=rise, run=run)
+    if name in LEVEL_KINDS:
+        (level_text,) = _parameters(name, rest, (1,), f"{name}:D with a difficulty D from 0 to 1, e.g. {name}:0.5")
+        level = _number(level_text, f"{name} difficulty", f"{name}:0.5")
+        if not 0.0 <= level <= 1.0:
+            raise _error(f"{name} difficulty {level:g} is outside [0, 1]",
+                         f"give a difficulty from 0 (easiest) to 1 (hardest), e.g. {name}:0.5")
+        return TerrainSpec(name, stripped, level=level)
     return _parse_heightfield(stripped, rest)
+
+
+def robot_scale(body_clearance: float) -> float:
+    """The factor a level terrain's lengths and heights are scaled by: the robot's ``walker.body_clearance``
+    over :data:`REFERENCE_CLEARANCE` (legged_gym's numbers are for a robot about 0.5 m high)."""
+    return body_clearance / REFERENCE_CLEARANCE
+
+
+def resolve(spec: TerrainSpec, scale: float) -> TerrainSpec:
+    """The geometry of a level terrain (legged_gym's ``terrain.py`` numbers × ``scale``, docs/terrains.md); any
+    other spec unchanged. slope: a ramp of 0.4·D rad; steps: stairs of (0.05 + 0.18·D)·s rise and 0.31·s run;
+    obstacles: blocks of side 1·s, each of height 0, h/2 or h with h = (0.05 + 0.2·D)·s; stones: square stones of
+    side 1.5·(1.05 − D)·s, 0.1·s apart (0.05·s at D = 0), on pillars 1·s high; gaps: gaps D·s wide between
+    platform pieces 1·s long, 1·s deep."""
+    d, s, text = spec.level, scale, spec.text
+    if spec.kind == "slope":
+        return TerrainSpec("ramp", text, degrees=math.degrees(0.4 * d), level=d)
+    if spec.kind == "steps":
+        return TerrainSpec("stairs", text, rise=(0.05 + 0.18 * d) * s, run=max(0.05, 0.31 * s), level=d)
+    if spec.kind == "obstacles":
+        h = (0.05 + 0.2 * d) * s
+        size = min(1.0, max(MIN_BLOCK_SIZE, 1.0 * s))
+        return TerrainSpec("blocks", text, low=0.0, high=h, size=size, choices=(0.0, h / 2.0, h), level=d)
+    if spec.kind == "stones" and not spec.depth:
+        gap = (0.05 if d == 0.0 else 0.1) * s
+        return TerrainSpec("stones", text, size=1.5 * (1.05 - d) * s, gap=gap, depth=1.0 * s, level=d)
+    if spec.kind == "gaps" and not spec.depth:
+        return TerrainSpec("gaps", text, size=1.0 * s, gap=d * s, depth=1.0 * s, level=d)
+    return spec
 
 
 def _parse_blocks(text: str, rest: str | None) -> TerrainSpec:
@@ -274,6 +332,12 @@ def _block_grid(spec: TerrainSpec) -> tuple[int, int]:
     return nx, ny
 
 
+def _odd_count(span: float) -> int:
+    """Stones across: an odd number, so one row is centred on y = 0, the robot's path."""
+    n = max(1, math.floor(span + 1e-9))
+    return n if n % 2 else n - 1
+
+
 def _stair_count(spec: TerrainSpec) -> int:
     return max(1, math.floor((FEATURE_END_X - FEATURE_START_X) / spec.run + 1e-9))
 
@@ -282,7 +346,7 @@ class Terrain:
     """A terrain's geometry (what an engine builds) and the analytic ground height.
 
     Attributes:
-        spec: What was built.
+        spec: What was built (a level kind resolved for the robot's ``scale``, :func:`resolve`).
         seed: The seed the block heights were drawn with.
         body_ids: The engine's ids of its bodies (PyBullet: body ids, the ground plane first); empty if not built.
         block_heights: Block heights ``(nx, ny)`` [m] for ``blocks`` (x index along +x from x = 0.4,
@@ -294,7 +358,8 @@ class Terrain:
     """
 
     def __init__(self, spec: TerrainSpec, seed: int, body_ids: tuple[int, ...] = (),
-                 diagonal: Literal["pybullet", "mujoco"] = "pybullet") -> None:
+                 diagonal: Literal["pybullet", "mujoco"] = "pybullet", scale: float = 1.0) -> None:
+        spec = resolve(spec, scale)
         self.spec = spec
         self.diagonal = diagonal
         self.seed = seed
@@ -303,7 +368,9 @@ class Terrain:
         self.field: np.ndarray | None = None
         if spec.kind == "blocks":
             nx, ny = _block_grid(spec)
-            heights = np.random.default_rng(seed).uniform(spec.low, spec.high, size=(nx, ny))
+            rng = np.random.default_rng(seed)
+            heights = (rng.choice(np.array(spec.choices), size=(nx, ny)) if spec.choices
+                       else rng.uniform(spec.low, spec.high, size=(nx, ny)))
             heights[heights < 1e-6] = 0.0  # too thin to build: no box, and height_at says 0
             heights.setflags(write=False)
             self.block_heights = heights
@@ -324,6 +391,8 @@ class Terrain:
         On a vertical face (a block or stair edge) the cell on the +x / +y side counts.
         """
         spec = self.spec
+        if spec.kind in RAISED_KINDS:
+            return self._raised_height(x, y)
         if spec.kind == "flat" or x < START_END_X:
             return 0.0
         if spec.kind == "heightfield":
@@ -347,6 +416,59 @@ class Terrain:
             return float(self.block_heights[i, j])
         return 0.0
 
+    @property
+    def start_height(self) -> float:
+        """Height of the start area (x < :data:`START_END_X`) [m]: 0, or the top of a raised start platform."""
+        return self.height_at(0.0, 0.0)
+
+    def _raised_height(self, x: float, y: float) -> float:
+        """Ground height of ``stairs-down``, ``stones`` and ``gaps``: a platform from :data:`PLATFORM_START_X`."""
+        spec = self.spec
+        if abs(y) > HALF_WIDTH or not PLATFORM_START_X <= x < LANDING_END_X:
+            return 0.0
+        if spec.kind == "stairs-down":
+            steps = _stair_count(spec)
+            if x < FEATURE_START_X:
+                return steps * spec.rise
+            return max(0, steps - math.floor((x - FEATURE_START_X) / spec.run + 1e-12) - 1) * spec.rise
+        if x < FEATURE_START_X:
+            return spec.depth
+        if spec.kind == "stones":  # (the rectangles' arithmetic, without walking thousands of them)
+            pitch = spec.size + spec.gap
+            nx = max(1, math.floor((FEATURE_END_X - FEATURE_START_X) / pitch + 1e-9))
+            ny = _odd_count(2.0 * HALF_WIDTH / pitch)
+            if x >= FEATURE_START_X + nx * pitch + spec.gap:
+                return spec.depth
+            u, v = x - FEATURE_START_X - spec.gap, y + ny * pitch / 2.0 - spec.gap / 2.0
+            i, j = math.floor(u / pitch), math.floor(v / pitch)
+            inside = 0 <= i < nx and 0 <= j < ny and u - i * pitch < spec.size and v - j * pitch < spec.size
+            return spec.depth if inside else 0.0
+        for x0, x1, y0, y1 in self._platform_rectangles():
+            if x0 <= x < x1 and y0 <= y < y1:
+                return spec.depth
+        return 0.0
+
+    def _platform_rectangles(self) -> list[tuple[float, float, float, float]]:
+        """Tops (x0, x1, y0, y1) of the ``stones``' and ``gaps``' platform pieces, all ``spec.depth`` high."""
+        spec = self.spec
+        start = (PLATFORM_START_X, FEATURE_START_X, -HALF_WIDTH, HALF_WIDTH)
+        if spec.kind == "gaps":
+            if spec.gap <= 0.0:
+                return [(PLATFORM_START_X, LANDING_END_X, -HALF_WIDTH, HALF_WIDTH)]
+            pieces, x = [start], FEATURE_START_X + spec.gap
+            while x + spec.size < FEATURE_END_X:
+                pieces.append((x, x + spec.size, -HALF_WIDTH, HALF_WIDTH))
+                x += spec.size + spec.gap
+            return [*pieces, (x, LANDING_END_X, -HALF_WIDTH, HALF_WIDTH)]
+        pitch = spec.size + spec.gap  # stones: a stone centred in every pitch × pitch cell
+        nx = max(1, math.floor((FEATURE_END_X - FEATURE_START_X) / pitch + 1e-9))
+        ny = _odd_count(2.0 * HALF_WIDTH / pitch)
+        x0, y0 = FEATURE_START_X + spec.gap, -ny * pitch / 2.0 + spec.gap / 2.0
+        stones = [(x0 + i * pitch, x0 + i * pitch + spec.size, y0 + j * pitch, y0 + j * pitch + spec.size)
+                  for i in range(nx) for j in range(ny)]
+        end = FEATURE_START_X + nx * pitch + spec.gap
+        return [start, *stones, (end, LANDING_END_X, -HALF_WIDTH, HALF_WIDTH)]
+
     def _field_height(self, x: float, y: float) -> float:
         """Height on the engine's triangulation: PyBullet splits each cell along its (i+1, j)–(i, j+1) diagonal,
         MuJoCo along its (i, j)–(i+1, j+1) one."""
@@ -369,10 +491,11 @@ class Terrain:
         return float(h11 + (1.0 - fx) * (h01 - h11) + (1.0 - fy) * (h10 - h11))
 
     def boxes(self) -> list[Box]:
-        """The boxes of a ramp, stairs or block field (none for flat and height fields)."""
+        """The boxes of a ramp, stairs, a block field or a raised platform (none for flat, height fields and a
+        0° slope)."""
         spec = self.spec
         width = 2.0 * HALF_WIDTH
-        if spec.kind == "ramp":
+        if spec.kind == "ramp" and spec.degrees > 0.0:
             theta = math.radians(spec.degrees)
             top = math.tan(theta) * (FEATURE_END_X - FEATURE_START_X)
             length = (FEATURE_END_X - FEATURE_START_X) / math.cos(theta)
@@ -391,6 +514,18 @@ class Terrain:
                 x1 = LANDING_END_X if k == steps else x0 + spec.run
                 boxes.append(Box(((x0 + x1) / 2.0, 0.0, k * spec.rise / 2.0), (x1 - x0, width, k * spec.rise)))
             return boxes
+        if spec.kind == "stairs-down":
+            steps = _stair_count(spec)
+            boxes = [Box(((PLATFORM_START_X + FEATURE_START_X) / 2.0, 0.0, steps * spec.rise / 2.0),
+                         (FEATURE_START_X - PLATFORM_START_X, width, steps * spec.rise))]
+            for k in range(1, steps):
+                x0 = FEATURE_START_X + (k - 1) * spec.run
+                height = (steps - k) * spec.rise
+                boxes.append(Box((x0 + spec.run / 2.0, 0.0, height / 2.0), (spec.run, width, height)))
+            return boxes
+        if spec.kind in ("stones", "gaps"):
+            return [Box(((x0 + x1) / 2.0, (y0 + y1) / 2.0, spec.depth / 2.0), (x1 - x0, y1 - y0, spec.depth))
+                    for x0, x1, y0, y1 in self._platform_rectangles()]
         if spec.kind == "blocks":
             assert self.block_heights is not None
             nx, ny = self.block_heights.shape

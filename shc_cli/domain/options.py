@@ -86,7 +86,8 @@ SIMULATE: dict[str, Option] = {option.name: option for option in (
     Option("out", Path, None, "Run directory (default runs/<timestamp>-simulate)."),
     Option("plots", bool, True, "Write trajectory.png, power.png and contacts.png."),
     Option("terrain", str, "flat",
-           "flat, ramp:DEG, blocks[:LOW,HIGH[,SIZE]], stairs:RISE,RUN or heightfield:FILE[,SCALE]"),
+           "flat, ramp:DEG, blocks[:LOW,HIGH[,SIZE]], stairs[-down]:RISE,RUN, heightfield:FILE[,SCALE] "
+           "or slope|steps|obstacles|stones|gaps:D (docs/terrains.md)"),
     Option("scenario", str, "WG", "WG walk ground, SG stance ground, WA walk air, SA stance air."),
     Option("physics_rate", float, 400.0, "Physics steps per second (whole multiple of control).", "Hz", 0.0, 1e5,
            True, example="400"),

@@ -388,6 +388,31 @@ class Hardware(Strict):
         default_factory=dict, description="one entry per joint, keyed '<LEG>_<joint>' (e.g. AR_coxa)")
 
 
+class Perception(Strict):
+    """The simulated depth sensor and the robot-centred height map it feeds (``shc_cli.backends.height_map``);
+    the defaults are a RealSense D435-like camera at the body's front, its depth image subsampled."""
+
+    mount: tuple[Metres, Metres, Metres] = Field(
+        (0.1, 0.0, 0.05), strict=False, description="sensor origin in the body frame (x forward, z up) [m]")
+    pitch: Radians = Field(0.7854, description="down-tilt of the sensor's optical axis below the body's x axis [rad]")
+    fov: tuple[Positive, Positive] = Field(
+        (1.518, 1.012), strict=False, description="horizontal and vertical field of view [rad] (D435 depth: 87°, 58°)")
+    resolution: tuple[Annotated[int, Field(ge=1, le=1024)], Annotated[int, Field(ge=1, le=1024)]] = Field(
+        (32, 24), strict=False, description="rays across (columns) and down (rows) the field of view")
+    range: tuple[NonNegative, Positive] = Field(
+        (0.1, 3.0), strict=False, description="nearest and farthest distance the sensor reports [m]")
+    noise: NonNegative = Field(0.005, description="standard deviation of each distance along its ray [m]")
+    rate: Positive = Field(30.0, description="scans per second [Hz]")
+    cell: Positive = Field(0.05, description="side of a height-map cell [m]")
+    extent: Positive = Field(1.5, description="the height map reaches this far from the robot in x and y [m]")
+
+    @model_validator(mode="after")
+    def _near_below_far(self) -> Perception:
+        if self.range[0] >= self.range[1]:
+            raise ValueError(f"range: nearest {self.range[0]} m must be below farthest {self.range[1]} m")
+        return self
+
+
 ADJUSTABLE_WALKER = ("step_frequency", "swing_height", "swing_width", "step_depth", "stance_span_modifier")
 """The ``[walker]`` parameters that can change while running (each an :class:`Adjustable`)."""
 ADJUSTABLE_ADMITTANCE = ("virtual_mass", "virtual_stiffness", "virtual_damping_ratio", "force_gain")
@@ -414,6 +439,8 @@ class Robot(Strict):
     admittance: Admittance = Field(default_factory=Admittance)
     servo: Servo = Field(default_factory=Servo)
     hardware: Hardware = Field(default_factory=Hardware)
+    perception: Perception | None = Field(
+        None, description="the simulated depth sensor and height map (None: the defaults of Perception when asked for)")
 
     @property
     def leg_ids(self) -> list[str]:

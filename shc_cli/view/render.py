@@ -305,7 +305,7 @@ def _annotate(image: np.ndarray, lines: list[str], font: Any, scale: float) -> n
 def render_frames(run: RunLog, options: RenderOptions) -> Iterator[np.ndarray]:
     """The run's video frames, ``(H, W, 3)`` uint8 each, in order."""
     shape = scene.shapes(run.robot)
-    terrain = scene.terrain_shapes(run.summary)
+    terrain = scene.terrain_shapes(run.summary, run.robot)
     rows = frame_rows(run.t, options.fps, options.speed)
     pose = scene.poses(shape, run.joints[rows], run.position[rows], run.rpy[rows])
     speed = measured_speed(run)

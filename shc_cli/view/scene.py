@@ -179,15 +179,17 @@ class TerrainShapes:
     mesh: tuple[FloatArray, np.ndarray] | None = None
 
 
-def terrain_shapes(summary: RunSummary) -> TerrainShapes:
-    """The terrain a run walked on, from its summary (``terrain``, ``seed``), as the simulation built it. A terrain
-    that cannot be rebuilt (a height-field file no longer there) is drawn flat."""
-    from shc_cli.backends.terrain import FEATURE_START_X, Terrain, parse_terrain
+def terrain_shapes(summary: RunSummary, robot: Robot | None = None) -> TerrainShapes:
+    """The terrain a run walked on, from its summary (``terrain``, ``seed``), as the simulation built it (the level
+    terrains scaled to ``robot``, docs/terrains.md). A terrain that cannot be rebuilt (a height-field file no longer
+    there) is drawn flat."""
+    from shc_cli.backends.terrain import FEATURE_START_X, Terrain, parse_terrain, robot_scale
     from shc_cli.errors import ShcError
 
     text = summary.terrain or "flat"
+    scale = 1.0 if robot is None else robot_scale(robot.walker.body_clearance)
     try:
-        terrain = Terrain(parse_terrain(text), summary.seed or 0)
+        terrain = Terrain(parse_terrain(text), summary.seed or 0, scale=scale)
         raw = terrain.boxes()
     except (ShcError, OSError, ValueError):
         return TerrainShapes(text, [])

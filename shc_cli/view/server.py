@@ -350,7 +350,7 @@ def run_scene(run: RunLog) -> RunScene:
         total = weights.sum(axis=1)
         ok = total > 0.0
         zmp[ok] = (pose.feet[ok, :, :2] * weights[ok, :, None]).sum(axis=1) / total[ok, None]  # ATHENA eq. 32
-    terrain = scene.terrain_shapes(run.summary)
+    terrain = scene.terrain_shapes(run.summary, run.robot)
     return RunScene(run, shape, pose, com, zmp, commanded_path(run), terrain, PlotImage(run))
 
 

@@ -40,7 +40,7 @@ from shc_cli.backends.mujoco_ import substeps as substeps_kernels
 from shc_cli.backends.mujoco_.gl import import_for_physics
 from shc_cli.backends.mujoco_.mjcf import RESTITUTION_THRESHOLD_MPS, Options, robot_mjcf, velocity_stiffness
 from shc_cli.backends.servo import ServoModel
-from shc_cli.backends.terrain import Terrain
+from shc_cli.backends.terrain import Terrain, robot_scale
 from shc_cli.errors import BackendError
 from shc_cli.events import NOTICE, event
 from shc_cli.model.body import leg_names
@@ -82,7 +82,7 @@ class MujocoWorld:
         self.substeps = substeps
         self.physics_time = 0.0
         """Wall time spent inside ``mj_step`` [s]."""
-        self.terrain = Terrain(terrain, seed, diagonal="mujoco")
+        self.terrain = Terrain(terrain, seed, diagonal="mujoco", scale=robot_scale(robot.walker.body_clearance))
         stand = stand and not fixed_base
         self.fixed_base = fixed_base
         height = spawn_height(robot, self.terrain, initial_joints, fixed_base, stand)
@@ -280,6 +280,17 @@ class MujocoWorld:
         if distance < 0.0:
             return self.terrain.height_above(position)
         return float(distance)
+
+    def cast_rays(self, origin: np.ndarray, directions: np.ndarray, reach: float) -> np.ndarray:
+        """Distances [m] from ``origin`` along each unit direction ``(n, 3)`` to a terrain geom (group 0; ``nan``:
+        nothing within ``reach``), in one ``mj_multiRay``."""
+        n = len(directions)
+        geoms, distances = np.empty(n, dtype=np.int32), np.empty(n)
+        self.mujoco.mj_multiRay(self.model, self.data, np.asarray(origin, dtype=float),
+                                np.ascontiguousarray(directions, dtype=float).ravel(), RAY_GROUPS, 1, -1, geoms,
+                                distances, None, n, reach)
+        distances[(geoms < 0) | (distances < 0.0) | (distances > reach)] = np.nan
+        return distances
 
     def close(self) -> None:
         """Nothing to free but the references."""

@@ -40,7 +40,8 @@ def _boxes_urdf(boxes: list[Box], shade: tuple[float, float] | None) -> str:
     return "\n".join(lines)
 
 
-def build_terrain(client_id: int, spec: TerrainSpec, friction: float, restitution: float, seed: int) -> Terrain:
+def build_terrain(client_id: int, spec: TerrainSpec, friction: float, restitution: float, seed: int,
+                  scale: float = 1.0) -> Terrain:
     """Create the terrain's bodies in PyBullet client ``client_id``; returns them with the analytic height.
 
     Args:
@@ -50,10 +51,11 @@ def build_terrain(client_id: int, spec: TerrainSpec, friction: float, restitutio
         restitution: Restitution of every terrain body.
         seed: Seed of the block heights (``numpy.random.default_rng(seed)``); the same seed gives the same
             terrain. Unused by the other terrains.
+        scale: The robot's scale of the level terrains (:func:`~shc_cli.backends.terrain.robot_scale`).
     """
     import pybullet as p
 
-    terrain = Terrain(spec, seed)
+    terrain = Terrain(spec, seed, scale=scale)
     c = client_id
     with quiet_stdout():
         plane = p.createCollisionShape(p.GEOM_PLANE, physicsClientId=c)
@@ -61,12 +63,12 @@ def build_terrain(client_id: int, spec: TerrainSpec, friction: float, restitutio
         bodies = [p.createMultiBody(0.0, plane, plane_visual, physicsClientId=c)]
         boxes = terrain.boxes()
         if boxes:
-            shade = (spec.low, spec.high) if spec.kind == "blocks" else None
+            shade = (terrain.spec.low, terrain.spec.high) if terrain.spec.kind == "blocks" else None
             with tempfile.TemporaryDirectory(prefix="shc-terrain-") as folder:
                 path = Path(folder) / "terrain.urdf"
                 path.write_text(_boxes_urdf(boxes, shade), encoding="utf-8")
                 bodies.append(p.loadURDF(str(path), useFixedBase=True, physicsClientId=c))
-        if spec.kind == "heightfield":
+        if terrain.spec.kind == "heightfield":
             bodies.append(_build_heightfield(c, terrain))
     for body in bodies:
         for link in range(-1, p.getNumJoints(body, physicsClientId=c)):

@@ -23,6 +23,7 @@ from shc_cli.backends.pybullet_.quiet import quiet_stdout
 from shc_cli.backends.pybullet_.terrain_bodies import build_terrain
 from shc_cli.backends.pybullet_.urdf import robot_urdf
 from shc_cli.backends.servo import ServoModel
+from shc_cli.backends.terrain import robot_scale
 from shc_cli.errors import BackendError
 from shc_cli.model.body import GRAVITY
 from shc_cli.model.chains import JointSlots
@@ -105,7 +106,8 @@ class World:
         p.setTimeStep(self.timestep, physicsClientId=c)
         p.setPhysicsEngineParameter(numSolverIterations=SOLVER_ITERATIONS, deterministicOverlappingPairs=1,
                                     physicsClientId=c)
-        self.terrain = build_terrain(c, terrain, friction, restitution, seed)
+        self.terrain = build_terrain(c, terrain, friction, restitution, seed,
+                                     robot_scale(robot.walker.body_clearance))
         self.stand: int | None = None
         self._load_robot(fixed_base, initial_joints, friction, restitution, stand and not fixed_base)
 
@@ -326,6 +328,34 @@ class World:
                 return float(z - hit[3][2])
             start = hit[3][2] - 0.001
         return self.terrain.height_above(position)
+
+    def cast_rays(self, origin: np.ndarray, directions: np.ndarray, reach: float) -> np.ndarray:
+        """Distances [m] from ``origin`` along each unit direction ``(n, 3)`` to the terrain (``nan``: nothing
+        within ``reach``), in one ``rayTestBatch``; a ray that hits the robot is cast again from just beyond the hit
+        (up to 7 times), so the rays see only the terrain, as :meth:`_ray_height` does, and the physics is untouched."""
+        p, c = self.p, self.client
+        directions = np.asarray(directions, dtype=float)
+        start = np.array(np.broadcast_to(np.asarray(origin, dtype=float), directions.shape))
+        travelled = np.zeros(len(directions))
+        result = np.full(len(directions), np.nan)
+        todo = np.arange(len(directions))
+        for _ in range(8):
+            left = reach - travelled[todo]
+            ends = start[todo] + directions[todo] * left[:, None]
+            hits = p.rayTestBatch(start[todo].tolist(), ends.tolist(), physicsClientId=c)
+            body = np.array([hit[0] for hit in hits])
+            fraction = np.array([hit[2] for hit in hits], dtype=float)
+            terrain = (body >= 0) & (body != self.body)
+            result[todo[terrain]] = travelled[todo[terrain]] + fraction[terrain] * left[terrain]
+            robot = body == self.body
+            if not robot.any():
+                break
+            again = todo[robot]
+            step = fraction[robot] * left[robot] + 0.001
+            travelled[again] += step
+            start[again] += directions[again] * step[:, None]
+            todo = again
+        return result
 
     def close(self) -> None:
         self.p.disconnect(physicsClientId=self.client)

@@ -1,0 +1,69 @@
+"""The simulated depth sensor's cost: µs per scan (the engine's ray casts, then the map update) and per control cycle.
+
+    .venv/bin/python benchmarks/bench_height_map.py [--robot bullet] [--repeat 30] [--resolution 16,12] [--rate 10]
+
+For each engine and terrain the robot is held in the air at the origin (its sensor sees the terrain ahead); one
+scan is the robot file's ``[perception]`` rays (default 32 × 24) cast at once (MuJoCo ``mj_multiRay``, PyBullet
+``rayTestBatch``), the points made from them and fused into the height map. Per cycle = per scan × the sensor's
+rate × the control period (a scan every 1/rate s, not every cycle).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from shc_cli.backends.engine import EngineOptions
+from shc_cli.backends.engine_registry import open_engine
+from shc_cli.backends.height_map import DepthSensor, HeightMap
+from shc_cli.backends.terrain import parse_terrain
+from shc_cli.model.chains import Chains
+from shc_cli.spec.loading import load_robot, resolve
+from shc_cli.spec.robot import Perception
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--robot", default="bullet")
+    parser.add_argument("--repeat", type=int, default=30)
+    parser.add_argument("--resolution", help="rays across,down instead of the robot file's, e.g. 16,12")
+    parser.add_argument("--rate", type=float, help="scans per second instead of the robot file's")
+    args = parser.parse_args()
+    robot = load_robot(resolve("robots", args.robot)).robot
+    spec = robot.perception or Perception()
+    if args.resolution:
+        columns, rows = (int(n) for n in args.resolution.split(","))
+        spec = spec.model_copy(update={"resolution": (columns, rows)})
+    if args.rate:
+        spec = spec.model_copy(update={"rate": args.rate})
+    sensor = DepthSensor(spec)
+    joints = Chains.from_robot(robot).default_joints()
+    print(f"{args.robot}: {sensor.count} rays a scan at {spec.rate:g} Hz, control period {robot.time_delta:g} s")
+    print("engine    terrain           cast µs/scan  map µs/scan  µs/cycle")
+    for engine in ("mujoco", "pybullet"):
+        for text in ("flat", "stairs:0.05,0.3", "blocks"):
+            world = open_engine(robot, EngineOptions(parse_terrain(text), 4, True, seed=5, engine=engine), joints)
+            reading = world.read()
+            origin, directions = sensor.rays(reading.position, Rotation.from_euler("xyz", reading.rpy).as_matrix())
+            grid, rng = HeightMap.of(spec), np.random.default_rng(0)
+            cast = fuse = 0.0
+            for _ in range(args.repeat):
+                started = time.perf_counter()
+                distances = world.cast_rays(origin, directions, spec.range[1])  # type: ignore[attr-defined]
+                middle = time.perf_counter()
+                grid.update(sensor.points(origin, directions, distances, rng), reading.position[0],
+                            reading.position[1])
+                ended = time.perf_counter()
+                cast, fuse = cast + middle - started, fuse + ended - middle
+            world.close()
+            per_scan = (cast + fuse) / args.repeat * 1e6
+            per_cycle = per_scan * spec.rate * robot.time_delta
+            print(f"{engine:9} {text:17} {cast / args.repeat * 1e6:12.0f} {fuse / args.repeat * 1e6:12.0f} "
+                  f"{per_cycle:9.0f}")
+
+
+if __name__ == "__main__":
+    main()
