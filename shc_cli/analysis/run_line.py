@@ -85,11 +85,11 @@ def walk_warnings(path: Path, summary: RunSummary) -> list[str]:
 
     from shc_cli.analysis import metrics
     from shc_cli.analysis.progress import cycle_path_length
-    from shc_cli.domain.stored_run import open_run
     from shc_cli.errors import ShcError
+    from shc_cli.record.runread import read_run
 
     try:
-        log = open_run(path)
+        log = read_run(path)  # the run directory the simulation just finished
     except (ShcError, OSError):
         return []
     rows = np.flatnonzero(metrics.window_mask(log, metrics.Window()))

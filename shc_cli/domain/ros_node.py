@@ -14,7 +14,7 @@ import logging
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from shc_cli.domain.live import open_live
 from shc_cli.domain.result import RunResult
@@ -67,12 +67,11 @@ def _robot(node: Node, config: NodeConfig,
     import tempfile
 
     from shc_cli.loop.run_inputs import load_inputs
-    from shc_cli.ros.node import RosNode
 
     if config.robot == SERVER:  # the server's robot as shc files, read, then removed (the run keeps robot.toml)
-        assert isinstance(node, RosNode)  # ROS 1's parameter server (shc ros2 refuses 'server' before its node)
+        ros1 = cast("RosNode", node)  # ROS 1's parameter server (shc ros2 refuses 'server' before its node opens)
         with tempfile.TemporaryDirectory(prefix="shc-ros-") as folder:
-            source = str(_robot_from_server(node, config.namespace, Path(folder)))
+            source = str(_robot_from_server(ros1, config.namespace, Path(folder)))
             inputs = load_inputs(source, None, "0,0,0", None, None, default_s=1.0)
     else:
         inputs = load_inputs(config.robot, None, "0,0,0", None, None, default_s=1.0)

@@ -39,7 +39,7 @@ if TYPE_CHECKING:
     import numpy as np
 
     from shc_cli.ros.messages import MessageTypes
-    from shc_cli.ros.remote import RemoteInput
+    from shc_cli.ros.transport import ParameterSink
     from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
@@ -195,7 +195,7 @@ class RosNode:
         so far)."""
         return None
 
-    def serve_parameters(self, robot: Robot, remote: RemoteInput) -> None:
+    def serve_parameters(self, robot: Robot, remote: ParameterSink) -> None:
         """Nothing: on ROS 1 OpenSHC's dynamic parameters change through the remote's parameter adjustment."""
 
     def get_param(self, key: str) -> object:

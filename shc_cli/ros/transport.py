@@ -11,8 +11,15 @@ if TYPE_CHECKING:
 
     from shc_cli.ros.messages import MessageTypes
     from shc_cli.ros.outputs import Sender
-    from shc_cli.ros.remote import RemoteInput
     from shc_cli.spec.robot import Robot
+
+
+class ParameterSink(Protocol):
+    """Where a parameter client's set lands: the remote's dynamic-parameter change
+    (:meth:`shc_cli.ros.remote.RemoteInput.set_parameter`)."""
+
+    def set_parameter(self, name: str, value: float) -> None:
+        ...
 
 
 class Node(Protocol):
@@ -36,7 +43,7 @@ class Node(Protocol):
         """The joints measured at start-up (``/joint_states``, less the offsets) ``(L, n)`` [rad], or None."""
         ...
 
-    def serve_parameters(self, robot: Robot, remote: RemoteInput) -> None:
+    def serve_parameters(self, robot: Robot, remote: ParameterSink) -> None:
         """Offer the robot's dynamic parameters to parameter clients (ROS 1: the remote's adjustment only)."""
         ...
 

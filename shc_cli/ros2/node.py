@@ -33,7 +33,7 @@ from shc_cli.errors import ShcError
 from shc_cli.ros.messages import MessageTypes
 
 if TYPE_CHECKING:
-    from shc_cli.ros.remote import RemoteInput
+    from shc_cli.ros.transport import ParameterSink
     from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
@@ -214,7 +214,7 @@ class Ros2Node:
                     "as OpenSHC does", ", ".join(missing[:3]) + (" …" if len(missing) > 3 else ""), timeout)
         return None
 
-    def serve_parameters(self, robot: Robot, remote: RemoteInput) -> None:
+    def serve_parameters(self, robot: Robot, remote: ParameterSink) -> None:
         """Declare OpenSHC's dynamic parameters as ROS 2 parameters that change the running controller."""
         from shc_cli.ros2.parameters import Parameters
 

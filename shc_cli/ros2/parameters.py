@@ -21,7 +21,7 @@ from shc_cli.events import event
 from shc_cli.spec.robot import ADJUSTABLE, ADJUSTABLE_WALKER
 
 if TYPE_CHECKING:
-    from shc_cli.ros.remote import RemoteInput
+    from shc_cli.ros.transport import ParameterSink
     from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
@@ -53,7 +53,7 @@ def adjustable(robot: Robot) -> dict[str, tuple[float, float, float]]:
 class Parameters:
     """Declares the parameters on ``node`` (an rclpy node) and hands accepted sets to ``remote``."""
 
-    def __init__(self, node: Any, robot: Robot, remote: RemoteInput) -> None:
+    def __init__(self, node: Any, robot: Robot, remote: ParameterSink) -> None:
         from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor
         from rclpy.exceptions import InvalidParameterValueException
 
