@@ -144,18 +144,19 @@ LAYERS: dict[str, int] = {
     "shc_cli.live": 13,
     "shc_cli.replay": 14,
     "shc_cli.domain": 15,
-    "shc_cli.view": 16,
-    "shc_cli.api": 17,
-    "shc_cli": 18,
-    "shc_cli.commands": 19,
-    "shc_cli.cli": 20,
+    "shc_cli.gym": 16,
+    "shc_cli.view": 17,
+    "shc_cli.api": 18,
+    "shc_cli": 19,
+    "shc_cli.commands": 20,
+    "shc_cli.cli": 21,
 }
 """The layers, lowest first (a module may import its own package and the layers below; the longest prefix names a
 module's layer): robot and gait files ← kinematics ← the controller ← servo buses ← backends (engines, servo
 models, the Dynamixel backend) ← the emulated servo buses (they run the backends' servo physics; a package of
 their own once the bus work settles) ← the run record (log format, readers, row kernels, summary models) ←
 validation ← analysis ← plots ← interop (bags, OpenSHC files, URDF import) ← the run loop ← ROS 1 ← the live
-stream ← replay ← domain (runs, sweeps, optimize, opening a stored run) ← view ← api ← the package's lazy facade
+stream ← replay ← domain (runs, sweeps, optimize, opening a stored run) ← the Gymnasium environment ← view ← api ← the package's lazy facade
 (``import shc_cli``) ← commands ← cli."""
 ANYWHERE = {"shc_cli.version", "shc_cli.errors", "shc_cli.events", "shc_cli.outputs", "shc_cli.progress"}
 """Helpers every layer may import: the version, the one exception tree, logging (events), file writing, the progress
