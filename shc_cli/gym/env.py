@@ -89,7 +89,7 @@ class WalkEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         actor = self.gait or self.residual or self.joints
         assert actor is not None
         self.action_space = actor.space
-        self._action_size = int(actor.space.shape[0])
+        self.action_size = int(actor.space.shape[0])
         self._adjust: Adjust | None = (self.residual.adjust if self.residual is not None
                                        else self.joints.adjust if self.joints is not None else None)
         self._slots = JointSlots.of(self.robot)
@@ -138,11 +138,11 @@ class WalkEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         self._loop = loop = RunLoop(controller, backend, source, NullRecorder(), StartUp.of(robot))
         self._cycles_in_step, self._period = 0, 1
         if self.gait is not None:
-            self.gait.set(np.zeros(self._action_size))
+            self.gait.set(np.zeros(self.action_size))
         if self.joints is not None:
             self.joints.targets = None
         if self.residual is not None:
-            self.residual.set(np.zeros(self._action_size))
+            self.residual.set(np.zeros(self.action_size))
         loop.begin()
         cycle = None
         while controller.state != RobotState.RUNNING:

@@ -1,0 +1,192 @@
+"""shc_cli.gym: the Gymnasium environment over the one controller and run loop (issue 41)."""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Callable
+from pathlib import Path
+from typing import cast
+
+import gymnasium
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import shc_cli.gym
+from shc_cli.backends.engine import Reading
+from shc_cli.backends.simulated import SimulatedBackend, open_world
+from shc_cli.control.controller import Command, Controller, CycleOutput
+from shc_cli.domain.config import SimulationConfig
+from shc_cli.gym.actions import GAIT_PARAMETERS, around
+from shc_cli.gym.env import WalkEnv
+from shc_cli.gym.observe import TERMS, observation_names, support_margin
+from shc_cli.loop.run_inputs import load_inputs
+from shc_cli.loop.run_loop import RunLoop, StartUp
+
+STEPS = 60
+"""Environment steps of the comparisons (0.6 s of walking at 100 Hz)."""
+
+
+def _env(action: str, **kwargs: float | str | tuple[float, float, float] | dict[str, float]) -> WalkEnv:
+    make = cast(Callable[..., gymnasium.Env[np.ndarray, np.ndarray]], gymnasium.make)  # (its own keywords typed)
+    env = make(shc_cli.gym.ENV_ID, action=action, duration=STEPS * 0.01, **kwargs)
+    inner = env.unwrapped
+    assert isinstance(inner, WalkEnv)
+    return inner
+
+
+@pytest.mark.parametrize("action", [pytest.param("gait", marks=pytest.mark.slow), "residual",
+                                    pytest.param("joints", marks=pytest.mark.slow)])  # each 6–12 s on 2 busy cores
+def test_check_env_passes_for_every_action_space(action: str) -> None:
+    env = _env(action)
+    check_env(env, skip_render_check=True)
+    assert env.observation_space.shape == (len(observation_names(env.robot)),)
+    env.close()
+
+
+class _Capture:
+    """A recorder keeping the applied joint targets of every cycle."""
+
+    def __init__(self) -> None:
+        self.applied: list[np.ndarray] = []
+
+    def record(self, cycle: int, command: Command, out: CycleOutput, applied: np.ndarray, reading: Reading) -> None:
+        self.applied.append(np.array(applied))
+
+    def flush(self) -> None:
+        """Nothing to flush."""
+
+
+def _simulated_targets(velocity: str, seed: int) -> list[np.ndarray]:
+    """Every cycle's joint targets of ``shc simulate bullet --velocity V --duration STEPS·dt --seed S`` as the
+    domain builds it (the same robot, world, controller and loop), captured instead of logged."""
+    config = SimulationConfig(robot="bullet", velocity=velocity, duration=STEPS * 0.01, seed=seed)
+    inputs = load_inputs(config.robot, config.gait, config.velocity, config.duration, None, default_s=20.0,
+                         walking=config.walking, robot_change=config.apply_switches)
+    world = open_world(inputs.robot, config.engine_options(inputs.robot))
+    capture = _Capture()
+    with SimulatedBackend(inputs.robot, world) as backend:
+        controller = Controller(inputs.robot, inputs.gait, joints=backend.start(), pose_sets=inputs.pose_sets)
+        RunLoop(controller, backend, inputs.source(controller), capture, StartUp.of(inputs.robot)).run()
+    return capture.applied
+
+
+def _episode(env: WalkEnv, seed: int, action: np.ndarray, options: dict[str, float] | None = None
+             ) -> tuple[int, list[np.ndarray], list[np.ndarray]]:
+    """(start-up cycles, each step's applied joint targets, each observation) of one episode."""
+    obs, info = env.reset(seed=seed, options=options)
+    joints, observations = [], [obs]
+    for _ in range(STEPS):
+        obs, _, terminated, truncated, info = env.step(action)
+        joints.append(np.array(info["joints"]))
+        observations.append(obs)
+        if terminated or truncated:
+            break
+    return int(info.get("start_up_cycles", 0) or 0), joints, observations
+
+
+@pytest.mark.parametrize("action", ["residual", "gait"])
+def test_zero_actions_give_the_joint_targets_of_shc_simulate(action: str) -> None:
+    reference = _simulated_targets("0.6,0,0.2", seed=3)
+    env = _env(action, command=(0.6, 0.0, 0.2))
+    _, info = env.reset(seed=3)
+    start_up = info["start_up_cycles"] + 1
+    zero = np.zeros(env.action_size, dtype=np.float32)
+    joints = []
+    truncated = False
+    while not truncated:
+        _, _, terminated, truncated, step_info = env.step(zero)
+        assert not terminated
+        joints.append(step_info["joints"])
+    env.close()
+    assert len(reference) == start_up + STEPS == start_up + len(joints)
+    for mine, theirs in zip(joints, reference[start_up:], strict=True):
+        np.testing.assert_array_equal(mine, theirs)  # bit for bit
+
+
+def test_zero_residual_matches_the_log_of_the_simulate_command(tmp_path: Path) -> None:
+    """Against ``log.csv`` of the command itself (6 significant digits there)."""
+    from shc_cli.api import simulate
+
+    run = simulate("bullet", velocity="0.6,0,0.2", duration=STEPS * 0.01, seed=3, out=tmp_path / "run", plots=False)
+    with (run.path / "log.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    env = _env("residual", command="0.6,0,0.2")
+    _, joints, _ = _episode(env, 3, np.zeros(env.action_size, dtype=np.float32))
+    names = [f"{leg}_{joint}_cmd" for leg, spec in env.robot.legs.items() for joint in spec.joints]
+    slots = env._slots
+    logged = np.array([[float(row[name]) for name in names] for row in rows[-STEPS:]])
+    mine = np.array([slots.servo_order(j) for j in joints])
+    np.testing.assert_allclose(mine, logged, rtol=1e-5, atol=1e-6)
+    env.close()
+
+
+def test_a_residual_moves_the_tips_by_its_offset() -> None:
+    """A 1 cm offset along x on every leg moves every tip (FK of the applied joints) by about 1 cm along x."""
+    from shc_cli.model.chains import Chains
+
+    env = _env("residual", command=(0.0, 0.0, 0.0), residual_limit=0.01)
+    env.reset(seed=0)
+    legs = len(env.robot.legs)
+    _, _, _, _, plain = env.step(np.zeros(3 * legs, dtype=np.float32))
+    chains = Chains.from_robot(env.robot)
+    before = chains.tips(plain["joints"])
+    action = np.tile(np.array([1.0, 0.0, 0.0], dtype=np.float32), legs)
+    _, _, _, _, moved = env.step(action)
+    shift = chains.tips(moved["joints"]) - before
+    env.close()
+    np.testing.assert_allclose(shift[:, 0], 0.01, atol=2e-3)  # standing still: the controller's tips stay put
+    np.testing.assert_allclose(shift[:, 1:], 0.0, atol=2e-3)
+
+
+def test_reset_with_a_seed_is_deterministic_and_options_change_the_episode() -> None:
+    env = _env("gait")
+    action = np.array([0.5, -0.5, 0.0, 0.0], dtype=np.float32)
+    _, first, obs_first = _episode(env, 7, action)
+    _, again, obs_again = _episode(env, 7, action)
+    np.testing.assert_array_equal(np.array(first), np.array(again))
+    np.testing.assert_array_equal(np.array(obs_first), np.array(obs_again))
+    _, _, obs_heavy = _episode(env, 7, action, {"mass_scale": 1.5, "friction": 0.5})
+    assert np.any(np.array(obs_heavy) != np.array(obs_first))
+    with pytest.raises(ValueError, match="no option 'gravity'"):
+        env.reset(options={"gravity": 1.0})
+    env.close()
+
+
+def test_the_gait_action_stays_within_the_dynamic_parameter_ranges() -> None:
+    env = _env("gait", command=(0.5, 0.0, 0.0))
+    env.reset(seed=0)
+    for _ in range(STEPS):
+        env.step(np.ones(4, dtype=np.float32))
+    parameters = env._loop.controller.parameters if env._loop is not None else {}
+    for name in GAIT_PARAMETERS:
+        spec = getattr(env.robot.walker, name)
+        assert spec.min <= parameters[name] <= spec.max
+    assert parameters["step_frequency"] == pytest.approx(env.robot.walker.step_frequency.max)
+    env.close()
+
+
+def test_around_maps_zero_to_the_default_and_the_ends_to_the_range() -> None:
+    assert around(0.0, 0.1, 0.5, 2.0) == 0.5
+    assert around(-1.0, 0.1, 0.5, 2.0) == pytest.approx(0.1)
+    assert around(1.0, 0.1, 0.5, 2.0) == pytest.approx(2.0)
+    assert around(7.0, 0.1, 0.5, 2.0) == pytest.approx(2.0)
+
+
+def test_support_margin_of_a_square_and_outside_it() -> None:
+    square = np.array([[0.1, 0.1], [-0.1, 0.1], [-0.1, -0.1], [0.1, -0.1]])
+    assert support_margin(square) == pytest.approx(0.1)
+    assert support_margin(square + np.array([0.15, 0.0])) == pytest.approx(-0.05)
+    assert support_margin(square[:2]) == -0.1
+
+
+def test_reward_terms_are_named_and_an_unknown_one_is_refused() -> None:
+    env = _env("gait", reward={"stability": 1.0})
+    env.reset(seed=0)
+    _, reward, _, _, info = env.step(np.zeros(4, dtype=np.float32))
+    assert set(info["terms"]) == set(TERMS)
+    assert info["terms"]["stability"] > 0  # standing on six feet, the body over them
+    assert reward == pytest.approx(sum(env.rewards.weights[k] * v for k, v in info["terms"].items()))
+    env.close()
+    with pytest.raises(ValueError, match="no term 'speed'"):
+        WalkEnv(reward={"speed": 1.0})
