@@ -190,3 +190,15 @@ def test_reward_terms_are_named_and_an_unknown_one_is_refused() -> None:
     env.close()
     with pytest.raises(ValueError, match="no term 'speed'"):
         WalkEnv(reward={"speed": 1.0})
+
+
+def test_the_example_of_docs_gym_runs(capsys: pytest.CaptureFixture[str]) -> None:
+    import re
+
+    from .conftest import ROOT
+
+    page = (ROOT / "docs" / "gym.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", page, flags=re.S)
+    assert len(blocks) == 1
+    exec(compile(blocks[0], "docs/gym.md", "exec"), {})
+    assert capsys.readouterr().out.strip() == "(94,) ['cot', 'fall', 'joint_limits', 'stability', 'tracking']"

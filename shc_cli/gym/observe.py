@@ -117,7 +117,7 @@ class Rewards:
             wx, wy = float(reading.linear_velocity[0]), float(reading.linear_velocity[1])
             error = math.hypot(c * wx + s * wy - vx, -s * wx + c * wy - vy)
             terms["tracking"] = math.exp(-((error / TRACKING_SCALE) ** 2))
-            power = float(np.sum(reading.servo_power))
+            power = float(reading.servo_power.sum())
             terms["cot"] = -power / (self.weight_mg * max(math.hypot(vx, vy), MIN_SPEED))
         if w["stability"]:
             tips = out.model_tips[np.asarray(reading.foot_contact, dtype=bool), :2]
@@ -125,7 +125,8 @@ class Rewards:
         terms["fall"] = -1.0 if fell else 0.0
         if w["joint_limits"]:
             q = out.joints[self.rows, self.cols]
-            terms["joint_limits"] = -float(np.mean((q < self.near_low) | (q > self.near_high)))
+            near = np.count_nonzero(q < self.near_low) + np.count_nonzero(q > self.near_high)
+            terms["joint_limits"] = -near / len(q)
         return terms
 
     def total(self, terms: dict[str, float]) -> float:
