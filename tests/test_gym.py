@@ -202,3 +202,22 @@ def test_the_example_of_docs_gym_runs(capsys: pytest.CaptureFixture[str]) -> Non
     assert len(blocks) == 1
     exec(compile(blocks[0], "docs/gym.md", "exec"), {})
     assert capsys.readouterr().out.strip() == "(94,) ['cot', 'fall', 'joint_limits', 'stability', 'tracking']"
+
+
+def test_out_writes_each_episode_as_the_run_directory_of_shc_simulate(tmp_path: Path) -> None:
+    """With ``out=DIR`` and zero residuals an episode's log.csv is byte for byte that of ``shc simulate``."""
+    from shc_cli.api import simulate
+
+    run = simulate("bullet", velocity="0.6,0,0.2", duration=STEPS * 0.01, seed=3, out=tmp_path / "run", plots=False)
+    env = _env("residual", command="0.6,0,0.2", out=str(tmp_path / "episodes"))
+    _episode(env, 3, np.zeros(env.action_size, dtype=np.float32))
+    env.close()
+    assert [p.name for p in env.written] == ["episode-0001"]
+    episode = env.written[0]
+    assert (episode / "log.csv").read_bytes() == (run.path / "log.csv").read_bytes()
+    assert (episode / "robot.toml").read_bytes() == (run.path / "robot.toml").read_bytes()
+    import json
+
+    mine, theirs = (json.loads((p / "summary.json").read_text()) for p in (episode, run.path))
+    for key in ("sim_time_s", "distance_m", "cot", "fell", "stop_reason", "complete", "mean_power_w", "seed"):
+        assert mine[key] == theirs[key], key

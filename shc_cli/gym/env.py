@@ -5,11 +5,13 @@ its joints and runs the one run loop (:class:`~shc_cli.loop.run_loop.RunLoop`) c
 runs the start-up to RUNNING, every :meth:`WalkEnv.step` one cycle of the run's command timeline (the
 ``command`` velocity for ``duration`` seconds, as ``shc simulate --velocity --duration``) with the action applied:
 to the command (``gait``) or to the controller's joint targets (``residual``, ``joints``; :mod:`.actions`). The
-episode is terminated when the robot falls and truncated when the timeline is over. Nothing is written.
+episode is terminated when the robot falls and truncated when the timeline is over. Nothing is written unless
+``out=DIR`` (:mod:`.episodes`).
 """
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any, SupportsFloat
 
 import gymnasium
@@ -23,6 +25,7 @@ from shc_cli.control.controller import Command, Controller
 from shc_cli.control.states import RobotState
 from shc_cli.domain.config import SimulationConfig
 from shc_cli.gym.actions import ACTIONS, ActionName, GaitAction, JointAction, ResidualAction
+from shc_cli.gym.episodes import EpisodeRecord
 from shc_cli.gym.observe import Rewards, fallen, observation_names, observe
 from shc_cli.loop.run_inputs import RunInputs, load_inputs
 from shc_cli.loop.run_loop import Adjust, NullRecorder, RunLoop, StartUp
@@ -65,6 +68,7 @@ class WalkEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         gait: gait file or name (None: the robot's).
         friction: lateral friction of feet and terrain (as ``shc simulate --friction``).
         residual_limit: bound of the residual tip offsets [m].
+        out: write each episode as a run directory ``out/episode-NNNN`` (:mod:`.episodes`); None: nothing.
     """
 
     metadata: Info = {"render_modes": []}  # noqa: RUF012 (gymnasium's class attribute)
@@ -72,7 +76,7 @@ class WalkEnv(gymnasium.Env[np.ndarray, np.ndarray]):
     def __init__(self, robot: str = "bullet", action: ActionName = "gait", engine: str = "mujoco",
                  terrain: str = "flat", command: tuple[float, float, float] | str = (1.0, 0.0, 0.0),
                  reward: dict[str, float] | None = None, duration: float = 10.0, gait: str | None = None,
-                 friction: float = 0.9, residual_limit: float = 0.02) -> None:
+                 friction: float = 0.9, residual_limit: float = 0.02, out: str | Path | None = None) -> None:
         if action not in ACTIONS:
             raise ValueError(f"action: '{action}' is not one of {', '.join(ACTIONS)}")
         velocity = command if isinstance(command, str) else ",".join(repr(float(v)) for v in command)
@@ -102,6 +106,11 @@ class WalkEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         self._cycles_in_step = 0
         self._period = 1
         self.seed_used = 0
+        self.out = None if out is None else Path(out)
+        self.episodes = 0
+        self._record: EpisodeRecord | None = None
+        self.written: list[Path] = []
+        """The run directories written so far (``out``)."""
 
     def gait_command(self, command: Command) -> Command:
         """The timeline's command with the gait action (its parameters sent once a step cycle)."""
@@ -135,7 +144,13 @@ class WalkEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         self._backend = backend = SimulatedBackend(robot, world)
         controller = Controller(robot, self.inputs.gait, joints=backend.start(), pose_sets=self.inputs.pose_sets)
         source = _Commands(self.inputs.source(controller), self)
-        self._loop = loop = RunLoop(controller, backend, source, NullRecorder(), StartUp.of(robot))
+        if self.out is not None:
+            self.episodes += 1
+            self._record = record = EpisodeRecord(self.out / f"episode-{self.episodes:04d}", robot, backend, config)
+            self._loop = loop = RunLoop(controller, backend, source, record.recorder, StartUp.of(robot),
+                                        observers=[record.observer])
+        else:
+            self._loop = loop = RunLoop(controller, backend, source, NullRecorder(), StartUp.of(robot))
         self._cycles_in_step, self._period = 0, 1
         if self.gait is not None:
             self.gait.set(np.zeros(self.action_size))
@@ -172,6 +187,9 @@ class WalkEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         return obs, self.rewards.total(terms), fell, truncated, {"terms": terms, "joints": cycle.applied}
 
     def close(self) -> None:
+        if self._record is not None and self._loop is not None:
+            self.written.append(self._record.finish(self._loop.finish(), self._loop.controller))
+            self._record = None
         if self._backend is not None:
             self._backend.close()
             self._backend = self._loop = None
