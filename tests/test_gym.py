@@ -221,3 +221,22 @@ def test_out_writes_each_episode_as_the_run_directory_of_shc_simulate(tmp_path: 
     mine, theirs = (json.loads((p / "summary.json").read_text()) for p in (episode, run.path))
     for key in ("sim_time_s", "distance_m", "cot", "fell", "stop_reason", "complete", "mean_power_w", "seed"):
         assert mine[key] == theirs[key], key
+
+
+@pytest.mark.slow
+def test_the_gait_search_example_lowers_the_cost_of_transport_at_equal_speed() -> None:
+    """docs/experiments/gym_gait_search.py (seeded, 2 iterations of 6): a gait found through the environment walks
+    at the defaults' speed (within 5 %) for less than the defaults' CoT."""
+    import re
+    import subprocess
+    import sys
+
+    from .conftest import ROOT
+
+    done = subprocess.run([sys.executable, str(ROOT / "docs" / "experiments" / "gym_gait_search.py"),
+                           "--iterations", "2"], capture_output=True, text=True, timeout=600, check=True)
+    base = re.search(r"defaults: CoT ([\d.]+) at ([\d.]+) m/s", done.stdout)
+    found = re.search(r"found: CoT ([\d.]+) against [\d.]+ of the defaults .* at ([\d.]+) m/s", done.stdout)
+    assert base is not None and found is not None, done.stdout
+    assert float(found[1]) < float(base[1])
+    assert abs(float(found[2]) / float(base[2]) - 1.0) <= 0.05

@@ -184,7 +184,8 @@ class WalkEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         terms = self.rewards.terms(cycle.out, cycle.reading, fell)
         obs = observe(self._slots, cycle.reading, cycle.out)
         truncated = not fell and self._steps >= self.inputs.cycles
-        return obs, self.rewards.total(terms), fell, truncated, {"terms": terms, "joints": cycle.applied}
+        return obs, self.rewards.total(terms), fell, truncated, {"terms": terms, "joints": cycle.applied,
+                                                                **self.rewards.measures(cycle.reading)}
 
     def close(self) -> None:
         if self._record is not None and self._loop is not None:

@@ -10,8 +10,9 @@ The reward is a weighted sum of named terms (:data:`TERMS`), each computed from 
 
 - ``tracking``: ``exp(−(|v − v*| / 0.1 m/s)²)`` of the body's planar velocity (body frame, ground truth) against the
   controller's desired velocity ``v*``, 0…1.
-- ``cot``: minus the cost of transport of the cycle, ``P / (m·g·max(|v*|, 0.05 m/s))``, from the servos' electrical
-  power ``P`` (the servo model of ``shc simulate``).
+- ``cot``: minus the cost of transport of the cycle, ``P / (m·g·max(|v|, 0.05 m/s))``, from the servos' electrical
+  power ``P`` (the servo model of ``shc simulate``) and the body's planar speed ``|v|`` (ground truth: against the
+  controller's desired speed a policy would lower the cost by asking for a slower gait).
 - ``stability``: the static stability margin [m]: the distance of the body origin's ground projection inside the
   support polygon of the feet in contact (negative outside it, −0.1 with fewer than three feet down).
 - ``fall``: −1 on the cycle the robot falls (the fall of ``shc simulate``: tilt above
@@ -118,7 +119,7 @@ class Rewards:
             error = math.hypot(c * wx + s * wy - vx, -s * wx + c * wy - vy)
             terms["tracking"] = math.exp(-((error / TRACKING_SCALE) ** 2))
             power = float(reading.servo_power.sum())
-            terms["cot"] = -power / (self.weight_mg * max(math.hypot(vx, vy), MIN_SPEED))
+            terms["cot"] = -power / (self.weight_mg * max(math.hypot(wx, wy), MIN_SPEED))
         if w["stability"]:
             tips = out.model_tips[np.asarray(reading.foot_contact, dtype=bool), :2]
             terms["stability"] = support_margin(tips)
@@ -128,6 +129,12 @@ class Rewards:
             near = np.count_nonzero(q < self.near_low) + np.count_nonzero(q > self.near_high)
             terms["joint_limits"] = -near / len(q)
         return terms
+
+    @staticmethod
+    def measures(reading: Reading) -> dict[str, float]:
+        """The cycle's servo power [W] and planar body speed [m/s] (ground truth), for ``info``."""
+        v = reading.linear_velocity
+        return {"power_w": float(reading.servo_power.sum()), "speed_mps": math.hypot(float(v[0]), float(v[1]))}
 
     def total(self, terms: dict[str, float]) -> float:
         w = self.weights
