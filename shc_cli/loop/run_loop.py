@@ -9,6 +9,9 @@ targets applied, one control period, the reading, the fault check, the recorder'
 stop the run: a fall). It stops when the input is over, on a fault, on an observer's reason or on a stop request
 (SIGINT/SIGTERM via :func:`shc_cli.loop.session.interrupts`, or :meth:`RunLoop.request_stop`). Robot and walk state
 changes, faults, stop requests and the end are logged as events (:mod:`shc_cli.events`: the run's ``events.log``).
+:meth:`RunLoop.run` is :meth:`RunLoop.begin`, :meth:`RunLoop.step` until it returns ``None``, :meth:`RunLoop.finish`;
+the Gymnasium environment (:mod:`shc_cli.gym`) calls them itself, one cycle a step, with an :data:`Adjust` of the
+controller's output (a policy's residual).
 """
 
 from __future__ import annotations
