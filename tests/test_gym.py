@@ -240,3 +240,25 @@ def test_the_gait_search_example_lowers_the_cost_of_transport_at_equal_speed() -
     assert base is not None and found is not None, done.stdout
     assert float(found[1]) < float(base[1])
     assert abs(float(found[2]) / float(base[2]) - 1.0) <= 0.05
+
+
+def test_the_observation_holds_the_reading_in_the_documented_order() -> None:
+    env = _env("residual")
+    env.reset(seed=0)
+    obs, _, _, _, _ = env.step(np.zeros(env.action_size, dtype=np.float32))
+    assert env._backend is not None and env._backend.reading is not None and env._loop is not None
+    reading = env._backend.reading
+    named = dict(zip(env.names, obs.tolist(), strict=True))
+    leg, joint = next(iter(env.robot.legs.items()))
+    first = f"{leg}.{next(iter(joint.joints))}"
+    assert named[f"q.{first}"] == pytest.approx(float(reading.joints[0, 0]), abs=1e-6)
+    assert named[f"dq.{first}"] == pytest.approx(float(reading.joint_velocities[0, 0]), abs=1e-4)
+    quaternion = [named[k] for k in ("qx", "qy", "qz", "qw")]
+    np.testing.assert_allclose(quaternion, reading.orientation, atol=1e-6)
+    assert np.linalg.norm(quaternion) == pytest.approx(1.0, abs=1e-5)
+    legs = list(env.robot.legs)
+    np.testing.assert_array_equal([named[f"contact.{leg}"] for leg in legs], reading.foot_contact.astype(float))
+    np.testing.assert_allclose([named[f"force.{leg}"] for leg in legs], reading.foot_forces, rtol=1e-6)
+    assert named["cmd.vx"] > 0 and named["cmd.vy"] == 0.0  # walking forward, as commanded
+    assert all(-1.0 <= named[f"{kind}.{leg}"] <= 1.0 for kind in ("stance", "swing") for leg in legs)
+    env.close()
