@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import functools
 from collections.abc import Callable
 from pathlib import Path
 from typing import cast
@@ -11,20 +12,32 @@ import gymnasium
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import shc_cli.gym
 from shc_cli.backends.engine import Reading
 from shc_cli.backends.simulated import SimulatedBackend, open_world
 from shc_cli.control.controller import Command, Controller, CycleOutput
+from shc_cli.control.states import RobotState
+from shc_cli.control.walk import WalkState
 from shc_cli.domain.config import SimulationConfig
 from shc_cli.gym.actions import GAIT_PARAMETERS, around
 from shc_cli.gym.env import WalkEnv
 from shc_cli.gym.observe import TERMS, observation_names, support_margin
 from shc_cli.loop.run_inputs import load_inputs
 from shc_cli.loop.run_loop import RunLoop, StartUp
+from shc_cli.spec.robot import Robot
 
 STEPS = 60
 """Environment steps of the comparisons (0.6 s of walking at 100 Hz)."""
+
+
+@functools.cache
+def _bullet() -> Robot:
+    from shc_cli.spec.loading import load_robot
+
+    return load_robot("bullet").robot
 
 
 def _env(action: str, **kwargs: float | str | tuple[float, float, float] | dict[str, float]) -> WalkEnv:
@@ -262,3 +275,47 @@ def test_the_observation_holds_the_reading_in_the_documented_order() -> None:
     assert named["cmd.vx"] > 0 and named["cmd.vy"] == 0.0  # walking forward, as commanded
     assert all(-1.0 <= named[f"{kind}.{leg}"] <= 1.0 for kind in ("stance", "swing") for leg in legs)
     env.close()
+
+
+_UNIT = st.floats(-1.0, 1.0, allow_nan=False)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(_UNIT, min_size=4, max_size=4), st.tuples(_UNIT, _UNIT, _UNIT))
+def test_any_gait_action_stays_in_the_ranges_and_the_throttle(action: list[float],
+                                                              velocity: tuple[float, float, float]) -> None:
+    from shc_cli.gym.actions import VELOCITY_SCALE, GaitAction
+
+    robot = _bullet()
+    gait = GaitAction(robot)
+    gait.set(np.array(action))
+    defaults = {name: getattr(robot.walker, name).default for name in GAIT_PARAMETERS}
+    command = gait.command(Command(velocity=velocity), defaults, new_step_cycle=True)
+    for name, value in command.parameters.items():
+        spec = getattr(robot.walker, name)
+        assert spec.min <= value <= spec.max
+    assert VELOCITY_SCALE[0] <= gait.scale <= VELOCITY_SCALE[1]
+    assert all(abs(v) <= 1.0 for v in command.velocity)
+    unchanged = gait.command(Command(velocity=velocity), dict(gait.values), new_step_cycle=True)
+    assert unchanged.parameters == {}  # nothing to send when the controller already has the values
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.lists(_UNIT, min_size=18, max_size=18))
+def test_any_residual_keeps_the_joint_targets_within_the_limits(action: list[float]) -> None:
+    from shc_cli.gym.actions import ResidualAction
+    from shc_cli.model.chains import Chains
+
+    robot = _bullet()
+    residual = ResidualAction(robot, limit=0.05)
+    chains = Chains.from_robot(robot)
+    joints = (chains.lower + chains.upper) / 2
+    legs = joints.shape[0]
+    out = CycleOutput(joints, np.zeros_like(joints), np.zeros((legs, 3)), np.zeros((legs, 3)), np.zeros((legs, 3)),
+                      np.full(legs, -1.0), np.full(legs, -1.0), (0.0, 0.0, 0.0), (0.0,) * 6,
+                      RobotState.RUNNING, WalkState.STOPPED)
+    residual.set(np.array(action))
+    moved = residual.adjust(out).joints
+    assert np.all(moved >= chains.lower) and np.all(moved <= chains.upper)
+    if not any(action):
+        assert moved is joints
