@@ -26,7 +26,7 @@ from shc_cli.control.states import RobotState
 from shc_cli.domain.config import SimulationConfig
 from shc_cli.gym.actions import ACTIONS, ActionName, GaitAction, JointAction, ResidualAction
 from shc_cli.gym.episodes import EpisodeRecord
-from shc_cli.gym.observe import Rewards, fallen, observation_names, observe
+from shc_cli.gym.observe import Rewards, fallen, observation_bounds, observation_names, observe
 from shc_cli.loop.run_inputs import RunInputs, load_inputs
 from shc_cli.loop.run_loop import Adjust, NullRecorder, RunLoop, StartUp
 from shc_cli.model.chains import JointSlots
@@ -99,7 +99,7 @@ class WalkEnv(gymnasium.Env[np.ndarray, np.ndarray]):
         self._slots = JointSlots.of(self.robot)
         self._steps = 0
         self.names = observation_names(self.robot)
-        self.observation_space = spaces.Box(-np.inf, np.inf, shape=(len(self.names),), dtype=np.float32)
+        self.observation_space = spaces.Box(*observation_bounds(self.names))
         self.rewards = Rewards(self.robot, reward or {})
         self._loop: RunLoop[Reading] | None = None
         self._backend: SimulatedBackend | None = None

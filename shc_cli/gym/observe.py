@@ -55,6 +55,19 @@ def observation_names(robot: Robot) -> list[str]:
             + [f"stance.{leg}" for leg in legs] + [f"swing.{leg}" for leg in legs])
 
 
+def observation_bounds(names: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper bounds of each entry (float32): the quaternion within ±1, contacts 0…1, the phase −1…1, the
+    rest unbounded."""
+    low = np.full(len(names), -np.inf, dtype=np.float32)
+    high = np.full(len(names), np.inf, dtype=np.float32)
+    for i, name in enumerate(names):
+        if name in ("qx", "qy", "qz", "qw") or name.startswith(("stance.", "swing.")):
+            low[i], high[i] = -1.0, 1.0
+        elif name.startswith("contact."):
+            low[i], high[i] = 0.0, 1.0
+    return low, high
+
+
 def observe(slots: JointSlots, reading: Reading, out: CycleOutput) -> np.ndarray:
     """The observation after one cycle (the module's order)."""
     order = slots.servo_order
