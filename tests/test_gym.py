@@ -319,3 +319,16 @@ def test_any_residual_keeps_the_joint_targets_within_the_limits(action: list[flo
     assert np.all(moved >= chains.lower) and np.all(moved <= chains.upper)
     if not any(action):
         assert moved is joints
+
+
+def test_a_servo_option_changes_the_power_and_an_unknown_number_is_refused() -> None:
+    env = _env("gait")
+    power = {}
+    for factor in (1.0, 2.0):
+        env.reset(seed=0, options={"servo": {"winding_resistance": factor}})
+        _, _, _, _, info = env.step(np.zeros(env.action_size, dtype=np.float32))
+        power[factor] = info["power_w"]
+    assert power[2.0] > power[1.0]  # twice the copper loss
+    with pytest.raises(ValueError, match="servo has no number 'colour'"):
+        env.reset(options={"servo": {"colour": 1.0}})
+    env.close()

@@ -34,7 +34,7 @@ from shc_cli.spec.robot import Robot
 
 Info = dict[str, Any]
 """gymnasium's info and options dicts (its Env API types them so)."""
-RESET_OPTIONS = ("friction", "mass_scale", "terrain")
+RESET_OPTIONS = ("friction", "mass_scale", "terrain", "servo")
 """The options :meth:`WalkEnv.reset` takes (domain randomisation), each for that episode only."""
 
 
@@ -126,7 +126,9 @@ class WalkEnv(gymnasium.Env[np.ndarray, np.ndarray]):
               options: Info | None = None) -> tuple[np.ndarray, Info]:
         """A new episode: the world rebuilt (seeded: terrain blocks, IMU noise), started up to RUNNING.
 
-        Options (this episode only): ``friction``, ``mass_scale`` (of every mass), ``terrain``."""
+        Options (this episode only): ``friction``, ``mass_scale`` (of every mass), ``terrain``, ``servo`` (factors of
+        the robot's ``[servo]`` numbers by name, e.g. ``{"winding_resistance": 1.1}``: within ``shc fit``'s
+        uncertainty)."""
         super().reset(seed=seed)
         if seed is not None:
             self.seed_used = seed
@@ -136,6 +138,8 @@ class WalkEnv(gymnasium.Env[np.ndarray, np.ndarray]):
             raise ValueError(f"reset: no option '{unknown[0]}' (options: {', '.join(RESET_OPTIONS)})")
         self.close()
         robot = self.robot if "mass_scale" not in options else scaled_masses(self.robot, float(options["mass_scale"]))
+        if "servo" in options:
+            robot = scaled_servo(robot, dict(options["servo"]))
         config = self.config.model_copy(update={"seed": self.seed_used, **{
             key: options[key] for key in ("friction", "terrain") if key in options}})
         if "terrain" in options:
@@ -205,3 +209,18 @@ def scaled_masses(robot: Robot, scale: float) -> Robot:
         for joint_name, joint in leg.joints.items()}}) for name, leg in robot.legs.items()}
     return robot.model_copy(update={"body": robot.body.model_copy(update={"mass": robot.body.mass * scale}),
                                     "legs": legs})
+
+
+def scaled_servo(robot: Robot, factors: dict[str, float]) -> Robot:
+    """``robot`` with the named numbers of its ``[servo]`` table times their factors."""
+    servo = robot.servo
+    update: dict[str, float] = {}
+    for name, factor in factors.items():
+        value = getattr(servo, name, None)
+        if not isinstance(value, float) or isinstance(value, bool):
+            numbers = sorted(k for k, v in servo.model_dump().items() if isinstance(v, float))
+            raise ValueError(f"reset: servo has no number '{name}' (numbers: {', '.join(numbers)})")
+        if not float(factor) > 0:
+            raise ValueError(f"reset: servo factor {name}={factor:g} must be positive")
+        update[name] = value * float(factor)
+    return robot.model_copy(update={"servo": servo.model_copy(update=update)})
