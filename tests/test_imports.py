@@ -156,8 +156,8 @@ module's layer): robot and gait files ← kinematics ← the controller ← serv
 models, the Dynamixel backend) ← the emulated servo buses (they run the backends' servo physics; a package of
 their own once the bus work settles) ← the run record (log format, readers, row kernels, summary models) ←
 validation ← analysis ← plots ← interop (bags, OpenSHC files, URDF import) ← the run loop ← ROS 1 ← the live
-stream ← replay ← domain (runs, sweeps, optimize, opening a stored run) ← the Gymnasium environment ← view ← api ← the package's lazy facade
-(``import shc_cli``) ← commands ← cli."""
+stream ← replay ← domain (runs, sweeps, optimize, opening a stored run) ← the Gymnasium environment ← view ← api ←
+the package's lazy facade (``import shc_cli``) ← commands ← cli."""
 ANYWHERE = {"shc_cli.version", "shc_cli.errors", "shc_cli.events", "shc_cli.outputs", "shc_cli.progress"}
 """Helpers every layer may import: the version, the one exception tree, logging (events), file writing, the progress
 bar."""
