@@ -332,3 +332,22 @@ def test_a_servo_option_changes_the_power_and_an_unknown_number_is_refused() -> 
     with pytest.raises(ValueError, match="servo has no number 'colour'"):
         env.reset(options={"servo": {"colour": 1.0}})
     env.close()
+
+
+def test_a_policy_file_plays_into_a_run_directory(tmp_path: Path) -> None:
+    import json
+
+    from shc_cli.gym.policy import LinearPolicy, play
+
+    names = observation_names(_bullet())
+    file = tmp_path / "gait.npz"
+    LinearPolicy.constant("gait", np.array([0.5, 0.0, 0.0, 0.0]), len(names)).save(file)
+    policy = LinearPolicy.load(file)
+    assert policy.action == "gait" and policy(np.ones(len(names), dtype=np.float32)).tolist() == [0.5, 0.0, 0.0, 0.0]
+    path = play(policy, tmp_path / "runs", command="0.5,0,0", duration=0.5)
+    summary = json.loads((path / "summary.json").read_text())
+    assert summary["complete"] and not summary["fell"]
+    frequency = _bullet().walker.step_frequency
+    assert summary["step_frequency_hz"] == pytest.approx(frequency.default + 0.5 * (frequency.max - frequency.default))
+    with pytest.raises(ValueError, match=r"do not fit this robot's \(4, 50\)"):
+        play(policy, tmp_path / "quad", robot="quadruped", duration=0.1)

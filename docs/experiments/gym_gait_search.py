@@ -3,7 +3,7 @@ constant ``gait`` action (step frequency, swing height, stance span, velocity sc
 transport at the speed the defaults walk. numpy only: the learning libraries on the package index (stable-baselines3
 and its JAX port sbx-rl alike) pull torch with its GPU wheels (docs/gym.md).
 
-Run:  .venv/bin/python docs/experiments/gym_gait_search.py [--iterations 4] [--population 6] [--seed 0]
+Run:  .venv/bin/python docs/experiments/gym_gait_search.py [--iterations 4] [--population 6] [--seed 0] [--save F]
 
 Each candidate walks one episode (seeded: the same world each time) at throttle 0.5 forward; its cost of transport
 over the episode's second half is the servo model's mean power over m·g·the mean planar body speed (``info``'s
@@ -16,11 +16,13 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 import numpy as np
 
 from shc_cli.gym.actions import GAIT_PARAMETERS, VELOCITY_SCALE, around
 from shc_cli.gym.env import WalkEnv
+from shc_cli.gym.policy import LinearPolicy
 
 SPEED_TOLERANCE = 0.05
 """A candidate's mean speed must lie within this share of the defaults' (equal speed)."""
@@ -63,6 +65,7 @@ def main() -> None:
     parser.add_argument("--elites", type=int, default=2)
     parser.add_argument("--duration", type=float, default=6.0, help="walking per episode [s]")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--save", type=Path, help="write the gait found as a policy file (shc_cli.gym.policy)")
     args = parser.parse_args()
     start = time.perf_counter()
     env = WalkEnv(action="gait", command=(0.5, 0.0, 0.0), reward=WEIGHTS, duration=args.duration)
@@ -88,6 +91,8 @@ def main() -> None:
         sigma = np.maximum(candidates[order].std(axis=0), 0.1)
         print(f"iteration {iteration + 1}: best CoT so far {best_cot:.3f}")
     env.close()
+    if args.save is not None:
+        LinearPolicy.constant("gait", best, len(env.names)).save(args.save)
     wall = time.perf_counter() - start
     print(f"found: CoT {best_cot:.3f} against {base_cot:.3f} of the defaults ({100 * (1 - best_cot / base_cot):.0f} % "
           f"lower) at {best_speed:.4f} m/s with {parameters(env, best)}; {episodes} episodes in {wall:.0f} s")
