@@ -145,11 +145,12 @@ LAYERS: dict[str, int] = {
     "shc_cli.live": 14,
     "shc_cli.replay": 15,
     "shc_cli.domain": 16,
-    "shc_cli.view": 17,
-    "shc_cli.api": 18,
-    "shc_cli": 19,
-    "shc_cli.commands": 20,
-    "shc_cli.cli": 21,
+    "shc_cli.gym": 17,
+    "shc_cli.view": 18,
+    "shc_cli.api": 19,
+    "shc_cli": 20,
+    "shc_cli.commands": 21,
+    "shc_cli.cli": 22,
 }
 """The layers, lowest first (a module may import its own package and the layers below; the longest prefix names a
 module's layer): robot and gait files ← kinematics ← the controller ← servo buses ← backends (engines, servo
@@ -157,7 +158,8 @@ models, the Dynamixel backend) ← the emulated servo buses (they run the backen
 their own once the bus work settles) ← the run record (log format, readers, row kernels, summary models) ←
 validation ← analysis ← plots ← interop (bags, OpenSHC files, URDF import) ← the run loop ← ROS 1 ← ROS 2 (a
 transport beside ROS 1's, on its session) ← the live stream ← replay ← domain (runs, sweeps, optimize, opening a
-stored run) ← view ← api ← the package's lazy facade (``import shc_cli``) ← commands ← cli."""
+stored run) ← the Gymnasium environment ← view ← api ← the package's lazy facade (``import shc_cli``) ← commands ←
+cli."""
 ANYWHERE = {"shc_cli.version", "shc_cli.errors", "shc_cli.events", "shc_cli.outputs", "shc_cli.progress"}
 """Helpers every layer may import: the version, the one exception tree, logging (events), file writing, the progress
 bar."""

@@ -9,6 +9,9 @@ targets applied, one control period, the reading, the fault check, the recorder'
 stop the run: a fall). It stops when the input is over, on a fault, on an observer's reason or on a stop request
 (SIGINT/SIGTERM via :func:`shc_cli.loop.session.interrupts`, or :meth:`RunLoop.request_stop`). Robot and walk state
 changes, faults, stop requests and the end are logged as events (:mod:`shc_cli.events`: the run's ``events.log``).
+:meth:`RunLoop.run` is :meth:`RunLoop.begin`, :meth:`RunLoop.step` until it returns ``None``, :meth:`RunLoop.finish`;
+the Gymnasium environment (:mod:`shc_cli.gym`) calls them itself, one cycle a step, with an :data:`Adjust` of the
+controller's output (a policy's residual).
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ import numpy as np
 
 from shc_cli.backends.base import Backend, FeedbackSource, InputSource
 from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
+from shc_cli.control.sensing import Sensors
 from shc_cli.control.walk import WalkState
 from shc_cli.errors import ShcError
 from shc_cli.events import event
@@ -44,6 +48,21 @@ ReadingT_contra = TypeVar("ReadingT_contra", contravariant=True)
 Observer = Callable[[int, Command, CycleOutput, ReadingT], "str | None"]
 """Called after every logged cycle with (cycle, command, output, reading); a returned text stops the run with that
 reason (e.g. ``"fell"``)."""
+
+
+Adjust = Callable[[CycleOutput], CycleOutput]
+"""Changes a cycle's controller output before the backend applies it (:meth:`RunLoop.step`)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Cycle(Generic[ReadingT]):
+    """One control cycle as :meth:`RunLoop.step` ran it: the command, the output (as applied), the joint
+    targets the backend applied ``(L, n)`` [rad] and the reading after it."""
+
+    command: Command
+    out: CycleOutput
+    applied: np.ndarray
+    reading: ReadingT
 
 
 class Recorder(Protocol[ReadingT_contra]):
@@ -177,6 +196,10 @@ class RunLoop(Generic[ReadingT]):
         self._stop_limit_s = 0.0
         self._observe = source.observe if isinstance(source, FeedbackSource) else None
         """The source's feedback hook (:class:`~shc_cli.backends.base.FeedbackSource`), told every cycle's output."""
+        self._cycle = 0
+        self._over = False
+        self._states: tuple[RobotState | None, WalkState | None] = (None, None)
+        self._sensors: Sensors | None = None
 
     def request_stop(self, reason: str) -> None:
         """Stop (or begin the controlled stop) at the next cycle; the first reason is kept."""
@@ -236,48 +259,73 @@ class RunLoop(Generic[ReadingT]):
 
     def run(self) -> LoopResult:
         """Run until the input is over, a fault, an observer's reason or a stop request."""
-        controller, backend, recorder = self.controller, self.backend, self.recorder
-        wanted = True  # the controller's leg odometry reads the sensors every cycle, whatever the robot uses
-        observers, flush_every = self.observers, self.flush_every
-        cycle = 0
-        robot_state = walk_state = None
-        fault = backend.fault()
+        if self.begin():
+            step = self.step
+            while step() is not None:
+                pass
+        return self.finish()
+
+    def begin(self) -> bool:
+        """Before the first cycle: the backend's fault check and first sensors; False (a fault) ends the run."""
+        self._cycle, self._over, self._states = 0, False, (None, None)
+        fault = self.backend.fault()
         if fault is not None:
             self._fault(fault)
-            return self._result(cycle)
-        sensors = backend.sensors(wanted)
-        backend.begin()
-        while True:
-            self.cycle = cycle
-            command = self._command(cycle)
-            if command is None:
-                break
-            out = controller.step(command, sensors)
-            if self._observe is not None:
-                self._observe(out)
-            if out.robot_state is not robot_state or out.walk_state is not walk_state:
-                robot_state, walk_state = self._state_events(cycle, out, robot_state, walk_state)
-            applied = backend.apply(out)
-            backend.advance()
-            reading = backend.read()
-            fault = backend.fault()
-            if fault is not None:  # the reading is not trusted: no row, no further target
-                self._fault(fault)
-                break
-            sensors = backend.sensors(wanted)
-            recorder.record(cycle, command, out, applied, reading)
-            stop = None
-            for observer in observers:
-                stop = observer(cycle, command, out, reading)
-                if stop is not None:
-                    break
-            cycle += 1
+            return False
+        self._sensors = self.backend.sensors(True)  # the controller's leg odometry reads them every cycle
+        self.backend.begin()
+        return True
+
+    def step(self, adjust: Adjust | None = None) -> Cycle[ReadingT] | None:
+        """One control cycle (:meth:`begin` first); ``None`` once the run is over (then :meth:`finish`).
+
+        Args:
+            adjust: changes the controller's output before it is applied (a learned policy's residual,
+                :mod:`shc_cli.gym`); the recorder and the observers see the changed output.
+        """
+        controller, backend = self.controller, self.backend
+        if self._over:
+            return None
+        cycle = self._cycle
+        self.cycle = cycle
+        command = self._command(cycle)
+        if command is None:
+            self._over = True
+            return None
+        out = controller.step(command, self._sensors)
+        if adjust is not None:
+            out = adjust(out)
+        if self._observe is not None:
+            self._observe(out)
+        if out.robot_state is not self._states[0] or out.walk_state is not self._states[1]:
+            self._states = self._state_events(cycle, out, *self._states)
+        applied = backend.apply(out)
+        backend.advance()
+        reading = backend.read()
+        fault = backend.fault()
+        if fault is not None:  # the reading is not trusted: no row, no further target
+            self._fault(fault)
+            self._over = True
+            return None
+        self._sensors = backend.sensors(True)
+        self.recorder.record(cycle, command, out, applied, reading)
+        stop = None
+        for observer in self.observers:
+            stop = observer(cycle, command, out, reading)
             if stop is not None:
-                self.stop_reason = stop
                 break
-            if cycle % flush_every == 0:
-                recorder.flush()
-        recorder.flush()
+        self._cycle = cycle = cycle + 1
+        if stop is not None:
+            self.stop_reason = stop
+            self._over = True
+        elif cycle % self.flush_every == 0:
+            self.recorder.flush()
+        return Cycle(command, out, applied, reading)
+
+    def finish(self) -> LoopResult:
+        """After the last cycle: the recorder flushed, the end logged; how the run ended."""
+        cycle = self._cycle
+        self.recorder.flush()
         self.cycle = None
         event(log, logging.INFO, "stopped", "ended after %d cycles (%s)", cycle, self.stop_reason or "end",
               cycle=cycle)

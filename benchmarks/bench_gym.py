@@ -1,0 +1,73 @@
+"""Throughput of ``shc/Walk-v0``: environment steps per second (one step = one control cycle), one environment
+in this process and two in gymnasium's ``AsyncVectorEnv`` (two processes).
+
+Run:  .venv/bin/python benchmarks/bench_gym.py [--steps 3000] [--action residual] [--engine mujoco]
+
+Each measurement resets (start-up to RUNNING, not timed), then times ``--steps`` steps of zero actions while the
+Bullet walks at full throttle (episodes long enough not to end). The vector figure counts the steps of both
+environments (``--steps`` vector steps = 2 × ``--steps`` environment steps). Prints one line per measurement and
+the speed-up of two environments over one.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from typing import Any
+
+import gymnasium
+import numpy as np
+
+import shc_cli.gym
+
+Env = gymnasium.Env[np.ndarray, np.ndarray]
+VectorEnv = gymnasium.vector.VectorEnv[np.ndarray, np.ndarray, np.ndarray]
+
+
+def env_action_shape(env: Env | VectorEnv) -> tuple[int, ...]:
+    """One environment's action shape."""
+    space = env.single_action_space if isinstance(env, gymnasium.vector.VectorEnv) else env.action_space
+    shape = space.shape
+    assert shape is not None
+    return tuple(shape)
+
+
+def one(steps: int, action: str, engine: str) -> float:
+    env = gymnasium.make(shc_cli.gym.ENV_ID, action=action, engine=engine, duration=steps * 0.01 + 10)
+    env.reset(seed=0)
+    zero = np.zeros(env_action_shape(env), dtype=np.float32)
+    start = time.perf_counter()
+    for _ in range(steps):
+        env.step(zero)
+    rate = steps / (time.perf_counter() - start)
+    env.close()
+    return rate
+
+
+def vector(steps: int, action: str, engine: str, count: int = 2) -> float:
+    kwargs: dict[str, Any] = {"action": action, "engine": engine, "duration": steps * 0.01 + 10}
+    envs = gymnasium.vector.AsyncVectorEnv([lambda: gymnasium.make(shc_cli.gym.ENV_ID, **kwargs)] * count)
+    envs.reset(seed=0)
+    zero = np.zeros((count, *env_action_shape(envs)), dtype=np.float32)
+    start = time.perf_counter()
+    for _ in range(steps):
+        envs.step(zero)
+    rate = count * steps / (time.perf_counter() - start)
+    envs.close()
+    return rate
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=3000, help="timed steps per measurement")
+    parser.add_argument("--action", default="residual", choices=["gait", "residual", "joints"])
+    parser.add_argument("--engine", default="mujoco", choices=["mujoco", "pybullet"])
+    args = parser.parse_args()
+    single = one(args.steps, args.action, args.engine)
+    print(f"one environment ({args.action}, {args.engine}): {single:.0f} steps/s")
+    double = vector(args.steps, args.action, args.engine)
+    print(f"two AsyncVectorEnv environments: {double:.0f} steps/s ({double / single:.2f}× one)")
+
+
+if __name__ == "__main__":
+    main()
