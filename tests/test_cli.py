@@ -112,7 +112,7 @@ def test_validate_reports_every_problem_in_one_line_each(tmp_path: Path, capsys,
     assert code == 2 and out == ""
     assert lines == [f"error: {bad}:10: body_clearence: unknown key 'body_clearence' (allowed: name, description, "
                      "time_delta, body, legs, walker, cruise, ik, pose, start_up, posture, manipulation, admittance, "
-                     "servo, hardware)"]
+                     "servo, hardware, perception)"]
 
 
 def test_missing_robot_is_one_line_with_the_bundled_names(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
