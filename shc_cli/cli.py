@@ -120,6 +120,8 @@ def plan(
     live: LiveOption = False,
     live_port: LivePortOption = 8765,
     realtime: Annotated[bool, typer.Option(help="Pace the run to the wall clock.")] = False,
+    fail_leg: Annotated[list[str] | None, typer.Option(metavar="LEG[:MODE]", help=SIMULATE["fail_leg"].help)]
+    = None,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
     from shc_cli.loop.gc_pause import paused
@@ -131,7 +133,8 @@ def plan(
         check_outputs(bag, video, overwrite)
         run_plan(robot, gait, velocity, duration, commands, out, plots,
                  after=lambda run: finish_outputs(run, bag, video), overwrite=overwrite, live=live,
-                 live_port=live_port, realtime=realtime, path=path)
+                 live_port=live_port, realtime=realtime, path=path,
+                 fail_leg=",".join(fail_leg) if fail_leg else None)
 
 
 @app.command()

@@ -79,7 +79,7 @@ def parse_failures(specs: Sequence[str], legs: Sequence[str]) -> tuple[FailedLeg
         if leg not in legs:
             raise _bad(spec, f"no leg {leg!r} on this robot", f"give one of {', '.join(legs)}")
         if mode not in MODES:
-            raise _bad(spec, f"unknown mode {mode!r}", f"give {leg}:{' or '.join(f'{leg}:{m}' for m in MODES)}")
+            raise _bad(spec, f"unknown mode {mode!r}", f"give {' or '.join(f'{leg}:{m}' for m in MODES)}")
         if any(f.leg == leg for f in failed):
             raise _bad(spec, f"leg {leg} is failed twice", "give each leg once")
         failed.append(FailedLeg(leg, mode))
