@@ -128,3 +128,14 @@ def test_one_retracted_leg_walks_on_without_a_fall_in_mujoco(leg: str, tmp_path:
     assert not summary["fell"] and summary["max_tilt_rad"] < 0.6
     assert summary["forward_distance_m"] > 0.5  # intact: 3.4 m in 20 s
     assert math.isfinite(summary["displacement_speed_mps"])
+
+
+@pytest.mark.slow
+def test_two_opposite_failed_legs_are_refused_in_one_line_until_the_body_sways() -> None:
+    """S2 (AL and CR): four legs left, no table keeps the margin with one constant shift (a crawl needs sway)."""
+    with pytest.raises(SpecError) as raised:
+        adapt(BULLET, parse_failures(["AL,CR"], LEGS))
+    assert str(raised.value) == (
+        "--fail-leg: 'AL:retracted,CR:retracted': no generated gait keeps a 0.02 m static margin on legs AR, BR, CL, "
+        "BL with one constant body shift, down to 0.25 of their stride (fail fewer legs: a body swaying through the "
+        "cycle is not applied yet)")

@@ -228,15 +228,17 @@ class Adapted:
 
 def _plan(stance: Mapping[str, tuple[float, float]], legs: Sequence[str], stride_m: float, heading_rad: float,
           reach_m: float, failed: Sequence[FailedLeg]) -> tuple[PlannedGait, float]:
-    """The gait for the longest share of ``stride_m`` (:data:`STRIDE_SHARES`) a generated table holds for."""
-    problem = ""
+    """The gait for the longest share of ``stride_m`` (:data:`STRIDE_SHARES`) a generated table holds for; the
+    stance positions are only moved (``reach_m``, a slow greedy search) at the shortest share."""
     for share in STRIDE_SHARES:
         try:
             return plan_gait(stance, legs, stride_m * share, heading_rad, MIN_MARGIN_M, name="planned",
-                             sway=False, reach_m=reach_m), share
-        except GaitPlanningError as error:
-            problem = str(error)
-    raise _bad(",".join(map(str, failed)), problem, "fail fewer legs")
+                             sway=False, reach_m=reach_m if share == STRIDE_SHARES[-1] else 0.0), share
+        except GaitPlanningError:
+            continue
+    raise _bad(",".join(map(str, failed)), f"no generated gait keeps a {MIN_MARGIN_M:g} m static margin on legs "
+               f"{', '.join(legs)} with one constant body shift, down to {STRIDE_SHARES[-1]:g} of their stride",
+               "fail fewer legs: a body swaying through the cycle is not applied yet")
 
 
 def adapt(robot: Robot, failed: Sequence[FailedLeg], heading_rad: float = 0.0) -> Adapted:
