@@ -167,14 +167,15 @@ def _velocity(value: Velocity) -> str:
 def plan(robot: str | Path = "bullet", *, gait: str | None = None, velocity: Velocity = "1,0,0",
          duration: float | None = None, commands: Path | str | None = None, out: Path | str | None = None,
          plots: bool = True, overwrite: bool = False, live: bool = False, live_port: int = 8765,
-         realtime: bool = False, path: Path | str | None = None) -> Run:
+         realtime: bool = False, path: Path | str | None = None, fail_leg: str | None = None) -> Run:
     """``shc plan``: the controller run kinematically; returns the run (joints, tips and body tables). ``live``:
     streamed on a Foxglove server while it runs; ``realtime``: paced to the wall clock; ``path``: a path file the
-    follower walks (docs/path-following.md)."""
+    follower walks (docs/path-following.md); ``fail_leg``: failed legs, ``LEG[:MODE]`` comma-separated
+    (docs/leg-failures.md)."""
     from shc_cli.domain.plan import plan as run
 
     result = run(str(robot), gait, _velocity(velocity), duration, _path(commands), _path(out), plots, overwrite,
-                 live, live_port, realtime, _path(path))
+                 live, live_port, realtime, _path(path), fail_leg)
     return Run(result.path, result.summary)
 
 

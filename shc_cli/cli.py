@@ -120,6 +120,8 @@ def plan(
     live: LiveOption = False,
     live_port: LivePortOption = 8765,
     realtime: Annotated[bool, typer.Option(help="Pace the run to the wall clock.")] = False,
+    fail_leg: Annotated[list[str] | None, typer.Option(metavar="LEG[:MODE]", help=SIMULATE["fail_leg"].help)]
+    = None,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
     from shc_cli.loop.gc_pause import paused
@@ -131,7 +133,8 @@ def plan(
         check_outputs(bag, video, overwrite)
         run_plan(robot, gait, velocity, duration, commands, out, plots,
                  after=lambda run: finish_outputs(run, bag, video), overwrite=overwrite, live=live,
-                 live_port=live_port, realtime=realtime, path=path)
+                 live_port=live_port, realtime=realtime, path=path,
+                 fail_leg=",".join(fail_leg) if fail_leg else None)
 
 
 @app.command()
@@ -178,6 +181,8 @@ def simulate(
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
     bag: BagOption = None,
+    fail_leg: Annotated[list[str] | None, typer.Option(metavar="LEG[:MODE]", help=SIMULATE["fail_leg"].help)]
+    = None,
     fail_on_fall: Annotated[bool, typer.Option(help="Exit with code 4 when the robot fell.")] = False,
     engine: Annotated[str, typer.Option(help="Physics engine: mujoco or pybullet.")] = "mujoco",
     video: Annotated[Path | None, typer.Option(help="Also render the finished run to FILE.mp4 or FILE.gif (as shc "
@@ -207,7 +212,8 @@ def simulate(
                                    friction=friction, restitution=restitution, seed=seed, imu_noise=imu_noise,
                                    imu_yaw_bias=imu_yaw_bias,
                                    start=start, gui=gui, stand=stand, posture=posture, imu_posing=imu_posing,
-                                   inclination=inclination, admittance=admittance, fail_on_fall=fail_on_fall,
+                                   inclination=inclination, admittance=admittance,
+                                   fail_leg=",".join(fail_leg) if fail_leg else None, fail_on_fall=fail_on_fall,
                                    overwrite=overwrite, engine=engine, live=live, live_port=live_port,
                                    realtime=realtime, input_mode=input_mode, watchdog=watchdog)
         run_simulate(options, after=lambda run: finish_outputs(run, bag, video))

@@ -19,6 +19,7 @@ from shc_cli.control.admittance import AdmittanceController, tip_forces_from_eff
 from shc_cli.control.autopose import AutoPoser
 from shc_cli.control.bezier import cubic
 from shc_cli.control.gait import StepCycle, step_cycle
+from shc_cli.control.leg_failure import LegFailure
 from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.manipulation import MAX_MANUAL_LEGS as MAX_MANUAL_LEGS
 from shc_cli.control.manipulation import LegManipulation
@@ -233,6 +234,8 @@ class Controller(LegManipulation):
             docs/deviations.md); by default each sequence iteration takes one control cycle.
         pose_sets: auto-pose sets by gait name (used when ``robot.pose.auto``); the caller loads them
             (``shc_cli.spec.autopose``), so the controller stays free of I/O.
+        failure: failed legs held at their pose every cycle and left out of the walkspace
+            (:mod:`shc_cli.control.leg_failure`; ``robot`` and ``gait`` already re-planned for the legs left).
         direct_shutdown: without a start-up sequence, let the robot go back down as well (an shc extension for
             ``run-hw``; OpenSHC's direct mode refuses): RUNNING → READY stops walking, READY → PACKED moves the
             joints back to ``joints`` (where the robot started, e.g. lying on the ground) in ``time_to_start``.
@@ -240,8 +243,9 @@ class Controller(LegManipulation):
 
     def __init__(self, robot: Robot, gait: Gait, joints: FloatArray | None = None,
                  openshc_double_shutdown: bool = False, pose_sets: dict[str, AutoPoseSet] | None = None,
-                 direct_shutdown: bool = False) -> None:
+                 direct_shutdown: bool = False, failure: LegFailure | None = None) -> None:
         self.robot = robot
+        self.failure = failure
         self.direct_shutdown = direct_shutdown
         self.pose_sets = pose_sets or {}
         self.openshc_double_shutdown = openshc_double_shutdown
@@ -395,6 +399,8 @@ class Controller(LegManipulation):
             self._transition_state()  # in RUNNING the running cycle handles it first (study §9.4)
         if self.state == _RUNNING:
             deviations, clamped = self._running()
+        if self.failure is not None:
+            self._hold_failed(self.failure)
         limited = self.model.limit_speed(before)
         if limited:
             self.joint_speed_limited_cycles += 1
@@ -607,7 +613,8 @@ class Controller(LegManipulation):
             self.planes = {leg: plane_at(stack, 0.0) for leg, stack in layers.items()}
         else:
             self.planes = search_workspaces(self.model.chains, self.default_joints, identity, self.dt).planes
-        self.walkspace = walkspace(self.planes, self.stance, self.robot.walker.overlapping_walkspaces)
+        planes = self.planes if self.failure is None else self.failure.walking(self.planes)
+        self.walkspace = walkspace(planes, self.stance, self.robot.walker.overlapping_walkspaces)
         limits = self._limits_for(self.cycle)
         walker_spec = self.robot.walker
         if self.walker is None:
@@ -616,6 +623,16 @@ class Controller(LegManipulation):
                                          walker_spec.rough_terrain_mode)
         else:
             self.walker.set_cycle(self.cycle, limits)
+
+    def _hold_failed(self, failure: LegFailure) -> None:
+        """Failed legs back at their held pose (before the joint speed guard, which paces the first move)."""
+        held = failure.hold(self.model.joints, self.state == _RUNNING)
+        if held is not None:
+            velocities = self.model.joint_velocities.copy()
+            velocities[failure.index] = 0.0
+            tips = self.model.tips.copy()
+            tips[failure.index] = failure.tips(held)
+            self.model.joints, self.model.joint_velocities, self.model.tips = held, velocities, tips
 
     def _running(self) -> tuple[int, int]:
         """One RUNNING cycle (study §9.4): gait change, cruise control, parameter changes, then walk, pose
@@ -658,10 +675,13 @@ class Controller(LegManipulation):
         if not walking:  # manipulated legs take their walker tip as it is (already in base_link)
             manual = (self.leg_modes == LegMode.MANUAL) | (self.leg_modes == LegMode.WALKING_TO_MANUAL)
             self.poser_tips[manual] = self.walker.legs.vectors[manual, stepping.CURRENT]
+        if self.failure is not None:
+            self.poser_tips = self.failure.posed(self.poser_tips)
         if self.admittance is not None:
             self._apply_admittance(self.admittance)
         ik = self.robot.ik
-        return self.model.step_ik(self.poser_tips, self.dt, ik.clamp_joint_positions, ik.clamp_joint_velocities)
+        return self.model.step_ik(self.poser_tips, self.dt, ik.clamp_joint_positions, ik.clamp_joint_velocities,
+                                  None if self.failure is None else self.failure.active())
 
     def _apply_admittance(self, admittance: AdmittanceController) -> None:
         """Raise each walking leg's tip target by its admittance offset (paper eq. 20, z_d = z_r − Δz)."""

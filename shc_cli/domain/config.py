@@ -72,6 +72,7 @@ class SimulationConfig(BaseModel):
         imu_posing: OpenSHC IMU posing on or off (None: as the robot file says).
         inclination: ``"off"``, ``"openshc"`` or ``"support_centroid"`` (None: as the robot file says).
         admittance: admittance control on or off (None: as the robot file says).
+        fail_leg: failed legs from the start, ``LEG[:MODE]`` comma-separated (:mod:`shc_cli.control.leg_failure`).
         fail_on_fall: the command exits 4 when the robot fell.
         overwrite: replace an existing run directory at ``out`` when the run finishes.
         engine: the physics engine (:data:`~shc_cli.backends.engine_registry.ENGINES`).
@@ -109,6 +110,7 @@ class SimulationConfig(BaseModel):
     imu_posing: bool | None = None
     inclination: InclinationMode | None = None
     admittance: bool | None = None
+    fail_leg: str | None = None
     fail_on_fall: bool = False
     overwrite: bool = False
     engine: EngineName = DEFAULT_ENGINE
@@ -332,6 +334,7 @@ class SimulationOptions(TypedDict, total=False):
     imu_posing: bool | None
     inclination: InclinationMode | None
     admittance: bool | None
+    fail_leg: str | None
     fail_on_fall: bool
     overwrite: bool
     live: bool

@@ -17,7 +17,7 @@ if TYPE_CHECKING:
 def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0", duration: float | None = None,
          commands: Path | None = None, out: Path | None = None, plots: bool = True,
          overwrite: bool = False, live: bool = False, live_port: int = 8765, realtime: bool = False,
-         path: Path | None = None) -> RunResult:
+         path: Path | None = None, fail_leg: str | None = None) -> RunResult:
     """Load, run through the one loop on the kinematic backend, log; returns the run directory and its summary
     (``complete`` false when a signal stopped it).
 
@@ -33,9 +33,11 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
         live: stream the run while it happens on a Foxglove server on 127.0.0.1:``live_port`` (0: any free port).
         realtime: pace the run to the wall clock.
         path: a path file the follower walks (instead of ``velocity`` or ``commands``), steering by the odometry.
+        fail_leg: failed legs, ``LEG[:MODE]`` comma-separated (:func:`shc_cli.domain.simulate.failed_legs`).
     """
     from shc_cli.backends.kinematic import KinematicBackend
     from shc_cli.control.controller import Controller
+    from shc_cli.domain.simulate import failed_legs
     from shc_cli.loop.path_input import keep_path
     from shc_cli.loop.plan_summary import PlanRecord, plan_summary
     from shc_cli.loop.run_inputs import load_inputs
@@ -44,9 +46,9 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
     from shc_cli.record.runlog import RunWriter, default_run_directory
 
     inputs = load_inputs(robot, gait, velocity, duration, commands, default_s=10.0, check_fit=True, path=path)
-    model = inputs.robot
+    model, walked_gait, failure = failed_legs(inputs.robot, inputs.gait, fail_leg, velocity)
     directory = out or default_run_directory("plan")
-    controller = Controller(model, inputs.gait, pose_sets=inputs.pose_sets)
+    controller = Controller(model, walked_gait, pose_sets=inputs.pose_sets, failure=failure)
     writer = RunWriter(directory, model, overwrite)
     writer.write_robot(model)
     source = inputs.source(controller)

@@ -15,8 +15,11 @@ from shc_cli.domain.result import RunResult
 if TYPE_CHECKING:
     from shc_cli.backends.engine import Reading
     from shc_cli.control.controller import Command, CycleOutput
+    from shc_cli.control.leg_failure import LegFailure
     from shc_cli.loop.run_loop import LoopResult
     from shc_cli.record.summary import RunSummary
+    from shc_cli.spec.gait import Gait
+    from shc_cli.spec.robot import Robot
 
 
 log = logging.getLogger(__name__)
@@ -33,6 +36,37 @@ def check_display(gui: bool) -> None:
     if gui and sys.platform.startswith("linux") and not display:
         raise SpecError([Issue(None, None, "--gui", "no display (DISPLAY is not set)",
                                "drop --gui, or set DISPLAY / run under a virtual display: xvfb-run shc simulate ...")])
+
+
+def failed_legs(robot: Robot, gait: Gait, fail_leg: str | None, velocity: str = "1,0,0"
+                ) -> tuple[Robot, Gait, LegFailure | None]:
+    """The robot and gait re-planned for the legs left after ``fail_leg`` (``LEG[:MODE]``, comma-separated;
+    :mod:`shc_cli.control.leg_failure`) and the controller's collaborator; unchanged without failures. The
+    walking heading is the velocity input's (``VX,VY,WZ``; forward when it has none).
+
+    Raises:
+        SpecError: an unknown leg or mode, or no gait for the legs left (one line).
+    """
+    import math
+
+    from shc_cli.control.leg_failure import adapt, parse_failures
+    from shc_cli.events import event
+
+    if not fail_leg:
+        return robot, gait, None
+    failed = parse_failures([fail_leg], list(robot.legs))
+    try:
+        vx, vy = (float(part) for part in velocity.split(",")[:2])
+    except ValueError:
+        vx, vy = 1.0, 0.0
+    adapted = adapt(robot, failed, math.atan2(vy, vx) if (vx or vy) else 0.0)
+    planned = adapted.planned
+    event(log, logging.INFO, "leg_failure", "failed legs %s: walking on %s with a generated gait (%s, duty "
+          "factor %.3f, static margin %.3f m at a %.3f m stride, body shifted %+.3f, %+.3f m)",
+          ", ".join(map(str, failed)), ", ".join(leg for leg in robot.legs if leg not in adapted.failure.legs),
+          " → ".join("+".join(group) for group in planned.groups), planned.duty_factor, planned.margin_m,
+          adapted.stride_m, planned.body_shift_m[0][0], planned.body_shift_m[0][1], terminal=False)
+    return adapted.robot, adapted.gait, adapted.failure
 
 
 def simulate(config: SimulationConfig | None = None, progress: OnProgress | None = None) -> RunResult:
@@ -65,15 +99,16 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     inputs = load_inputs(o.robot, o.gait, o.velocity, o.duration, commands_file(o.input_mode, o.commands),
                          default_s=20.0, walking=o.walking, robot_change=o.apply_switches, path=o.path)
     by_hand = is_live(o.input_mode)
-    robot = inputs.robot
+    robot, gait, failure = failed_legs(inputs.robot, inputs.gait, o.fail_leg, o.velocity)
     options = o.engine_options(robot)
     directory = o.out or default_run_directory("simulate")
-    source = open_input(o.input_mode, robot, inputs.gait, inputs.commands(), o.watchdog)  # before anything opens
+    source = open_input(o.input_mode, robot, gait, inputs.commands(), o.watchdog)  # before anything opens
     try:
         with RunDirectory(directory, o.overwrite) as run:  # refuses an existing --out before the physics opens
             world = open_world(robot, options)
             with SimulatedBackend(robot, world) as backend:
-                controller = Controller(robot, inputs.gait, joints=backend.start(), pose_sets=inputs.pose_sets)
+                controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
+                                        failure=failure)
                 run.write_robot(robot)
                 if inputs.path is not None:
                     source.close()
