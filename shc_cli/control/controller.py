@@ -243,6 +243,8 @@ class Controller(LegManipulation):
         self.robot = robot
         self.speed_shares = speed_shares or source_for(robot)
         """Shares of OpenSHC's speed limits per gait (:mod:`~shc_cli.control.verified_limits`); None: OpenSHC's."""
+        if self.speed_shares is not None:
+            self.speed_shares(gait)  # verified now, before a loop runs (another gait: when it is first chosen)
         self.direct_shutdown = direct_shutdown
         self.pose_sets = pose_sets or {}
         self.openshc_double_shutdown = openshc_double_shutdown
