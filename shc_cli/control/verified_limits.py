@@ -4,7 +4,8 @@ OpenSHC derives its speed limits from the walkspace alone (:mod:`shc_cli.control
 DLS step per cycle with null-space limit avoidance lets the redundant joint drift during long walks, so a robot can
 reach its walkspace at start and still walk onto a joint limit after some seconds at full speed (the default robot
 ``bullet`` above half throttle, issue 42). A robot file that sets ``walker.verify_speed_limits`` has its limits
-checked here: per bearing (the walkspace's, 0°…315°) and for turning, the controller alone walks
+checked here: per bearing (the walkspace's, 0°…315°: three directions from it to the next one, which OpenSHC
+reads its limits for) and for turning, the controller alone walks
 :data:`TRIAL_STEP_CYCLES` step cycles from its running stance at the limit; when a cycle of it commands a joint
 within :data:`PROXIMITY_MARGIN` of a position limit (OpenSHC's limit proximity), misses an IK target, clamps a
 joint or has its speed guarded, that bearing's limit is scaled down by bisection (:data:`BISECTION_STEPS` halvings)
@@ -48,7 +49,9 @@ BISECTION_STEPS = 5
 """Halvings of a failed bearing's share (resolution 1/32)."""
 START_UP_CYCLES = 20000
 """Give up bringing a trial robot to RUNNING after this many cycles."""
-VERSION = 1
+SECTOR_SAMPLES = 3
+"""Directions tried per bearing b: b, b + step/3, b + 2·step/3 (OpenSHC reads b's limits up to the next bearing)."""
+VERSION = 2
 """Bumped when the trial's rules change (part of the cache key)."""
 
 
@@ -110,7 +113,7 @@ def verified_shares(robot: Robot, gait: Gait) -> SpeedShares:
 def cache_key(robot: Robot, gait: Gait) -> str:
     """Hash of both specs, the trial's rules and the control and model sources (their sizes and times)."""
     digest = hashlib.sha256()
-    digest.update(f"v{VERSION} {TRIAL_STEP_CYCLES} {PROXIMITY_MARGIN} {BISECTION_STEPS}".encode())
+    digest.update(f"v{VERSION} {TRIAL_STEP_CYCLES} {PROXIMITY_MARGIN} {BISECTION_STEPS} {SECTOR_SAMPLES}".encode())
     digest.update(robot.model_dump_json().encode())
     digest.update(gait.model_dump_json().encode())
     package = Path(__file__).resolve().parent.parent
@@ -163,13 +166,16 @@ def trial_shares(robot: Robot, gait: Gait) -> SpeedShares:
         return low
 
     linear: dict[int, float] = {}
+    keys = sorted(openshc.bearings)
+    step = keys[1] - keys[0]
     for bearing, lim in sorted(openshc.bearings.items()):
         if bearing == 360 or lim.linear_speed <= 0.0:
             continue
-        angle = math.radians(bearing)
         scale = 1.0 if unit else 2.0 * lim.linear_speed  # 'real' inputs: beyond the limit, which caps them
-        velocity = (scale * math.cos(angle), scale * math.sin(angle), 0.0)
-        linear[bearing] = bisect(_partial_trial(clean, velocity, bearing))
+        # the walker reads bearing b's limits for every direction from b up to the next bearing: try three of them
+        angles = [math.radians(bearing + step * k / SECTOR_SAMPLES) for k in range(SECTOR_SAMPLES)]
+        velocities = [(scale * math.cos(a), scale * math.sin(a), 0.0) for a in angles]
+        linear[bearing] = bisect(_partial_trial(clean, velocities, bearing))
     linear[360] = linear.get(0, 1.0)
     turn = 1.0 if unit else 2.0 * max(lim.angular_speed for lim in openshc.bearings.values())
     angular = bisect(lambda s: all(clean((0.0, 0.0, sign * turn), SpeedShares({}, s)) for sign in (1.0, -1.0)))
@@ -177,9 +183,9 @@ def trial_shares(robot: Robot, gait: Gait) -> SpeedShares:
 
 
 def _partial_trial(clean: Callable[[tuple[float, float, float], SpeedShares], bool],
-                   velocity: tuple[float, float, float], bearing: int) -> Callable[[float], bool]:
-    """The trial of one bearing at a share."""
-    return lambda share: clean(velocity, SpeedShares({bearing: share}, 1.0))
+                   velocities: list[tuple[float, float, float]], bearing: int) -> Callable[[float], bool]:
+    """The trial of one bearing at a share: every one of its directions walks clean."""
+    return lambda share: all(clean(v, SpeedShares({bearing: share}, 1.0)) for v in velocities)
 
 
 def source_for(robot: Robot) -> ShareSource | None:
