@@ -44,8 +44,8 @@ def test_plan_walks_the_square_exactly(tmp_path: Path, capsys, monkeypatch) -> N
     assert max(errors) < 2e-3 and max(abs(h) for h in headings) < 1.2
     assert isinstance(result["cross_track_rms_m"], float) and result["cross_track_rms_m"] < 1e-3
     assert isinstance(result["time_to_goal_s"], float) and 100.0 < result["time_to_goal_s"] < 160.0
-    # 8 m at bullet's verified 0.106 m/s is 75 s; four quarter turns at 0.244 rad/s another 26 s; braking and
-    # settling (129.4 s measured)
+    # 8 m at bullet's verified 0.094 m/s is 85 s; four quarter turns at 0.244 rad/s another 26 s; braking and
+    # settling (138.9 s measured)
 
 
 def test_a_toml_path_with_a_tolerance_and_without_headings(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
