@@ -162,13 +162,19 @@ def test_plan_at_full_throttle_walks_clean_and_records_the_shares(tmp_path: Path
 def test_workspace_shows_openshcs_and_the_verified_speeds(capsys: pytest.CaptureFixture[str],
                                                           monkeypatch: pytest.MonkeyPatch) -> None:
     """`shc workspace bullet`: OpenSHC's max linear speed (0.2000 m/s ahead, the figure issue 42 quotes) and below
-    it the verified one, each bearing's at its verified share of OpenSHC's."""
+    it the verified one, each bearing's at its verified share of OpenSHC's (the table's rows; --json's numbers)."""
     code, text, err = run(["workspace", "bullet"], capsys, monkeypatch)
     assert code == 0, err
-    openshc = next(line for line in text.splitlines() if line.startswith("max linear speed m/s")).split()[4:]
-    verified = next(line for line in text.splitlines() if line.startswith("verified linear speed m/s")).split()[4:]
+    assert "verified linear speed m/s" in text and "verified angular speed rad/s" in text
+    code, text, err = run(["workspace", "bullet", "--json"], capsys, monkeypatch)
+    assert code == 0, err
+    document = json.loads(text)
+    openshc, verified = document["max_linear_speed"], document["verified_max_linear_speed"]
     shares = verified_shares(load_robot("bullet").robot, load_gait("tripod").gait).linear
-    assert float(openshc[0]) == pytest.approx(0.2, abs=1e-4)
-    for k, bearing in enumerate(range(0, 360, 45)):
-        assert float(verified[k]) == pytest.approx(float(openshc[k]) * shares[bearing], abs=1e-4)
-        assert float(verified[k]) < float(openshc[k])
+    assert openshc["0"] == pytest.approx(0.2, abs=1e-4)
+    for bearing in range(0, 360, 45):
+        assert verified[str(bearing)] == pytest.approx(openshc[str(bearing)] * shares[bearing], rel=1e-12)
+        assert verified[str(bearing)] < openshc[str(bearing)]
+    code, text, err = run(["workspace", "bullet_openshc", "--json"], capsys, monkeypatch)
+    assert code == 0, err
+    assert json.loads(text)["verified_max_linear_speed"] is None
