@@ -144,16 +144,15 @@ def test_plan_reports_the_limited_cycles_in_summary_and_line(tmp_path: Path, cap
     assert f"joint speed limited in {cycles} cycles" in text
 
 
-@pytest.mark.parametrize(("gait", "velocity"), [("tripod", (0.5, 0.0, 0.0)), ("tripod", (0.0, 0.0, 0.5)),
-                                                ("bipod", (0.4, 0.0, 0.0)), ("wave", (1.0, 0.0, 0.0)),
+@pytest.mark.parametrize(("gait", "velocity"), [("tripod", (1.0, 0.0, 0.0)), ("tripod", (0.0, 0.0, 1.0)),
+                                                ("bipod", (1.0, 0.0, 0.0)), ("wave", (1.0, 0.0, 0.0)),
                                                 ("amble", (1.0, 0.0, 0.0))])
-def test_the_default_robot_walks_clear_of_its_joint_limits_within_its_envelope(
+def test_the_default_robot_walks_clear_of_its_joint_limits_at_full_throttle(
         gait: str, velocity: tuple[float, float, float]) -> None:
-    """bullet (arrangement A, feet 0.35 m out), 15 s: no joint reaches its position limit, the IK never misses its
-    target by 5 mm and no joint's speed is limited — up to half throttle in the tripod, 0.4 in the bipod, full
-    throttle in wave and amble (0.21 rad or more from every limit). Beyond (tripod ≥ 0.7 ahead, full throttle
-    sideways or turning) its folded legs' roll joints drift onto −1.396 rad (issue 42: not fixed, the report
-    says why); the commands then still stay within the limits and speeds (the property test above)."""
+    """bullet (arrangement A, feet 0.35 m out), 15 s at full throttle: no joint reaches its position limit, the IK
+    never misses its target by 5 mm and no joint's speed is limited. With OpenSHC's limits its folded legs' roll
+    joints drift onto −1.396 rad above ≈ 0.6 throttle (tripod); bullet walks its verified limits instead
+    (tests/test_verified_limits.py, docs/deviations.md)."""
     ready, _ = started("bullet", gait)
     controller = copy.deepcopy(ready)
     lower, upper = controller.model.chains.lower, controller.model.chains.upper
@@ -162,7 +161,7 @@ def test_the_default_robot_walks_clear_of_its_joint_limits_within_its_envelope(
         out = controller.step(Command(velocity=velocity))
         assert out.ik_deviations == 0 and out.ik_clamped == 0 and out.joint_speed_limited == 0
         margin = min(margin, float(np.minimum(out.joints - lower, upper - out.joints).min()))
-    assert margin > 0.15  # rad: the closest any joint came to a limit (0.208 measured, amble)
+    assert margin > 0.1  # rad: the closest any joint came to a limit
 
 
 def test_simulate_commands_every_joint_within_its_speed_limit(tmp_path: Path, capsys: pytest.CaptureFixture[str],

@@ -129,13 +129,20 @@ def plan_line(summary: RunSummary, path: Path, note: str = "") -> str:
 
 
 def speed_note(summary: RunSummary) -> str:
-    """``", joint speed limited in 257 cycles (10.3 %)"`` when the controller had to hold a joint to its ``max_vel``
-    (the inputs asked for more than the servos can do), else empty."""
+    """``", speed limits verified (41–56 % of OpenSHC's)"`` when the robot's verified speed limits are below
+    OpenSHC's, and ``", joint speed limited in 257 cycles (10.3 %)"`` when the controller had to hold a joint to its
+    ``max_vel`` (the inputs asked for more than the servos can do); else empty."""
+    verified = summary.speed_limits_verified
+    note = ""
+    if verified:  # the robot verifies its speed limits and kept less than OpenSHC's (docs/deviations.md)
+        low, high = min(verified.values()), max(verified.values())
+        kept = f"{100.0 * low:.0f} %" if low == high else f"{100.0 * low:.0f}–{100.0 * high:.0f} %"
+        note = f", speed limits verified ({kept} of OpenSHC's)"
     cycles = summary.joint_speed_limited_cycles
     if not cycles:
-        return ""
+        return note
     share = summary.joint_speed_limited_share or 0.0
-    return f", joint speed limited in {cycles} cycles ({100.0 * share:.1f} %)"
+    return f"{note}, joint speed limited in {cycles} cycles ({100.0 * share:.1f} %)"
 
 
 def path_note(summary: RunSummary) -> str:

@@ -15,6 +15,7 @@ import numpy as np
 from shc_cli.control.gait import StepCycle, step_cycle
 from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.startup import plan_direct_startup
+from shc_cli.control.verified_limits import verified_shares
 from shc_cli.model.chains import Chains, FloatArray
 from shc_cli.model.workspace import (
     Workplane,
@@ -42,6 +43,8 @@ class WorkspaceReport:
     layers: dict[str, dict[float, Workplane]] | None
     walkspace: Workplane
     limits: Limits
+    verified: Limits | None = None
+    """The limits the controller walks when the robot verifies them (``walker.verify_speed_limits``), else None."""
 
     def area(self, leg: str) -> float:
         """Area of a leg's workplane polygon [m²]."""
@@ -85,6 +88,10 @@ class WorkspaceReport:
             "cycle_frequency_hz": self.cycle.frequency,
             "duty_factor": self.cycle.duty_factor,
             "time_to_max_stride_s": self.limits.time_to_max_stride,
+            "verified_max_linear_speed": None if self.verified is None else {
+                str(b): lim.linear_speed for b, lim in self.verified.bearings.items()},
+            "verified_max_angular_speed": None if self.verified is None else {
+                str(b): lim.angular_speed for b, lim in self.verified.bearings.items()},
             "default_joints": {
                 leg: dict(zip(self.robot.legs[leg].joints, map(float, self.default_joints[i]), strict=False))
                 for i, leg in enumerate(self.robot.legs)
@@ -122,4 +129,6 @@ def analyse_workspace(
     cycle = step_cycle(gait, frequency, robot.time_delta)
     first = next(iter(robot.legs.values())).stance
     limits = generate_limits(common, cycle, robot.time_delta, math.hypot(first.x, first.y))
-    return WorkspaceReport(robot, gait, frequency, cycle, default_joints, identity, planes, layers, common, limits)
+    verified = verified_shares(robot, gait).apply(limits) if robot.walker.verify_speed_limits else None
+    return WorkspaceReport(robot, gait, frequency, cycle, default_joints, identity, planes, layers, common, limits,
+                           verified)

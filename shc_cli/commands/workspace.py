@@ -112,6 +112,11 @@ def _block(report: WorkspaceReport, bearings: list[int]) -> list[str]:
     for label, field in rows:
         values = "".join(f"{getattr(report.limits.bearings[b], field):>9.4f}" for b in bearings)
         lines.append(f"{label:<49}{values}")
+    if report.verified is not None:  # shc: the limits trial walks verified (the ones the controller walks)
+        for label, field in (("verified linear speed m/s", "linear_speed"), ("verified angular speed rad/s",
+                                                                            "angular_speed")):
+            values = "".join(f"{getattr(report.verified.bearings[b], field):>9.4f}" for b in bearings)
+            lines.append(f"{label:<49}{values}")
     return lines
 
 

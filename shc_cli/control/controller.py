@@ -37,6 +37,7 @@ from shc_cli.control.speed_guard import SpeedGuard
 from shc_cli.control.startup import plan_direct_startup, transition_iterations
 from shc_cli.control.states import LegMode as LegMode
 from shc_cli.control.states import RobotState as RobotState  # re-exported: the controller's interface
+from shc_cli.control.verified_limits import ShareSource, source_for
 from shc_cli.control.walk import WalkController, WalkState
 from shc_cli.model import kernels
 from shc_cli.model.chains import Chains, FloatArray
@@ -243,9 +244,15 @@ class Controller(LegManipulation):
 
     def __init__(self, robot: Robot, gait: Gait, joints: FloatArray | None = None,
                  openshc_double_shutdown: bool = False, pose_sets: dict[str, AutoPoseSet] | None = None,
-                 direct_shutdown: bool = False, failure: LegFailure | None = None) -> None:
+                 direct_shutdown: bool = False, failure: LegFailure | None = None,
+                 speed_shares: ShareSource | None = None) -> None:
         self.robot = robot
         self.failure = failure
+        self.speed_shares = speed_shares or (source_for(robot) if failure is None else None)
+        """Shares of OpenSHC's speed limits per gait (:mod:`~shc_cli.control.verified_limits`); None: OpenSHC's (also
+        with a failed leg: the limits are then the walking legs' walkspace, not verified by a trial)."""
+        if self.speed_shares is not None:
+            self.speed_shares(gait)  # verified now, before a loop runs (another gait: when it is first chosen)
         self.direct_shutdown = direct_shutdown
         self.pose_sets = pose_sets or {}
         self.openshc_double_shutdown = openshc_double_shutdown
@@ -745,7 +752,8 @@ class Controller(LegManipulation):
     def _limits_for(self, cycle: StepCycle) -> Limits:
         """Limits for ``cycle``; the angular lever arm is leg 0's current default tip, re-read every time."""
         first = self.walker.legs.vectors[0, stepping.DEFAULT] if self.walker else self.identity_walker_tips[0]
-        return generate_limits(self.walkspace, cycle, self.dt, math.hypot(first[0], first[1]))
+        limits = generate_limits(self.walkspace, cycle, self.dt, math.hypot(first[0], first[1]))
+        return limits if self.speed_shares is None else self.speed_shares(self.gait).apply(limits)
 
     def _adjust_parameter(self) -> None:
         """Apply the first pending parameter change (study §9.6). A new step frequency waits until the

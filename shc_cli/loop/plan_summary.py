@@ -42,7 +42,8 @@ class PlanRecord:
 
 
 def eq16_speed(controller: Controller, linear_input: tuple[float, float]) -> float:
-    """Paper eq. 16 body speed ``l_s·f/β`` [m/s] for a linear velocity input, stride from the walkspace limit."""
+    """Paper eq. 16 body speed ``l_s·f/β`` [m/s] for a linear velocity input, stride from the walkspace limit (a robot
+    that verifies its speed limits: the stride of its verified speed limit)."""
     walker, cycle = controller.walker, controller.cycle
     if walker is None or not any(linear_input):
         return 0.0
@@ -51,7 +52,9 @@ def eq16_speed(controller: Controller, linear_input: tuple[float, float]) -> flo
     bearing = round(math.degrees(math.atan2(linear_input[1], linear_input[0]))) % 360
     limit = limits[(bearing // step * step) % 360]  # OpenSHC reads the sector below the bearing
     magnitude = math.hypot(*linear_input)
-    if walker.velocity_input_mode == "throttle":
+    if walker.velocity_input_mode == "throttle" and controller.speed_shares is not None:  # verified limits: their
+        stride = limit.linear_speed * min(magnitude, 1.0) * cycle.duty_factor / cycle.frequency  # speed's stride
+    elif walker.velocity_input_mode == "throttle":
         stride = 2.0 * limit.scaled_radius * min(magnitude, 1.0)
     else:
         stride = min(magnitude, limit.linear_speed) * cycle.duty_factor / cycle.frequency

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from shc_cli.errors import interrupt
+from shc_cli.control.verified_limits import controller_shares
 from shc_cli.events import recording
 from shc_cli.loop.gc_pause import collecting
 from shc_cli.loop.run_loop import LoopResult, ReadingT, RunLoop
@@ -64,6 +65,9 @@ def execute(loop: RunLoop[ReadingT], run: RunDirectory, summarise: Callable[[Loo
                                       joint_speed_limited_cycles=limited,
                                       joint_speed_limited_share=limited / controller.cycles if controller.cycles
                                       else 0.0)
+            verified = controller_shares(controller)
+            if verified is not None:  # only robots that verify their speed limits have the key
+                summary = summary.updated(speed_limits_verified=verified)
             late = signals.late is not None
             if late:
                 summary.plots_skipped = True

@@ -146,6 +146,12 @@ class RunSummary(BaseModel):
     joint_speed_limited_share: NonNegativeFloat | None = Field(None, description="plan, simulate, run-hw, ros: "
                                                                                  "joint_speed_limited_cycles ÷ the "
                                                                                  "control cycles [ratio].")
+    speed_limits_verified: dict[str, float] | None = Field(None, description="plan, simulate, run-hw, ros: for a robot "
+                                                                           "that verifies its speed limits "
+                                                                           "(walker.verify_speed_limits), the share "
+                                                                           "of OpenSHC's limit it kept per bearing "
+                                                                           "[degrees → ratio] and for turning "
+                                                                           "(\"turn\"), where below 1.")
     walkspace: dict[str, float] | None = Field(None, description="plan: the walkspace radius per bearing "
                                                                  "[degrees → m].")
 

@@ -151,6 +151,9 @@ class Walker(Strict):
     force_normal_touchdown: bool = Field(False, description="reshape the swing for a vertical final descent")
     gravity_aligned_tips: bool = Field(False, description=">3-DOF legs: keep the tip x axis along gravity")
     rough_terrain_mode: bool = Field(False, description="volumetric workspace and adaptive footholds")
+    verify_speed_limits: bool = Field(
+        False, description="scale OpenSHC's speed limits down per bearing until trial walks keep every joint off its "
+                           "limits (shc, docs/deviations.md)")
 
     @field_validator("step_frequency")
     @classmethod
