@@ -21,7 +21,7 @@ from shc_cli.control import verified_limits
 from shc_cli.control.controller import Command, Controller, RobotState
 from shc_cli.control.limits import generate_limits
 from shc_cli.control.verified_limits import SpeedShares, verified_shares
-from shc_cli.loop.summary import RunSummary
+from shc_cli.record.summary import RunSummary
 from shc_cli.spec.loading import bundled, load_gait, load_robot
 
 from .test_cli import run

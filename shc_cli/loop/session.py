@@ -15,8 +15,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-from shc_cli.errors import interrupt
 from shc_cli.control.verified_limits import controller_shares
+from shc_cli.errors import interrupt
 from shc_cli.events import recording
 from shc_cli.loop.gc_pause import collecting
 from shc_cli.loop.run_loop import LoopResult, ReadingT, RunLoop
