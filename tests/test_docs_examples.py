@@ -10,8 +10,9 @@ What counts as an example (:func:`steps`):
   written to ``NAME`` at that point, before the commands after it run.
 
 The README's first five minutes run after the README's own set-up command in a fresh clone (fast: no ``slow``
-marker; about 1–2 minutes). Every page of ``docs/`` runs in its own fresh clone with the test environment's
-``.venv/bin`` first on ``PATH`` (``slow``). Runs are shortened by ``SHC_MAX_DURATION``
+marker; about 1–2 minutes). The README and every page of ``docs/`` then run in reading order in one fresh clone,
+with the test environment's ``.venv/bin`` first on ``PATH`` (``slow``): a page may neither depend on nor be stopped
+by what an earlier page left behind. Runs are shortened by ``SHC_MAX_DURATION``
 (:data:`shc_cli.loop.run_inputs.MAX_DURATION_ENV`), which cuts every run to :data:`MAX_DURATION_S` after its
 start-up; the docs themselves are run as written. :data:`EXEMPT` lists the commands that are not run, each with its
 reason; an unlabelled code block may not hold a command (label it ``sh`` or ``text``).
@@ -301,24 +302,11 @@ def test_a_collision_is_found(tmp_path: Path) -> None:
 @pytest.mark.slow
 def test_every_page_runs_after_every_earlier_page_in_one_clone(tmp_path: Path) -> None:
     """The README and every page of docs/, in reading order, in one fresh clone (issue 42's acceptance): a page may
-    neither depend on nor be stopped by what an earlier page left behind. Hours on two shared cores (the papers'
-    experiments are most of it); :func:`test_every_page_reads_in_order_and_no_page_writes_over_another_pages_outputs`
+    neither depend on nor be stopped by what an earlier page left behind (the papers' experiments are most of its
+    time); :func:`test_every_page_reads_in_order_and_no_page_writes_over_another_pages_outputs`
     is its fast check of the outputs."""
     where = clone(tmp_path)
     if sys.prefix != sys.base_prefix:
         (where / ".venv").symlink_to(sys.prefix, target_is_directory=True)
     examples = [step for page in reading_order() for step in page_steps(page)]
     run_script(examples, where, str(Path(sys.executable).parent), timeout=6 * 3600)
-
-
-@needs_git
-@pytest.mark.slow
-@pytest.mark.parametrize("page", [p.relative_to(ROOT).as_posix() for p in doc_pages()])
-def test_every_docs_example_runs_in_a_fresh_clone(page: str, tmp_path: Path) -> None:
-    where = clone(tmp_path)
-    if sys.prefix != sys.base_prefix:  # the test's environment stands in for the clone's .venv (docs name .venv/bin)
-        (where / ".venv").symlink_to(sys.prefix, target_is_directory=True)
-    # docs/experiments/optimize.md (a 200-trial study and an 80-run sweep) took 23 min on two shared cores
-    examples = steps(ROOT / page)
-    assert examples, f"{page}: no example found"  # run_script itself fails on the first example that fails
-    run_script(examples, where, str(Path(sys.executable).parent), timeout=3600)
