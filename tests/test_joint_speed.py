@@ -17,6 +17,7 @@ from hypothesis import strategies as st
 from shc_cli.analysis.run_line import speed_note
 from shc_cli.control.controller import Command, Controller, RobotState
 from shc_cli.control.speed_guard import SpeedGuard
+from shc_cli.control.verified_limits import source_for
 from shc_cli.model.chains import Chains
 from shc_cli.record.summary import RunSummary
 from shc_cli.spec.loading import bundled, load_gait, load_robot
@@ -55,7 +56,7 @@ def fastest(steps: list[np.ndarray], bound: np.ndarray) -> float:
 def started(robot_name: str, gait_name: str) -> tuple[Controller, float]:
     """A controller through its start-up to RUNNING, and the start-up's fastest joint motion (share of the limit)."""
     robot = load_robot(robot_name).robot
-    controller = Controller(robot, load_gait(gait_name).gait)
+    controller = Controller(robot, load_gait(gait_name).gait, speed_shares=source_for(robot))
     commands = [controller.model.joints.copy()]
     while controller.state != RobotState.RUNNING:
         commands.append(controller.step(Command(state_request=RobotState.RUNNING)).joints.copy())
@@ -147,13 +148,13 @@ def test_plan_reports_the_limited_cycles_in_summary_and_line(tmp_path: Path, cap
 @pytest.mark.parametrize(("gait", "velocity"), [("tripod", (1.0, 0.0, 0.0)), ("tripod", (0.0, 0.0, 1.0)),
                                                 ("bipod", (1.0, 0.0, 0.0)), ("wave", (1.0, 0.0, 0.0)),
                                                 ("amble", (1.0, 0.0, 0.0))])
-def test_the_default_robot_walks_clear_of_its_joint_limits_at_full_throttle(
+def test_the_verified_bullet_walks_clear_of_its_joint_limits_at_full_throttle(
         gait: str, velocity: tuple[float, float, float]) -> None:
-    """bullet (arrangement A, feet 0.35 m out), 15 s at full throttle: no joint reaches its position limit, the IK
-    never misses its target by 5 mm and no joint's speed is limited. With OpenSHC's limits its folded legs' roll
-    joints drift onto −1.396 rad above ≈ 0.6 throttle (tripod); bullet walks its verified limits instead
+    """bullet_verified (the default bullet, arrangement A, walking its verified limits), 15 s at full throttle: no
+    joint reaches its position limit, the IK never misses its target by 5 mm and no joint's speed is limited. With
+    OpenSHC's limits bullet's folded legs' roll joints drift onto −1.396 rad above ≈ 0.6 throttle (tripod)
     (tests/test_verified_limits.py, docs/deviations.md)."""
-    ready, _ = started("bullet", gait)
+    ready, _ = started("bullet_verified", gait)
     controller = copy.deepcopy(ready)
     lower, upper = controller.model.chains.lower, controller.model.chains.upper
     margin = np.inf

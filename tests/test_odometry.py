@@ -163,7 +163,7 @@ def test_plan_odometry_follows_the_commanded_walk_and_measured_joints_give_the_s
     odometry (the integrated command; the residual is OpenSHC's stance curve, not the estimator — the rigid-motion
     tests above are exact); read back as measured joints one cycle late, the same poses one cycle later."""
     commanded = _walk(900, (1.0, 0.0, 0.3))
-    assert math.hypot(*commanded[-1][:2]) > 0.15  # it walked (at bullet's verified speed limits)
+    assert math.hypot(*commanded[-1][:2]) > 0.3  # it walked
     measured = _walk(900, (1.0, 0.0, 0.3), measured=True)
     assert np.allclose(np.array(measured[1:]), np.array(commanded[:-1]), atol=1e-9)
 

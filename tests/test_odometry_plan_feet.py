@@ -45,10 +45,10 @@ def _residuals(velocity: tuple[float, float, float], cycles: int = 2000) -> tupl
 def test_the_standing_feet_of_a_plan_are_not_rigid_to_1e_9_m() -> None:
     """Straight ahead the walker's tip targets move as one rigid body (≤ 1e-12 m), but the feet of the commanded
     joints — one damped-least-squares IK step per cycle, as OpenSHC — are each left a different residual: no body
-    pose keeps all standing feet still to better than 1e-7 m in any cycle (0.9 µm typically), so no kinematic truth
+    pose keeps all standing feet still to better than 1e-8 m in any cycle (0.9 µm typically), so no kinematic truth
     exists to 1e-9 m. In a turn the walker's own targets are not rigid either (each foot moves along a chord)."""
     joints_feet, walker_feet = _residuals((1.0, 0.0, 0.0))
     assert walker_feet.max() < 1e-12
-    assert joints_feet.min() > 1e-7 and np.median(joints_feet) < 1e-5  # [m] in every cycle; ~0.9 µm typically
+    assert joints_feet.min() > 1e-8 and np.median(joints_feet) < 1e-5  # [m] in every cycle; ~0.9 µm typically
     _, turning = _residuals((1.0, 0.0, 0.3))
     assert np.median(turning) > 1e-7

@@ -36,7 +36,8 @@ WALK_CYCLES = 2500
 @cache
 def running(robot_name: str, gait_name: str) -> Controller:
     """A controller of the robot and gait through its start-up to RUNNING."""
-    controller = Controller(load_robot(robot_name).robot, load_gait(gait_name).gait)
+    robot = load_robot(robot_name).robot
+    controller = Controller(robot, load_gait(gait_name).gait, speed_shares=verified_limits.source_for(robot))
     for _ in range(5000):
         if controller.state == RobotState.RUNNING:
             return controller
@@ -44,10 +45,11 @@ def running(robot_name: str, gait_name: str) -> Controller:
     raise AssertionError(f"{robot_name} / {gait_name}: no RUNNING")
 
 
-def test_the_verifying_robots_are_the_default_robot() -> None:
-    """bullet verifies; the paper's arrangement A (Table IV) and OpenSHC's own files keep OpenSHC's limits."""
-    assert "bullet" in VERIFYING
-    for name in ("bullet_insectoid_a", "bullet_mammalian_a", "bullet_openshc", "bullet_mammalian", "openshc_default"):
+def test_the_verifying_robot_is_bullet_verified() -> None:
+    """bullet_verified verifies; the default bullet, the paper's robots and OpenSHC's files keep OpenSHC's limits."""
+    assert "bullet_verified" in VERIFYING
+    for name in ("bullet", "bullet_insectoid_a", "bullet_mammalian_a", "bullet_openshc", "bullet_mammalian",
+                 "openshc_default"):
         assert name not in VERIFYING
 
 
@@ -142,7 +144,7 @@ def test_plan_at_full_throttle_walks_clean_and_records_the_shares(tmp_path: Path
     joint speed limited; summary.json records the shares below 1 (every bearing's, from bisection: k/32); the
     OpenSHC robot's summary has no such key."""
     out = tmp_path / "run"
-    code, text, err = run(["plan", "bullet", "--duration", "20", "--out", str(out), "--no-plots"], capsys,
+    code, text, err = run(["plan", "bullet_verified", "--duration", "20", "--out", str(out), "--no-plots"], capsys,
                           monkeypatch)
     assert code == 0, err
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))
@@ -163,14 +165,14 @@ def test_workspace_shows_openshcs_and_the_verified_speeds(capsys: pytest.Capture
                                                           monkeypatch: pytest.MonkeyPatch) -> None:
     """`shc workspace bullet`: OpenSHC's max linear speed (0.2000 m/s ahead, the figure issue 42 quotes) and below
     it the verified one, each bearing's at its verified share of OpenSHC's (the table's rows; --json's numbers)."""
-    code, text, err = run(["workspace", "bullet"], capsys, monkeypatch)
+    code, text, err = run(["workspace", "bullet_verified"], capsys, monkeypatch)
     assert code == 0, err
     assert "verified linear speed m/s" in text and "verified angular speed rad/s" in text
-    code, text, err = run(["workspace", "bullet", "--json"], capsys, monkeypatch)
+    code, text, err = run(["workspace", "bullet_verified", "--json"], capsys, monkeypatch)
     assert code == 0, err
     document = json.loads(text)
     openshc, verified = document["max_linear_speed"], document["verified_max_linear_speed"]
-    shares = verified_shares(load_robot("bullet").robot, load_gait("tripod").gait).linear
+    shares = verified_shares(load_robot("bullet_verified").robot, load_gait("tripod").gait).linear
     assert openshc["0"] == pytest.approx(0.2, abs=1e-4)
     for bearing in range(0, 360, 45):
         assert verified[str(bearing)] == pytest.approx(openshc[str(bearing)] * shares[bearing], rel=1e-12)

@@ -144,7 +144,6 @@ def write_outputs(report: WorkspaceReport, out: Path) -> None:
             lim.walkspace_radius, lim.scaled_radius, lim.stance_overshoot, lim.swing_overshoot, lim.linear_speed,
             lim.linear_acceleration, lim.angular_speed, lim.angular_acceleration)])
     write_text(out / "limits.csv", limits.getvalue())
-
     from shc_cli.plots import plot_workspace
 
     with atomic_path(out / "workspace.png") as temporary:

@@ -34,10 +34,10 @@ from shc_cli.control.sensing import (
     support_centroid_pose,
 )
 from shc_cli.control.speed_guard import SpeedGuard
+from shc_cli.control.speed_shares import ShareSource
 from shc_cli.control.startup import plan_direct_startup, transition_iterations
 from shc_cli.control.states import LegMode as LegMode
 from shc_cli.control.states import RobotState as RobotState  # re-exported: the controller's interface
-from shc_cli.control.verified_limits import ShareSource, source_for
 from shc_cli.control.walk import WalkController, WalkState
 from shc_cli.model import kernels
 from shc_cli.model.chains import Chains, FloatArray
@@ -248,9 +248,9 @@ class Controller(LegManipulation):
                  speed_shares: ShareSource | None = None) -> None:
         self.robot = robot
         self.failure = failure
-        self.speed_shares = speed_shares or (source_for(robot) if failure is None else None)
-        """Shares of OpenSHC's speed limits per gait (:mod:`~shc_cli.control.verified_limits`); None: OpenSHC's (also
-        with a failed leg: the limits are then the walking legs' walkspace, not verified by a trial)."""
+        self.speed_shares = speed_shares
+        """Shares of OpenSHC's speed limits per gait (a run gives :func:`shc_cli.control.verified_limits.source_for`
+        of its robot); None: OpenSHC's (also with a failed leg: the limits are the walking legs' walkspace)."""
         if self.speed_shares is not None:
             self.speed_shares(gait)  # verified now, before a loop runs (another gait: when it is first chosen)
         self.direct_shutdown = direct_shutdown

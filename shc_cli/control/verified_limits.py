@@ -26,13 +26,14 @@ import logging
 import math
 import os
 from collections.abc import Callable
-from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from shc_cli.control.limits import Limits
+from shc_cli.control.speed_shares import UNCHANGED as UNCHANGED
+from shc_cli.control.speed_shares import ShareSource
+from shc_cli.control.speed_shares import SpeedShares as SpeedShares
 
 if TYPE_CHECKING:
     from shc_cli.control.controller import Controller
@@ -54,42 +55,6 @@ SECTOR_SAMPLES = 3
 VERSION = 2
 """Bumped when the trial's rules change (part of the cache key)."""
 
-
-@dataclass(frozen=True)
-class SpeedShares:
-    """Shares of OpenSHC's limits a robot keeps.
-
-    Attributes:
-        linear: bearing [deg] → share of that bearing's linear speed and acceleration limit (360 repeats 0).
-        angular: share of every bearing's angular speed and acceleration limit.
-    """
-
-    linear: dict[int, float]
-    angular: float
-
-    def apply(self, limits: Limits) -> Limits:
-        """``limits`` with every bearing's speeds and accelerations scaled by its shares."""
-        bearings = {
-            b: replace(lim, linear_speed=lim.linear_speed * self.linear.get(b, 1.0),
-                       linear_acceleration=lim.linear_acceleration * self.linear.get(b, 1.0),
-                       angular_speed=lim.angular_speed * self.angular,
-                       angular_acceleration=lim.angular_acceleration * self.angular)
-            for b, lim in limits.bearings.items()}
-        return replace(limits, bearings=bearings)
-
-    @property
-    def reduced(self) -> dict[str, float]:
-        """The shares below 1, as summary.json records them: ``{"90": 0.5, "turn": 0.75}``."""
-        out = {str(b): s for b, s in sorted(self.linear.items()) if b != 360 and s < 1.0}
-        if self.angular < 1.0:
-            out["turn"] = self.angular
-        return out
-
-
-UNCHANGED = SpeedShares({}, 1.0)
-
-ShareSource = Callable[["Gait"], SpeedShares]
-"""The controller's source of shares for a gait."""
 
 _memo: dict[str, SpeedShares] = {}
 

@@ -44,6 +44,7 @@ if TYPE_CHECKING:
     from shc_cli.backends.base import InputSource
     from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Controller
+    from shc_cli.control.verified_limits import source_for
     from shc_cli.hardware.bus import BusState, ServoBus
     from shc_cli.live.foxglove_server import FoxgloveTransport
     from shc_cli.loop.run_loop import LoopResult
@@ -222,7 +223,7 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
         backend = DynamixelBackend(robot, bus, c.dry_run, run, c.on_fault, c.on_stop, clock=clock or time.perf_counter,
                                    sleep=sleep or time.sleep, missed_reads_fault=c.missed_reads_fault)
         controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
-                                direct_shutdown=True)
+                                direct_shutdown=True, speed_shares=source_for(robot))
         run.write_robot(robot)
         if inputs.path is not None:
             source.close()

@@ -50,6 +50,7 @@ def run_on_bus(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pose_se
     """
     from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Controller
+    from shc_cli.control.verified_limits import source_for
     from shc_cli.domain.hardware import STOP_TIMEOUT_S, bus_run_fields, prepare_bus
     from shc_cli.domain.live import open_live
     from shc_cli.domain.ros_session import NodeSession
@@ -68,7 +69,8 @@ def run_on_bus(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pose_se
     try:
         prepare_bus(bus, robot, c.dry_run)
         joints = bus.read_state().positions
-        controller = Controller(robot, gait, joints=joints, pose_sets=pose_sets, direct_shutdown=True)
+        controller = Controller(robot, gait, joints=joints, pose_sets=pose_sets, direct_shutdown=True,
+                                speed_shares=source_for(robot))
         session = NodeSession(node, c, robot, controller, gaits, sensors=False, joint_states=True)
         session.ready(node, c, robot, gait, on_ready)
         # the torque goes on once the remote is OPERATIONAL (Ctrl-C meanwhile: nothing commanded, nothing written)

@@ -150,6 +150,7 @@ def _run_outputs_only(node: Node, config: NodeConfig, robot: Robot, gait: Gait, 
     """Backend none: the controller's targets are taken as reached (OpenSHC with a hardware node of the user's)."""
     from shc_cli.backends.kinematic import KinematicBackend
     from shc_cli.control.controller import Controller
+    from shc_cli.control.verified_limits import source_for
     from shc_cli.domain.ros_session import NodeSession
     from shc_cli.loop.plan_summary import PlanRecord, plan_summary
     from shc_cli.loop.run_loop import Observer, RunLoop
@@ -157,7 +158,8 @@ def _run_outputs_only(node: Node, config: NodeConfig, robot: Robot, gait: Gait, 
     from shc_cli.record.runlog import RunWriter
 
     # OpenSHC starts from the measured joints when /joint_states gives them all (shc ros2; shc ros: the defaults)
-    controller = Controller(robot, gait, joints=node.measured_joints(robot), pose_sets=pose_sets)
+    controller = Controller(robot, gait, joints=node.measured_joints(robot), pose_sets=pose_sets,
+                            speed_shares=source_for(robot))
     writer = RunWriter(directory, robot, config.overwrite)
     writer.write_robot(robot)
     record = PlanRecord(controller)
@@ -194,6 +196,7 @@ def _run_simulated(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pos
     from shc_cli.backends.engine import Reading
     from shc_cli.backends.simulated import SimulatedBackend, open_world
     from shc_cli.control.controller import Controller
+    from shc_cli.control.verified_limits import source_for
     from shc_cli.domain.config import SimulationConfig
     from shc_cli.domain.ros_session import NodeSession
     from shc_cli.loop.physics_summary import PhysicsRecord
@@ -205,7 +208,8 @@ def _run_simulated(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pos
     with RunDirectory(directory, config.overwrite) as run:
         world = open_world(robot, sim.engine_options(robot))
         with SimulatedBackend(robot, world) as backend:
-            controller = Controller(robot, gait, joints=backend.start(), pose_sets=pose_sets)
+            controller = Controller(robot, gait, joints=backend.start(), pose_sets=pose_sets,
+                                    speed_shares=source_for(robot))
             run.write_robot(robot)
             record = PhysicsRecord(robot, backend, sim.airborne)
             session = NodeSession(node, config, robot, controller, gaits, sensors=True)

@@ -78,6 +78,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     """
     from shc_cli.backends.simulated import SimulatedBackend, open_world
     from shc_cli.control.controller import Controller
+    from shc_cli.control.verified_limits import source_for
     from shc_cli.errors import Issue, SpecError
     from shc_cli.events import event
     from shc_cli.loop.input_choice import commands_file, is_live, open_input
@@ -108,7 +109,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
             world = open_world(robot, options)
             with SimulatedBackend(robot, world) as backend:
                 controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
-                                        failure=failure)
+                                        failure=failure, speed_shares=None if failure else source_for(robot))
                 run.write_robot(robot)
                 if inputs.path is not None:
                     source.close()

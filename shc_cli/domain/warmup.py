@@ -11,8 +11,8 @@ The kernels are compiled by running what calls them, with the types the commands
 per argument-type signature): the servo laws of every ``[servo] control`` and MuJoCo's compiled control period
 (:mod:`shc_cli.backends.mujoco_.substeps`) of each, then a short simulation — start-up, the
 workspace search, walking — with and without admittance control, into a throwaway run directory.
-That run also verifies the default robot's speed limits for its gait (:mod:`shc_cli.control.verified_limits`,
-≈ 11 s the first time) into their cache.
+A robot that verifies its speed limits (``bullet_verified``, :mod:`shc_cli.control.verified_limits`) pays its trial
+walks at its first run of each gait instead (cached).
 """
 
 from __future__ import annotations

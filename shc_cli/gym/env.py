@@ -23,6 +23,7 @@ from shc_cli.backends.engine import Reading
 from shc_cli.backends.simulated import SimulatedBackend, open_world
 from shc_cli.control.controller import Command, Controller
 from shc_cli.control.states import RobotState
+from shc_cli.control.verified_limits import source_for
 from shc_cli.domain.config import SimulationConfig
 from shc_cli.gym.actions import ACTIONS, ActionName, GaitAction, JointAction, ResidualAction
 from shc_cli.gym.episodes import EpisodeRecord
@@ -146,7 +147,8 @@ class WalkEnv(gymnasium.Env[np.ndarray, np.ndarray]):
             config = SimulationConfig(**config.model_dump())  # parse and check the terrain
         world = open_world(robot, config.engine_options(robot))
         self._backend = backend = SimulatedBackend(robot, world)
-        controller = Controller(robot, self.inputs.gait, joints=backend.start(), pose_sets=self.inputs.pose_sets)
+        controller = Controller(robot, self.inputs.gait, joints=backend.start(), pose_sets=self.inputs.pose_sets,
+                                speed_shares=source_for(robot))
         source = _Commands(self.inputs.source(controller), self)
         if self.out is not None:
             self.episodes += 1
