@@ -44,13 +44,10 @@ def plan(velocity: str, out: Path, capsys: pytest.CaptureFixture[str],
 def test_the_readme_quotes_bullets_walkspace_speed_limits(capsys: pytest.CaptureFixture[str],
                                                           monkeypatch: pytest.MonkeyPatch) -> None:
     """README, First five minutes: "0.23 m/s straight ahead" was bullet_openshc's 0.2319, not the default robot's."""
-    report = workspace("bullet", capsys, monkeypatch)
-    speeds, verified = report["max_linear_speed"], report["verified_max_linear_speed"]
-    assert isinstance(speeds, dict) and isinstance(verified, dict)
+    speeds = workspace("bullet", capsys, monkeypatch)["max_linear_speed"]
+    assert isinstance(speeds, dict)
     quoted(f"`shc workspace` prints them per bearing: {speeds['0']:.4f} m/s straight ahead for Bullet's tripod")
     quoted(f"{min(speeds['45'], speeds['315']):.4f} m/s at 45° off it")
-    # the default robot's limits as its trial walks verified them (docs/deviations.md, "speed limits (verified)")
-    quoted(f"\"verified\" rows beside: {verified['0']:.4f} m/s ahead, {min(verified['45'], verified['315']):.4f} m/s")
 
 
 def test_the_readme_explains_the_turning_share_with_the_plans_own_figures(
@@ -58,7 +55,7 @@ def test_the_readme_explains_the_turning_share_with_the_plans_own_figures(
     """"`0.5,0,0.2` is half speed ahead" — it walked 0.064 m/s against 0.094 for `0.5,0,0`: OpenSHC's throttle mode
     scales the linear throttle by 1 − |turn throttle| and reads each foot's limit at its stride's bearing (the least
     over the legs: turning takes the rear feet into the 315° sector)."""
-    speeds = workspace("bullet", capsys, monkeypatch)["verified_max_linear_speed"]  # the limits the robot walks by
+    speeds = workspace("bullet", capsys, monkeypatch)["max_linear_speed"]
     assert isinstance(speeds, dict)
     straight, turning = plan("0.5,0,0", tmp_path / "straight", capsys, monkeypatch), plan(
         "0.5,0,0.2", tmp_path / "arc", capsys, monkeypatch)
@@ -67,8 +64,7 @@ def test_the_readme_explains_the_turning_share_with_the_plans_own_figures(
     # the explanation holds: the stance feet move at the predicted speed (1 %: the acceleration-limited ramp)
     assert turning["achieved_mean_speed_mps"] == pytest.approx(predicted, rel=0.01)
     assert straight["achieved_mean_speed_mps"] == pytest.approx(0.5 * speeds["0"], rel=0.01)
-    quoted(f"`0.5,0,0` walks at half of the verified speed (its plan's stance feet: "
-           f"{straight['achieved_mean_speed_mps']:.4f} m/s)")
+    quoted(f"`0.5,0,0` walks at half speed (its plan's stance feet: {straight['achieved_mean_speed_mps']:.4f} m/s)")
     quoted(f"moves at 0.5 × 0.8 × {off_axis:.4f} = {predicted:.4f} m/s (its plan's stance feet: "
            f"{turning['achieved_mean_speed_mps']:.4f} m/s; path speed {turning['path_speed_mps']:.4f} m/s against "
            f"{straight['path_speed_mps']:.4f} m/s for `0.5,0,0`")
