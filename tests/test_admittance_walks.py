@@ -63,7 +63,7 @@ def test_admittance_walks_on_flat_ground_as_far_as_without(tmp_path: Path) -> No
     walks without (measured: 97 % over 10 s) and has no NO PROGRESS flag."""
     off, _ = _walked(tmp_path, "off", False)
     on, run_on = _walked(tmp_path, "on", True)
-    assert off > 0.25  # 5 s at the verified 0.106 m/s ahead (docs/deviations.md)
+    assert off > 0.5
     assert on >= 0.9 * off
     assert not run_on.summary.no_progress and run_on.summary.cot is not None
 
