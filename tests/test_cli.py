@@ -121,7 +121,7 @@ def test_missing_robot_is_one_line_with_the_bundled_names(capsys, monkeypatch) -
     assert err.strip().splitlines() == [
         "error: bulet: no such robot file or bundled robot (did you mean 'bullet'? bundled: athena, athena_paper, "
         "bullet, bullet_insectoid_a, bullet_insectoid_b, bullet_mammalian, bullet_mammalian_a, bullet_mammalian_b, "
-        "bullet_openshc, octopod, openshc_default, quadruped)"]
+        "bullet_openshc, bullet_verified, octopod, openshc_default, quadruped)"]
 
 
 def test_workspace_json_has_the_documented_keys_and_nothing_else_on_stdout(capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]

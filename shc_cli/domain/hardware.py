@@ -44,7 +44,6 @@ if TYPE_CHECKING:
     from shc_cli.backends.base import InputSource
     from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Controller
-    from shc_cli.control.verified_limits import source_for
     from shc_cli.hardware.bus import BusState, ServoBus
     from shc_cli.live.foxglove_server import FoxgloveTransport
     from shc_cli.loop.run_loop import LoopResult
@@ -193,6 +192,7 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
     pacing (tests: an emulated bus on a virtual clock, :class:`~shc_cli.backends.dynamixel.DynamixelBackend`)."""
     from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Controller
+    from shc_cli.control.verified_limits import source_for
     from shc_cli.domain.live import open_live
     from shc_cli.hardware.buses import servo_bus
     from shc_cli.loop.input_choice import commands_file, open_input
