@@ -224,8 +224,11 @@ def test_json_of_a_simulated_run(walked: Path, capsys, monkeypatch) -> None:  # 
     for key in ("cot", "mean_power_w", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps",
                 "commanded_speed_mps", "distance_m"):
         assert result[key] == summary[key], key
-    assert summary["cot"] == pytest.approx(summary["mean_power_w"] / (summary["mass_kg"] * 9.81
-                                                                      * summary["mean_speed_mps"]), rel=1e-12)
+    weight = summary["mass_kg"] * 9.81  # eq. 22: P / (m·g·v), v the distance walked over the window (issue 38)
+    assert summary["cot"] == pytest.approx(summary["mean_power_w"] / (weight * summary["walked_m"]
+                                                                      / summary["analysed_time_s"]), rel=1e-9)
+    assert summary["cot_displacement"] == pytest.approx(summary["mean_power_w"] / (weight * summary["mean_speed_mps"]),
+                                                        rel=1e-12)
     assert 0.1 < result["stability_margin_median_m"] < 0.3  # CoM well inside the tripod
     assert 0.4 < result["duty_factor"] < 0.8
     assert result["height_median_m"] == pytest.approx(0.20, abs=0.03)  # bullet's body clearance (paper Table III)
