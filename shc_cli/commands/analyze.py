@@ -66,7 +66,15 @@ def run_analyze(runs: list[Path], as_json: bool, out: Path | None, skip: float, 
         refuse_existing([out / "analysis.json"], overwrite)
     logs = [open_run(path) for path in runs]
     window = Window(skip_s=skip, steady=steady)
-    results = [analyze_log(log, window) for log in logs]
+    results = []
+    for path, log in zip(runs, logs, strict=True):
+        try:
+            results.append(analyze_log(log, window))
+        except (ValueError, ArithmeticError) as error:  # numbers the readers let through that no metric can use
+            from shc_cli.errors import Issue, SpecError
+
+            raise SpecError([Issue(Path(path), None, "log", f"cannot be analysed: {error}",
+                                   "the run's files are damaged: run it again")]) from None
     for log in logs:
         note = log.partial_note()
         if note is not None:
