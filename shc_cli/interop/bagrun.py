@@ -21,6 +21,7 @@ def read_bag_run(path: Path) -> RunLog:
 
     from shc_cli.analysis.metrics import rpy_of
     from shc_cli.control.sensing import quaternion_matrix
+    from shc_cli.errors import SpecError
     from shc_cli.interop.bag import ROBOT_STATES, WALK_STATES, read_topics
     from shc_cli.spec.loading import load_robot
 
@@ -31,7 +32,11 @@ def read_bag_run(path: Path) -> RunLog:
     with tempfile.TemporaryDirectory() as directory:
         robot_file = Path(directory) / "robot.toml"
         robot_file.write_text(topics["/shc/robot"][0][1].data, encoding="utf-8")
-        loaded = load_robot(robot_file).robot
+        try:
+            loaded = load_robot(robot_file).robot
+        except SpecError as error:  # the bag's /shc/robot, not the temporary file it was read through, is at fault
+            raise bad_run(path, f"its /shc/robot does not load ({str(error).split(': ', 2)[-1]})",
+                          "re-export it") from None
     if loaded is None:
         raise bad_run(path, "its /shc/robot does not load", "re-export it")
     robot = loaded
