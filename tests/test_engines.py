@@ -214,17 +214,18 @@ def test_mujoco_dynamixel_servo_is_the_servo_models_torque() -> None:
 
 @pytest.mark.slow  # long simulations
 def test_an_unstable_mujoco_run_reports_it_and_writes_no_log_file(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    """ATHENA's explicit servo law at a 50 ms physics step blows up in MuJoCo: the warning reaches the summary and the
-    terminal, and MuJoCo's own MUJOCO_LOG.TXT is not left in the working directory."""
+    """ATHENA's explicit servo law at a 50 ms physics step blows up in MuJoCo: the run stops with the physics-diverged
+    exit code 6, the summary and the terminal name it, and MuJoCo's own MUJOCO_LOG.TXT is not left in the working
+    directory."""
     from .test_cli import run
 
     monkeypatch.chdir(tmp_path)
     code, _, err = run(["simulate", "athena_paper", "--engine", "mujoco", "--terrain", "ramp:10", "--duration", "3",
                           "--physics-rate", "20", "--no-plots", "--out", str(tmp_path / "run")], capsys, monkeypatch)
-    assert code == 0
+    assert code == 6, err
     import json
 
-    warnings = json.loads((tmp_path / "run" / "summary.json").read_text())["engine_warnings"]
-    assert any("unstable" in w for w in warnings)
-    assert "note: mujoco: " in err and "unstable" in err
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["stop_reason"] == "diverged"
+    assert "the physics diverged at cycle" in err and "--physics-rate" in err
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
