@@ -208,7 +208,7 @@ def test_ik_steps_from_kept_frames_equal_the_plain_steps_bit_for_bit(name: str, 
             common = (c.base, c.d, c.theta, c.r, c.alpha, c.lower, c.upper, c.max_vel, arrays[0], arrays[1],
                       arrays[2], target, 0.01, True, True, q_out, qd_out, tip_out, flags, proximity)
             if keep:
-                ik_step_frames_kernel(*common, frames, frames_q, 1.0)
+                ik_step_frames_kernel(*common, frames, frames_q, np.zeros(c.size), 1.0)
             else:
                 ik_step_kernel(*common, 1.0)
             arrays[:] = [q_out, qd_out, tip_out]

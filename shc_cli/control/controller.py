@@ -169,6 +169,9 @@ class Model:
         self._frames_q = np.full(self.chains.d.shape, np.nan)
         """Each leg's frames of the joints ``_frames_q`` (:func:`~shc_cli.model.kernels.ik_step_frames_kernel`)."""
         self._proximity = np.ones(self.chains.size)
+        self._last_targets: FloatArray | None = None
+        """The tip targets of the last IK step (how far each target moved feeds ``avoidance_cap``'s blend)."""
+        self._no_motion = np.zeros(self.chains.size)
         self._flags[:] = 1
         self.guard: SpeedGuard | None = None
         """The joint speed guard, once :meth:`start_cycle` has been given the control period."""
@@ -203,10 +206,13 @@ class Model:
         """
         c = self.chains
         joints, velocities, tips = np.empty_like(self.joints), np.empty_like(self.joints), np.empty_like(self.tips)
+        last = self._last_targets
+        motion = self._no_motion if last is None else np.sqrt(((targets - last) ** 2).sum(axis=1))
+        self._last_targets = np.array(targets, dtype=float)
         kernels.ik_step_frames_kernel(c.base, c.d, c.theta, c.r, c.alpha, c.lower, c.upper, c.max_vel, self.joints,
                                       self.joint_velocities, self.tips, targets, dt, clamp_positions,
                                       clamp_velocities, joints, velocities, tips, self._flags, self._proximity,
-                                      self._frames, self._frames_q, 1.0, self.avoidance_cap)
+                                      self._frames, self._frames_q, motion, 1.0, self.avoidance_cap)
         flags = self._flags.tolist()
         if active is not None:
             keep = ~np.asarray(active, dtype=bool)

@@ -17,6 +17,9 @@ from shc_cli.model.jit import njit
 DLS_COEFFICIENT = 0.02
 JOINT_LIMIT_COST_WEIGHT = 0.1
 POSITION_LIMIT_SHARE = 0.25
+CAPPED_TIP_SPEED = 0.05
+"""Tip speed [m/s] at and above which ``avoidance_cap`` leaves OpenSHC's velocity term whole (below, it blends
+to the capped term of a still tip)."""
 IK_TOLERANCE = 0.005
 
 
@@ -106,6 +109,7 @@ def ik_step_one(  # type: ignore[no-untyped-def]
     base, d, theta, r, alpha, lower, upper, max_vel,
     q, qd, current_tip, desired_tip, dt, clamp_positions, clamp_velocities,
     q_out, qd_out, tip_out, frames, jac, z, v, delta, null_space=1.0, frames_ready=False, avoidance_cap=0.0,
+    target_motion=0.0,
 ):
     """One DLS step with joint-limit avoidance for one chain (study §2.1–§2.2).
 
@@ -116,7 +120,8 @@ def ik_step_one(  # type: ignore[no-untyped-def]
     motion: 1 is OpenSHC; 0 gives a plain damped-least-squares step (used to polish planning solutions).
     ``frames_ready``: ``frames`` already holds the frames of ``q`` (:func:`ik_step_frames_kernel`). On return
     ``frames`` holds the frames of ``q_out``. ``avoidance_cap``: 0 is OpenSHC; c > 0 shortens the two limit-avoidance
-    terms to at most c times what they correct (see below).
+    terms to at most c times what they correct (see below); ``target_motion`` is how far the tip's target moved since
+    the last step [m] (0: a still target, as the planning callers pass).
     """
     n = d.shape[0]
     w = JOINT_LIMIT_COST_WEIGHT
@@ -196,6 +201,14 @@ def ik_step_one(  # type: ignore[no-untyped-def]
         length = (1.0 - POSITION_LIMIT_SHARE) * math.sqrt(pushed)
         if length > reach:
             vel_scale = reach / length
+        # a tip whose target moves (walking, posing) keeps OpenSHC's velocity term: shortened, it let a walking
+        # stance leg's redundant joints move undamped and its foot slip in yaw (the leg odometry then misread a
+        # walk as a turn); it blends in from a still target to one moving CAPPED_TIP_SPEED
+        moving = target_motion / (CAPPED_TIP_SPEED * dt)
+        if moving >= 1.0:
+            vel_scale = 1.0
+        elif moving > vel_scale:
+            vel_scale = moving
         gain = POSITION_LIMIT_SHARE * (w * w) / (narrowest * narrowest * norm_p) if norm_p > 0.0 else 0.0
         if gain > avoidance_cap:
             pos_scale = avoidance_cap / gain
@@ -283,12 +296,14 @@ def ik_step_kernel(  # type: ignore[no-untyped-def]
 def ik_step_frames_kernel(  # type: ignore[no-untyped-def]
     base, d, theta, r, alpha, lower, upper, max_vel,
     q, qd, current_tip, desired_tip, dt, clamp_positions, clamp_velocities,
-    q_out, qd_out, tip_out, flags_out, proximity_out, frames, frames_q, null_space=1.0, avoidance_cap=0.0,
+    q_out, qd_out, tip_out, flags_out, proximity_out, frames, frames_q, target_motion, null_space=1.0,
+    avoidance_cap=0.0,
 ):
     """:func:`ik_step_kernel` keeping each chain's frames: ``frames[b]`` ``(n + 1, 4, 4)`` holds the frames of the
     joints ``frames_q[b]`` (NaN: none yet). A chain whose joints ``q[b]`` are those, bit for bit, starts from them
     instead of computing them again — the frames of one step's result are where the controller's next step starts
-    (the same function of the same values: the same bits). Both are updated to ``q_out``."""
+    (the same function of the same values: the same bits). Both are updated to ``q_out``. ``target_motion[b]``: how
+    far chain b's target moved since its last step [m] (:func:`ik_step_one`)."""
     chains, n = d.shape
     jac, z, v, delta = np.empty((3, n)), np.empty((n, 3)), np.empty(n), np.empty(3)
     for b in range(chains):
@@ -303,6 +318,7 @@ def ik_step_frames_kernel(  # type: ignore[no-untyped-def]
             base[b], d[b], theta[b], r[b], alpha[b], lower[b], upper[b], max_vel[b],
             q[b], qd[b], current_tip[b], desired_tip[b], dt, clamp_positions, clamp_velocities,
             q_out[b], qd_out[b], tip_out[b], frames[b], jac, z, v, delta, null_space, ready, avoidance_cap,
+            target_motion[b],
         )
         for k in range(n):
             frames_q[b, k] = q_out[b, k]
