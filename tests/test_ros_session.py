@@ -44,7 +44,8 @@ def test_shc_ros_drives_like_openshc_and_its_bag_replays_exactly(ros_env: dict[s
     bag = tmp_path / "session.bag"
     recorder = None
     try:
-        _wait_for(lambda: "/shc" in ros(env, "rosnode", "list"), 60, "the node to register")
+        _wait_for(lambda: "/desired_joint_states" in ros(env, "rostopic", "list").split(), 60,
+                  "the node's outputs (after its 10 s wait for /joint_states)")
         topics = ros(env, "rostopic", "list")
         for topic in ("/desired_joint_states", "/shc/AR/state", "/shc/velocity", "/shc/pose", "/tf",
                       "/AR_coxa_joint/command", "/syropod_remote/desired_velocity", "/syropod_remote/robot_state"):
@@ -88,7 +89,8 @@ def test_an_openshc_parameter_file_loaded_with_rosparam_is_the_nodes_robot(ros_e
     ``shc ros server``: the robot, its joints and its gaits come from the parameter server."""
     ros(ros_env, "rosparam", "load", str(ROOT / "golden" / "openshc" / "bullet_insectoid.yaml"))
     ros(ros_env, "rosparam", "load", str(ROOT / "golden" / "openshc" / "gait.yaml"))
-    result = subprocess.run([*SHC, "ros", "server", "--duration", "3", "--out", str(tmp_path / "run")], cwd=ROOT,
+    result = subprocess.run([*SHC, "ros", "server", "--duration", "3", "--joint-states-timeout", "0",
+                             "--out", str(tmp_path / "run")], cwd=ROOT,
                             env=ros_env, capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
