@@ -107,7 +107,7 @@ def test_imu_and_tip_states_reach_the_controllers_sensors() -> None:
         linear_acceleration_covariance=np.zeros(9)))
     wrench = T["geometry_msgs/msg/Wrench"](force=_vector(3.0, 0.0, 4.0), torque=_vector(0.0, 0.0, 0.0))
     node.callbacks["/tip_states"](T["syropod_highlevel_controller/msg/TipState"](
-        header=_header(), name=["BL", "nobody"], wrench=[wrench, wrench], step_plane=[]))
+        header=_header(), name=["BL_tip", "nobody"], wrench=[wrench, wrench], step_plane=[]))
     node.callbacks["/joint_states"](_joint_state(NAMES, [0.0] * len(NAMES), [0.5] * len(NAMES)))
     sensors = MeasuredBackend(measured).sensors(True)
     assert sensors is not None

@@ -11,7 +11,7 @@ same on either node (ROS 1's :class:`~shc_cli.ros.node.RosNode`, ROS 2's :class:
   field, and the measured positions shc's leg odometry.
 * ``/imu/data`` (sensor_msgs/Imu): the orientation and angular velocity of IMU posing (``imu_posing``, RUNNING only)
   and inclination posing.
-* ``/tip_states`` (syropod_highlevel_controller/TipState, by leg name): each tip's measured force, whose magnitude
+* ``/tip_states`` (syropod_highlevel_controller/TipState, by the name's leg prefix, ``AR_tip`` → ``AR``): each tip's measured force, whose magnitude
   is compared with the touchdown and lift-off thresholds (study §8.4) and is admittance control's force without
   ``use_joint_effort``.
 
@@ -106,7 +106,7 @@ class MeasuredInputs:
             self.counts["/tip_states"] += 1
             forces = self._forces if self._forces is not None else np.zeros(len(self._legs))
             for name, wrench in zip(message.name, message.wrench, strict=False):
-                i = self._legs.get(str(name))
+                i = self._legs.get(str(name).split("_", 1)[0])  # "AR_tip" or "AR": OpenSHC's leg prefix
                 if i is not None:
                     f = wrench.force
                     forces[i] = float(np.sqrt(f.x * f.x + f.y * f.y + f.z * f.z))
