@@ -11,9 +11,10 @@ same on either node (ROS 1's :class:`~shc_cli.ros.node.RosNode`, ROS 2's :class:
   field, and the measured positions shc's leg odometry.
 * ``/imu/data`` (sensor_msgs/Imu): the orientation and angular velocity of IMU posing (``imu_posing``, RUNNING only)
   and inclination posing.
-* ``/tip_states`` (syropod_highlevel_controller/TipState, by the name's leg prefix, ``AR_tip`` → ``AR``): each tip's measured force, whose magnitude
-  is compared with the touchdown and lift-off thresholds (study §8.4) and is admittance control's force without
-  ``use_joint_effort``.
+* ``/tip_states`` (syropod_highlevel_controller/TipState, by the name's leg prefix, ``AR_tip`` → ``AR``): each
+  tip's measured force, whose magnitude is compared with the touchdown and lift-off thresholds (study §8.4) and is
+  admittance control's force without ``use_joint_effort``. Its ``step_plane`` (a range sensor's) is not used:
+  shc's controller has no step-plane input.
 
 Each cycle the controller reads the newest of each (:meth:`MeasuredInputs.sensors`, through
 :class:`MeasuredBackend`); while nothing arrived the controller runs as without sensors, exactly.
