@@ -15,6 +15,7 @@ those received; ROS 1 also ``seq`` gaps), and the node's own period p50/p99/max 
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import os
 import random
@@ -111,13 +112,13 @@ def _figures(seen: dict[str, Any], summary: dict[str, Any], seconds: float, seq:
                                "lost": summary["cycles"] - len(messages), "window_messages": len(window)}
     for name, k in (("stamp", 0), ("receive", 1)):
         times = [m[k] for m in window]
-        gaps = [b - a for a, b in zip(times, times[1:], strict=False)]
+        gaps = [b - a for a, b in itertools.pairwise(times)]
         figures[f"{name}_rate_hz"] = (len(times) - 1) / (times[-1] - times[0])
         figures[f"{name}_max_interval_ms"] = max(gaps) * 1e3
         figures[f"{name}_intervals_over_3_periods"] = sum(g > 3 * PERIOD for g in gaps)
     if seq:
         seqs = [m[2] for m in messages]
-        figures["seq_gaps"] = sum(b - a - 1 for a, b in zip(seqs, seqs[1:], strict=False))
+        figures["seq_gaps"] = sum(b - a - 1 for a, b in itertools.pairwise(seqs))
     for key in ("rate_hz", "cycle_time_p50_ms", "cycle_time_p99_ms", "cycle_time_max_ms"):
         figures[f"node_{key}"] = summary.get(key)
     return figures
