@@ -118,6 +118,9 @@ def test_imu_and_tip_states_reach_the_controllers_sensors() -> None:
     expected[list(ROBOT.legs).index("BL")] = 5.0  # |(3, 0, 4)|: OpenSHC compares the force's magnitude
     np.testing.assert_allclose(sensors.foot_forces, expected)
     assert sensors.joint_efforts is not None and float(sensors.joint_efforts[0, 0]) == 0.5
+    first = next(iter(ROBOT.legs.values())).joints.values()
+    assert sensors.joints is not None  # every cycle's measured joints, less the offsets (shc's leg odometry reads them)
+    np.testing.assert_allclose(sensors.joints[0, :len(first)], [-joint.offset for joint in first])
 
 
 _PUBLISHER = """
