@@ -9,7 +9,9 @@ that subscribes ``/desired_joint_states`` reliably with a deep queue, then sends
 (throttle 0.5 forward) and records each message's header stamp, receive time (and ROS 1's ``seq``) until the node
 exits. Printed for the ``--seconds`` s from the first RUNNING cycle: the rate by header stamps and by receive times,
 the longest interval of each (and how many exceed three control periods), the messages lost (the node's cycles −
-those received; ROS 1 also ``seq`` gaps), and the node's own period p50/p99/max from its summary.
+those received; ROS 1 also ``seq`` gaps), and the node's own period p50/p99/max from its summary (periods longer than
+its resync limit are counted as ``pauses`` and left out of those, as ``shc ros`` reports them), its overruns (over
+1.5 periods) and its largest lag behind the schedule.
 """
 
 from __future__ import annotations
@@ -119,7 +121,8 @@ def _figures(seen: dict[str, Any], summary: dict[str, Any], seconds: float, seq:
     if seq:
         seqs = [m[2] for m in messages]
         figures["seq_gaps"] = sum(b - a - 1 for a, b in itertools.pairwise(seqs))
-    for key in ("rate_hz", "cycle_time_p50_ms", "cycle_time_p99_ms", "cycle_time_max_ms"):
+    for key in ("rate_hz", "cycle_time_p50_ms", "cycle_time_p99_ms", "cycle_time_max_ms", "overruns", "pauses",
+                "realtime_lag_max_ms"):
         figures[f"node_{key}"] = summary.get(key)
     return figures
 
