@@ -170,3 +170,13 @@ def test_shc_ros_subscribes_the_sensor_topics_and_starts_from_the_measured_joint
         leg, joint = name.removesuffix("_joint").split("_", 1)
         expected = 0.1 + 0.01 * k - ROBOT.legs[leg].joints[joint].offset
         assert float(first[name.removesuffix("_joint")]) == pytest.approx(expected, abs=1e-6)
+
+
+@pytest.mark.parametrize("command", ["ros", "ros2"])
+def test_a_negative_joint_states_timeout_is_one_line(command: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    from tests.test_cli import run
+
+    code, _, stderr = run([command, "bullet", "--joint-states-timeout", "-1", "--out", str(tmp_path / "run")], capsys,
+                          monkeypatch)
+    assert code == 2 and stderr.count("\n") == 1 and "--joint-states-timeout" in stderr, stderr
+    assert not (tmp_path / "run").exists()
