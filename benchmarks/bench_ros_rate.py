@@ -106,6 +106,10 @@ def _free_port() -> int:
         return int(sock.getsockname()[1])
 
 
+def _fastdds_files(shm: Path) -> set[Path]:
+    return {*shm.glob("fastdds_*"), *shm.glob("sem.fastdds_*")} if shm.is_dir() else set()
+
+
 def _figures(seen: dict[str, Any], summary: dict[str, Any], seconds: float, seq: bool) -> dict[str, Any]:
     messages = seen["messages"]
     start = seen["running"] if seen["running"] is not None else messages[0][1]
@@ -142,6 +146,8 @@ def _run(ros: str, seconds: float, folder: Path) -> dict[str, Any]:
                    ROS_HOME=str(folder / "home2"), ROS_LOG_DIR=str(folder / "log2"))
         env.pop("ROS_LOCALHOST_ONLY", None)
         listener = [sys.executable, "-c", ROS2_LISTENER]
+    shm = Path("/dev/shm")
+    before = _fastdds_files(shm)
     run, seen_file = folder / f"run{ros}", folder / f"seen{ros}.json"
     command = "ros" if ros == "1" else "ros2"
     node = subprocess.Popen([*SHC, command, "bullet", "--joint-states-timeout", "0", "--duration", str(seconds + 25),
@@ -159,6 +165,8 @@ def _run(ros: str, seconds: float, folder: Path) -> dict[str, Any]:
         if core is not None:
             os.killpg(core.pid, 15)
             core.wait(timeout=30)
+        for leftover in _fastdds_files(shm) - before:  # Fast DDS leaves its shared-memory files behind
+            leftover.unlink(missing_ok=True)
     summary = json.loads((run / "summary.json").read_text())
     return _figures(json.loads(seen_file.read_text()), summary, seconds, seq=ros == "1")
 
