@@ -296,6 +296,9 @@ def ros(
     = "torque-off",
     on_stop: Annotated[str, typer.Option(help="--backend bus: after the shut-down, hold or torque-off.")]
     = "torque-off",
+    joint_states_timeout: Annotated[float, typer.Option(help="--backend none: seconds to wait at start-up for "
+                                                             "/joint_states to give every joint, as OpenSHC (0: do "
+                                                             "not wait).")] = 10.0,
 ) -> None:
     """Run as OpenSHC's ROS 1 node: its topics, messages and parameters, driven by syropod_remote."""
     from shc_cli.commands.ros import run_ros
@@ -304,7 +307,8 @@ def ros(
     run_ros(NodeConfig(robot=robot, backend=backend, name=name, master_uri=master, duration=duration, out=out,  # type: ignore[arg-type]
                        individual=individual, combined=combined, overwrite=overwrite, namespace=namespace,
                        live=live, live_port=live_port, path=path, ports=tuple(port or ()), baud=baud,
-                       dry_run=dry_run, stop_state=stop_state, on_fault=on_fault, on_stop=on_stop))
+                       dry_run=dry_run, stop_state=stop_state, on_fault=on_fault, on_stop=on_stop,
+                       joint_states_timeout=joint_states_timeout))
 
 
 @app.command()
@@ -335,6 +339,9 @@ def ros2(
     = "torque-off",
     on_stop: Annotated[str, typer.Option(help="--backend bus: after the shut-down, hold or torque-off.")]
     = "torque-off",
+    joint_states_timeout: Annotated[float, typer.Option(help="--backend none: seconds to wait at start-up for "
+                                                             "/joint_states to give every joint, as OpenSHC (0: do "
+                                                             "not wait).")] = 10.0,
 ) -> None:
     """Run as OpenSHC's node on ROS 2 (the ros2 extra): shc ros's topics under ROS 2 types, ROS 2 parameters."""
     from shc_cli.commands.ros2 import run_ros2
@@ -343,7 +350,8 @@ def ros2(
     run_ros2(NodeConfig(robot=robot, backend=backend, name=name, duration=duration, out=out,  # type: ignore[arg-type]
                         individual=individual, combined=combined, overwrite=overwrite, live=live,
                         live_port=live_port, path=path, ports=tuple(port or ()), baud=baud, dry_run=dry_run,
-                        stop_state=stop_state, on_fault=on_fault, on_stop=on_stop), params_file)
+                        stop_state=stop_state, on_fault=on_fault, on_stop=on_stop,
+                        joint_states_timeout=joint_states_timeout), params_file)
 
 
 @app.command()

@@ -34,7 +34,8 @@ def test_shc_ros_walks_its_path_then_a_goal_pose(ros_env: dict[str, str], tmp_pa
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     latched = []
     try:
-        _wait_for(lambda: "/shc" in ros(env, "rosnode", "list"), 60, "the node to register")
+        _wait_for(lambda: "/desired_joint_states" in ros(env, "rostopic", "list").split(), 60,
+                  "the node's outputs (after its 10 s wait for /joint_states)")
         assert "nav_msgs/Path" in ros(env, "rostopic", "info", "/shc/path")
         assert "geometry_msgs/PoseStamped" in ros(env, "rostopic", "info", "/move_base_simple/goal")
         for topic, value in (("system_state", "1"), ("robot_state", "2")):  # OPERATIONAL, RUNNING (latched)

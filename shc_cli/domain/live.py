@@ -23,12 +23,13 @@ def open_live(port: int, robot: Robot, controller: Controller, sensors: bool,
     servo bus reading's measured joints when ``joint_states``). The caller closes the server when the run ends."""
     from shc_cli.live.foxglove_server import FoxgloveTransport
     from shc_cli.ros.messages import MessageTypes
-    from shc_cli.ros.outputs import NodeOutputs
+    from shc_cli.ros.outputs import NodeOutputs, ideal_odometry
 
     transport = FoxgloveTransport(MessageTypes(), port)
     log.warning("live: %s (Foxglove WebSocket)", transport.url)
     outputs = NodeOutputs(transport, robot, individual=False, combined=True, sensors=sensors, always=False,
-                          walkspace=lambda: controller.walkspace, joint_states=joint_states)
+                          walkspace=lambda: controller.walkspace, joint_states=joint_states,
+                          ideal=ideal_odometry(controller))
     return transport, outputs
 
 

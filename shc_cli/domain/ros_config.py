@@ -31,6 +31,9 @@ class NodeConfig:
         live: also stream the session on a Foxglove WebSocket server on 127.0.0.1:``live_port``.
         path: a path file to walk once the robot runs (more paths and goals arrive on ``<name>/path`` and
             ``/move_base_simple/goal``: :mod:`shc_cli.ros.path_remote`).
+        joint_states_timeout: backend ``none``: how long to wait at start-up for ``/joint_states`` to give every
+            joint [s] (OpenSHC's ``ACQUISTION_TIME``, 10 s; 0: do not wait, start from the joints' defaults unless
+            they are already there).
         ports, baud, dry_run, stop_state, on_fault, on_stop, profile_velocity: backend ``bus``: the servo buses and
             their safety, as ``run-hw``'s options (:class:`~shc_cli.domain.hardware.HardwareConfig`).
     """
@@ -55,6 +58,7 @@ class NodeConfig:
     on_fault: str = "torque-off"
     on_stop: str = "torque-off"
     profile_velocity: bool = False
+    joint_states_timeout: float = 10.0
 
     def __post_init__(self) -> None:
         from shc_cli.errors import Issue, SpecError, check_choice
@@ -64,6 +68,9 @@ class NodeConfig:
         for option, value in (("--on-fault", self.on_fault), ("--on-stop", self.on_stop)):
             check_choice(option, value, ("hold", "torque-off"), "hold or torque-off")
         check_choice("--stop-state", self.stop_state, tuple(STATES), "a robot state")
+        if not self.joint_states_timeout >= 0.0:
+            raise SpecError([Issue(None, None, "--joint-states-timeout", f"{self.joint_states_timeout:g} is negative",
+                                   "give seconds ≥ 0 (0: do not wait for /joint_states)")])
         if (self.backend == "bus") != bool(self.ports):
             problem = ("the bus backend needs its serial ports" if self.ports == () else
                        f"--port is for the bus backend, not '{self.backend}'")

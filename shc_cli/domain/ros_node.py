@@ -148,7 +148,6 @@ def _run(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: di
 def _run_outputs_only(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
                       gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     """Backend none: the controller's targets are taken as reached (OpenSHC with a hardware node of the user's)."""
-    from shc_cli.backends.kinematic import KinematicBackend
     from shc_cli.control.controller import Controller
     from shc_cli.control.verified_limits import source_for
     from shc_cli.domain.ros_session import NodeSession
@@ -156,20 +155,23 @@ def _run_outputs_only(node: Node, config: NodeConfig, robot: Robot, gait: Gait, 
     from shc_cli.loop.run_loop import Observer, RunLoop
     from shc_cli.loop.session import execute
     from shc_cli.record.runlog import RunWriter
+    from shc_cli.ros.measured import MeasuredBackend, MeasuredInputs
 
-    # OpenSHC starts from the measured joints when /joint_states gives them all (shc ros2; shc ros: the defaults)
-    controller = Controller(robot, gait, joints=node.measured_joints(robot), pose_sets=pose_sets,
-                            speed_shares=source_for(robot))
+    # OpenSHC's start-up: /joint_states, /imu/data and /tip_states subscribed, the measured joints waited for
+    measured = MeasuredInputs(node, robot)
+    controller = Controller(robot, gait, joints=measured.wait_for_joints(config.joint_states_timeout),
+                            pose_sets=pose_sets, speed_shares=source_for(robot))
     writer = RunWriter(directory, robot, config.overwrite)
     writer.write_robot(robot)
     record = PlanRecord(controller)
     session = NodeSession(node, config, robot, controller, gaits, sensors=False)
-    observers: list[Observer[None]] = [record, session.outputs, session.clock, session.deadline]
+    observers: list[Observer[None]] = [record, measured.feed_efforts(session.outputs), session.outputs,
+                                       session.clock, session.deadline]
     stream = open_live(config.live_port, robot, controller, sensors=False) if config.live else None
     if stream is not None:
-        observers.insert(2, stream[1])
+        observers.insert(3, stream[1])
     path_fields = session.keep_path(writer.partial)
-    loop = RunLoop(controller, KinematicBackend(), session.source, writer, None, observers=observers,
+    loop = RunLoop(controller, MeasuredBackend(measured), session.source, writer, None, observers=observers,
                    flush_every=100)
     session.requested = lambda: loop.requested
     session.ready(node, config, robot, gait, on_ready)

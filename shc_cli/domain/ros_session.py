@@ -24,7 +24,7 @@ class NodeSession:
     def __init__(self, node: Node, config: NodeConfig, robot: Robot, controller: Controller,
                  gaits: dict[str, Gait], sensors: bool, joint_states: bool = False) -> None:
         from shc_cli.loop.pacing import WallClock
-        from shc_cli.ros.outputs import NodeOutputs
+        from shc_cli.ros.outputs import NodeOutputs, ideal_odometry
         from shc_cli.ros.path_remote import RemotePath
         from shc_cli.ros.remote import RemoteInput
         from shc_cli.spec.path import load_path
@@ -38,7 +38,7 @@ class NodeSession:
         self.source.subscribe(node)
         self.outputs = NodeOutputs(node, robot, config.individual, config.combined,
                                    walkspace=lambda: controller.walkspace, after=self.remote.latch, sensors=sensors,
-                                   always=True, joint_states=joint_states)
+                                   always=True, joint_states=joint_states, ideal=ideal_odometry(controller))
         self.clock = WallClock(robot.time_delta, pace=not joint_states)
 
     def keep_path(self, directory: Path) -> Callable[[], dict[str, object]]:

@@ -36,8 +36,6 @@ from shc_cli.errors import ShcError
 from shc_cli.ros import tcpros
 
 if TYPE_CHECKING:
-    import numpy as np
-
     from shc_cli.ros.messages import MessageTypes
     from shc_cli.ros.transport import ParameterSink
     from shc_cli.spec.robot import Robot
@@ -189,11 +187,6 @@ class RosNode:
         publishers = self._call("registerSubscriber", topic, msgtype, self.uri)
         assert isinstance(publishers, list)
         self._connect_publishers(subscription, [str(p) for p in publishers])
-
-    def measured_joints(self, robot: Robot) -> np.ndarray | None:
-        """None: ``shc ros`` starts from the joints' defaults (OpenSHC's wait for ``/joint_states`` is ``shc ros2``'s
-        so far)."""
-        return None
 
     def serve_parameters(self, robot: Robot, remote: ParameterSink) -> None:
         """Nothing: on ROS 1 OpenSHC's dynamic parameters change through the remote's parameter adjustment."""

@@ -3,9 +3,17 @@
 ``/desired_joint_states`` (all joints: desired position without offset, desired velocity, the last measured effort),
 the per-joint ``/<LEG>_<joint>_joint/command`` (Float64, desired position + offset) when the individual interface
 is on, ``/shc/<LEG>/state`` (OpenSHC's LegState), ``/shc/velocity`` and ``/shc/pose`` (Twist), ``/shc/walkspace``
-(Float32MultiArray, RUNNING only), ``/tf`` (``odom_ideal → base_link``, ``base_link → walk_plane``,
-``base_link → <LEG>_tip``) and shc's ``/odom`` (nav_msgs/Odometry: the leg odometry, ``odom → base_link``,
-planar pose and its velocity in base_link; an shc addition, docs/odometry.md). Headers carry the wall clock. The
+(Float32MultiArray, RUNNING only), ``/tf`` and shc's ``/odom`` (nav_msgs/Odometry: the leg odometry, ``odom →
+base_link``, planar pose and its velocity in base_link; an shc addition, docs/odometry.md). Headers carry the wall
+clock.
+
+``/tf`` is one tree, each frame with one parent: ``odom → odom_ideal → base_link → {walk_plane, <LEG>_tip}``.
+``odom_ideal → base_link`` is OpenSHC's (``StateController::publishFrameTransforms``): the ideal odometry — the
+walk plane's pose integrated from the commanded velocity (``WalkController::getOdometryIdeal``) — composed with the
+body's current pose in the walk plane. OpenSHC sends it only while no ``odom`` frame is on the tree; shc's leg
+odometry is one, so shc hangs ``odom_ideal`` under it: ``odom → odom_ideal`` is the leg odometry's planar pose times
+the inverse of the ideal one, so that ``odom → base_link`` (looked up through ``odom_ideal``) is the leg odometry
+composed with the same body pose, and ``odom_ideal → base_link`` stays exactly OpenSHC's. The
 publisher is an observer of the run loop; after publishing it lets the remote input take its snapshot, as OpenSHC's
 ``spinOnce`` follows its publications.
 """
@@ -67,13 +75,17 @@ class NodeOutputs:
         joint_states: publish the measured ``/joint_states`` only (a robot on servos: its bus reading's positions
             [rad], velocities [rad/s] and currents as efforts [A], as ``run-hw`` logs them); implied by ``sensors``.
         efforts: the last measured joint efforts ``(L, n)`` [N·m] or None (published as 0).
+        ideal: gives the ideal odometry (the walk plane's position [m] and yaw [rad] in ``odom_ideal``), or None
+            before the walk controller exists (:func:`ideal_odometry`); None: the walk plane stays at the origin.
     """
 
     def __init__(self, node: Transport, robot: Robot, individual: bool = True, combined: bool = True,
                  walkspace: Callable[[], dict[int, float]] | None = None,
                  after: Callable[[], None] | None = None, sensors: bool = False,
-                 always: bool | None = None, joint_states: bool = False) -> None:
+                 always: bool | None = None, joint_states: bool = False,
+                 ideal: Callable[[], tuple[np.ndarray, float] | None] | None = None) -> None:
         self.m = Messages(node.types.store)
+        self.ideal = ideal
         self.after = after
         self.efforts: np.ndarray | None = None
         self.period = robot.time_delta
@@ -250,14 +262,34 @@ class NodeOutputs:
     def _tf(self, sec: int, nanosec: int, out: CycleOutput) -> Any:
         T, m = self.m.T, self.m
         x, y, z, roll, pitch, yaw = out.pose
-        body_q = quaternions(_rotation(roll, pitch, yaw)[None])[0]
-        transforms = [m.transform(sec, nanosec, "odom_ideal", "base_link", np.array([x, y, z, *body_q])),
+        ideal = self.ideal() if self.ideal is not None else None
+        plane, heading = (np.zeros(3), 0.0) if ideal is None else (np.asarray(ideal[0], dtype=float), ideal[1])
+        turn = _rotation(0.0, 0.0, heading)
+        position = plane + turn @ np.array([x, y, z])  # odometry_ideal.addPose(current_pose)
+        body_q = quaternions((turn @ _rotation(roll, pitch, yaw))[None])[0]
+        ox, oy, oyaw = out.odometry  # odom → odom_ideal: the leg odometry's planar pose ∘ the ideal one's inverse
+        offset = _rotation(0.0, 0.0, oyaw - heading)
+        shift = np.array([ox, oy, 0.0]) - offset @ plane
+        transforms = [m.transform(sec, nanosec, "odom", "odom_ideal",
+                                  np.array([*shift, *quaternions(offset[None])[0]])),
+                      m.transform(sec, nanosec, "odom_ideal", "base_link", np.array([*position, *body_q])),
                       m.transform(sec, nanosec, "base_link", "walk_plane",
                                   np.array([0.0, 0.0, -z, *quaternions(_rotation(-roll, -pitch, 0.0)[None])[0]]))]
         transforms += [m.transform(sec, nanosec, "base_link", f"{leg}_tip", np.concatenate([out.model_tips[i],
                                                                                              _IDENTITY]))
                        for i, leg in enumerate(self.legs)]
         return T["tf2_msgs/msg/TFMessage"](transforms=transforms)
+
+
+def ideal_odometry(controller: Any) -> Callable[[], tuple[np.ndarray, float] | None]:
+    """What :class:`NodeOutputs`'s ``ideal`` reads from ``controller``: its walk controller's ideal odometry
+    (position [m], yaw [rad]), None while there is none (before RUNNING)."""
+
+    def read() -> tuple[np.ndarray, float] | None:
+        walker = controller.walker
+        return None if walker is None else (walker.odometry_position, walker.odometry_yaw)
+
+    return read
 
 
 def _rotation(roll: float, pitch: float, yaw: float) -> np.ndarray:

@@ -7,8 +7,6 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
-    import numpy as np
-
     from shc_cli.ros.messages import MessageTypes
     from shc_cli.ros.outputs import Sender
     from shc_cli.spec.robot import Robot
@@ -37,10 +35,6 @@ class Node(Protocol):
         ...
 
     def subscribe(self, topic: str, msgtype: str, callback: Callable[[object], None]) -> None:
-        ...
-
-    def measured_joints(self, robot: Robot) -> np.ndarray | None:
-        """The joints measured at start-up (``/joint_states``, less the offsets) ``(L, n)`` [rad], or None."""
         ...
 
     def serve_parameters(self, robot: Robot, remote: ParameterSink) -> None:

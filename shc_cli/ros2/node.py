@@ -27,8 +27,6 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from shc_cli.errors import ShcError
 from shc_cli.ros.messages import MessageTypes
 
@@ -43,8 +41,6 @@ SENSOR_TOPICS = frozenset({"/joint_states", "/imu/data", "/tip_states"})
 """Subscribed best effort (a sensor driver's QoS); everything else reliable."""
 _FLOAT64 = struct.Struct("<HHd")
 """A std_msgs/Float64 in CDR: the encapsulation (little-endian CDR, options 0) and the value."""
-ACQUISITION_TIME_S = 10.0
-"""How long OpenSHC waits at start-up for /joint_states to give every joint (``ACQUISTION_TIME``)."""
 GOAL_TOPIC = "/goal_pose"
 """RViz 2's goal tool publishes there (geometry_msgs/PoseStamped)."""
 
@@ -179,40 +175,6 @@ class Ros2Node:
 
         self._node.create_subscription(self.message_class(msgtype), topic, received,
                                        QoSProfile(depth=10, reliability=reliability), raw=True)
-
-    def measured_joints(self, robot: Robot, timeout: float = ACQUISITION_TIME_S) -> np.ndarray | None:
-        """OpenSHC's start-up: wait up to ``timeout`` s for ``/joint_states`` to give every joint of the robot (by
-        name); the measured positions less each joint's offset ``(L, n)`` [rad], or None (with a warning) when they
-        did not all come — the controller then starts from ``clamp(0, min, max)``, as OpenSHC does."""
-        from shc_cli.model.body import leg_names
-
-        names = {joint: (i, k, spec.offset) for i, (leg, legs) in enumerate(leg_names(robot).items())
-                 for k, (joint, spec) in enumerate(zip(legs.joints, robot.legs[leg].joints.values(), strict=True))}
-        width = max(len(leg.joints) for leg in robot.legs.values())
-        joints = np.zeros((len(robot.legs), width))
-        seen: set[str] = set()
-        lock = threading.Lock()
-        complete = threading.Event()
-
-        def received(message: Any) -> None:
-            with lock:
-                for name, position in zip(message.name, message.position, strict=False):
-                    if name in names:
-                        i, k, offset = names[name]
-                        joints[i, k] = float(position) - offset
-                        seen.add(name)
-                if len(seen) == len(names):
-                    complete.set()
-
-        self.subscribe("/joint_states", "sensor_msgs/JointState", received)
-        if complete.wait(timeout):
-            with lock:
-                log.info("starting from the measured /joint_states")
-                return joints.copy()
-        missing = sorted(set(names) - seen)
-        log.warning("no /joint_states for %s within %.0f s: starting from the joints' defaults (clamp(0, min, max)), "
-                    "as OpenSHC does", ", ".join(missing[:3]) + (" …" if len(missing) > 3 else ""), timeout)
-        return None
 
     def serve_parameters(self, robot: Robot, remote: ParameterSink) -> None:
         """Declare OpenSHC's dynamic parameters as ROS 2 parameters that change the running controller."""
