@@ -44,10 +44,13 @@ def plan(velocity: str, out: Path, capsys: pytest.CaptureFixture[str],
 def test_the_readme_quotes_bullets_walkspace_speed_limits(capsys: pytest.CaptureFixture[str],
                                                           monkeypatch: pytest.MonkeyPatch) -> None:
     """README, First five minutes: "0.23 m/s straight ahead" was bullet_openshc's 0.2319, not the default robot's."""
-    speeds = workspace("bullet", capsys, monkeypatch)["max_linear_speed"]
-    assert isinstance(speeds, dict)
+    document = workspace("bullet", capsys, monkeypatch)
+    speeds, kept = document["max_linear_speed"], document["verified_max_linear_speed"]
+    assert isinstance(speeds, dict) and isinstance(kept, dict)
     quoted(f"`shc workspace` prints them per bearing: {speeds['0']:.4f} m/s straight ahead for Bullet's tripod")
     quoted(f"{min(speeds['45'], speeds['315']):.4f} m/s at 45° off it")
+    quoted(f"`shc workspace` prints them beside OpenSHC's): {kept['0']:.4f} m/s straight ahead, "
+           f"{min(kept['45'], kept['315']):.4f} m/s at 45°")
 
 
 def test_the_readme_explains_the_turning_share_with_the_plans_own_figures(
@@ -55,11 +58,12 @@ def test_the_readme_explains_the_turning_share_with_the_plans_own_figures(
     """"`0.5,0,0.2` is half speed ahead" — it walked 0.064 m/s against 0.094 for `0.5,0,0`: OpenSHC's throttle mode
     scales the linear throttle by 1 − |turn throttle| and reads each foot's limit at its stride's bearing (the least
     over the legs: turning takes the rear feet into the 315° sector)."""
-    speeds = workspace("bullet", capsys, monkeypatch)["max_linear_speed"]
+    speeds = workspace("bullet", capsys, monkeypatch)["verified_max_linear_speed"]  # the limits the robot walks
     assert isinstance(speeds, dict)
     straight, turning = plan("0.5,0,0", tmp_path / "straight", capsys, monkeypatch), plan(
         "0.5,0,0.2", tmp_path / "arc", capsys, monkeypatch)
-    off_axis = speeds["315"]  # a left turn takes the rear feet's strides into the 315° sector
+    # a left turn takes the front feet's strides into the 0° sector and the rear feet's into the 315° one
+    off_axis = min(speeds["0"], speeds["315"])
     predicted = 0.5 * (1 - 0.2) * off_axis
     # the explanation holds: the stance feet move at the predicted speed (1 %: the acceleration-limited ramp)
     assert turning["achieved_mean_speed_mps"] == pytest.approx(predicted, rel=0.01)

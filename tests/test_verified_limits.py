@@ -26,8 +26,9 @@ from shc_cli.spec.loading import bundled, load_gait, load_robot
 
 from .test_cli import run
 
-VERIFYING = [name for name in bundled("robots") if load_robot(name).robot.walker.verify_speed_limits]
-"""The bundled robots that verify their speed limits."""
+VERIFYING = [name for name in bundled("robots") if load_robot(name).robot.walker.verify_speed_limits
+             or load_robot(name).robot.walker.speed_shares]
+"""The bundled robots that verify their speed limits (by trials at run time, or by the tables their file keeps)."""
 HEXAPOD_GAITS = ("tripod", "wave", "ripple", "amble", "bipod")
 WALK_CYCLES = 2500
 """25 s at bullet's 10 ms: its tripod drifted onto the roll limit after ≈ 15 s at 0.6 of OpenSHC's limit."""
@@ -45,12 +46,55 @@ def running(robot_name: str, gait_name: str) -> Controller:
     raise AssertionError(f"{robot_name} / {gait_name}: no RUNNING")
 
 
-def test_the_verifying_robot_is_bullet_verified() -> None:
-    """bullet_verified verifies; the default bullet, the paper's robots and OpenSHC's files keep OpenSHC's limits."""
-    assert "bullet_verified" in VERIFYING
-    for name in ("bullet", "bullet_insectoid_a", "bullet_mammalian_a", "bullet_openshc", "bullet_mammalian",
-                 "openshc_default"):
-        assert name not in VERIFYING
+def test_the_default_robot_walks_verified_limits_and_the_paper_robots_openshcs() -> None:
+    """The default bullet keeps verified shares for every hexapod gait in its file, bullet_verified runs the trials;
+    the paper's robots (which extend bullet under another name) and OpenSHC's own files walk OpenSHC's limits."""
+    assert {"bullet", "bullet_verified"} <= set(VERIFYING)
+    bullet = load_robot("bullet").robot
+    assert set(bullet.walker.speed_shares) == set(HEXAPOD_GAITS)
+    for gait in HEXAPOD_GAITS:
+        assert verified_limits.source_for(bullet)(load_gait(gait).gait).reduced  # type: ignore[misc]
+    for name in ("bullet_insectoid_a", "bullet_mammalian_a", "bullet_openshc", "bullet_mammalian", "openshc_default"):
+        robot = load_robot(name).robot
+        source = verified_limits.source_for(robot)
+        assert source is None or all(source(load_gait(g).gait) == verified_limits.UNCHANGED for g in HEXAPOD_GAITS)
+
+
+def test_the_default_robots_tables_were_verified_for_its_legs_and_gaits() -> None:
+    """Each stored table's fingerprint is that of bullet's legs, IK and the gait file as they are now: an edit of
+    either without new trials fails here (run docs/experiments/verify_speed_limits.py and paste its tables)."""
+    bullet = load_robot("bullet").robot
+    for gait, entry in bullet.walker.speed_shares.items():
+        assert entry.fingerprint == verified_limits.fingerprint(bullet, load_gait(gait).gait), gait
+
+
+def test_stored_shares_apply_only_to_the_robot_and_gait_they_were_verified_for() -> None:
+    """A table whose fingerprint matches gives its shares (bearing 360 repeats 0); another fingerprint, another gait
+    or a robot that extends it under another name: OpenSHC's limits."""
+    from shc_cli.spec.robot import StoredShares
+
+    bullet, tripod = load_robot("bullet").robot, load_gait("tripod").gait
+    entry = StoredShares(linear={"0": 0.5, "90": 0.25}, turn=0.75,
+                         fingerprint=verified_limits.fingerprint(bullet, tripod))
+    robot = bullet.model_copy(update={"walker": bullet.walker.model_copy(update={"speed_shares": {"tripod": entry}})})
+    assert verified_limits.stored_shares(robot, tripod) == SpeedShares({0: 0.5, 90: 0.25, 360: 0.5}, 0.75)
+    assert verified_limits.stored_shares(robot, load_gait("wave").gait) == verified_limits.UNCHANGED
+    renamed = robot.model_copy(update={"name": "my_bullet"})
+    assert verified_limits.stored_shares(renamed, tripod) == verified_limits.UNCHANGED
+    stale = entry.model_copy(update={"fingerprint": "0" * 16})
+    robot = bullet.model_copy(update={"walker": bullet.walker.model_copy(update={"speed_shares": {"tripod": stale}})})
+    assert verified_limits.stored_shares(robot, tripod) == verified_limits.UNCHANGED
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("gait", HEXAPOD_GAITS)
+def test_the_default_robots_stored_shares_pass_the_trials(gait: str) -> None:
+    """Every trial direction (three per walkspace bearing, turning both ways) walks 25 step cycles at bullet's stored
+    shares without an IK miss, a clamp, a guarded joint speed or a joint within 5 % of its range of a limit."""
+    bullet = load_robot("bullet").robot
+    shares = verified_limits.stored_shares(bullet, load_gait(gait).gait)
+    assert shares.reduced
+    assert verified_limits.failing_directions(bullet, load_gait(gait).gait, shares) == []
 
 
 @pytest.mark.slow
@@ -144,7 +188,7 @@ def test_plan_at_full_throttle_walks_clean_and_records_the_shares(tmp_path: Path
     joint speed limited; summary.json records the shares below 1 (every bearing's, from bisection: k/32); the
     OpenSHC robot's summary has no such key."""
     out = tmp_path / "run"
-    code, text, err = run(["plan", "bullet_verified", "--duration", "20", "--out", str(out), "--no-plots"], capsys,
+    code, text, err = run(["plan", "bullet", "--duration", "20", "--out", str(out), "--no-plots"], capsys,
                           monkeypatch)
     assert code == 0, err
     summary = json.loads((out / "summary.json").read_text(encoding="utf-8"))

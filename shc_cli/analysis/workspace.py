@@ -15,7 +15,7 @@ import numpy as np
 from shc_cli.control.gait import StepCycle, step_cycle
 from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.startup import plan_direct_startup
-from shc_cli.control.verified_limits import verified_shares
+from shc_cli.control.verified_limits import source_for
 from shc_cli.model.chains import Chains, FloatArray
 from shc_cli.model.workspace import (
     Workplane,
@@ -44,7 +44,8 @@ class WorkspaceReport:
     walkspace: Workplane
     limits: Limits
     verified: Limits | None = None
-    """The limits the controller walks when the robot verifies them (``walker.verify_speed_limits``), else None."""
+    """The limits the controller walks when the robot verifies them (``walker.verify_speed_limits``) or keeps verified
+    shares below 1 for this gait (``walker.speed_shares``), else None."""
 
     def area(self, leg: str) -> float:
         """Area of a leg's workplane polygon [m²]."""
@@ -129,6 +130,8 @@ def analyse_workspace(
     cycle = step_cycle(gait, frequency, robot.time_delta)
     first = next(iter(robot.legs.values())).stance
     limits = generate_limits(common, cycle, robot.time_delta, math.hypot(first.x, first.y))
-    verified = verified_shares(robot, gait).apply(limits) if robot.walker.verify_speed_limits else None
+    source = source_for(robot)
+    shares = None if source is None else source(gait)
+    verified = None if shares is None or not shares.reduced else shares.apply(limits)
     return WorkspaceReport(robot, gait, frequency, cycle, default_joints, identity, planes, layers, common, limits,
                            verified)

@@ -37,6 +37,7 @@ from shc_cli.control.speed_shares import SpeedShares as SpeedShares
 
 if TYPE_CHECKING:
     from shc_cli.control.controller import Controller
+    from shc_cli.control.limits import Limits
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
 
@@ -89,8 +90,13 @@ def cache_key(robot: Robot, gait: Gait) -> str:
     return digest.hexdigest()[:32]
 
 
-def trial_shares(robot: Robot, gait: Gait) -> SpeedShares:
-    """Bisect each bearing's (and turning's) share until its trial walk is clean."""
+Velocity = tuple[float, float, float]
+Clean = Callable[[Velocity, SpeedShares], bool]
+
+
+def _trial(robot: Robot, gait: Gait) -> tuple[Clean, Limits, bool] | None:
+    """The trial walk ``clean(velocity, shares)``, OpenSHC's limits and whether inputs are throttles; None when the
+    robot never reaches RUNNING (nothing to verify: validate reports why)."""
     from shc_cli.control.controller import Command, Controller, RobotState
 
     unit = robot.walker.velocity_input_mode == "throttle"
@@ -100,12 +106,12 @@ def trial_shares(robot: Robot, gait: Gait) -> SpeedShares:
             break
         base.step(Command(state_request=RobotState.RUNNING))
     else:
-        return UNCHANGED  # never runs: nothing to verify (validate reports why)
+        return None
     assert base.walker is not None
     openshc = base.walker.limits
     period = base.cycle.period
 
-    def clean(velocity: tuple[float, float, float], shares: SpeedShares) -> bool:
+    def clean(velocity: Velocity, shares: SpeedShares) -> bool:
         trial = copy.deepcopy(base)
         trial.speed_shares = lambda _: shares
         trial.walker.set_cycle(trial.cycle, shares.apply(openshc))  # type: ignore[union-attr]
@@ -121,6 +127,43 @@ def trial_shares(robot: Robot, gait: Gait) -> SpeedShares:
                 return False
         return True
 
+    return clean, openshc, unit
+
+
+def _directions(openshc: Limits, unit: bool) -> tuple[dict[int, list[Velocity]], list[Velocity]]:
+    """The trial velocities of each bearing (three directions of its sector) and of turning (both ways)."""
+    keys = sorted(openshc.bearings)
+    step = keys[1] - keys[0]
+    linear: dict[int, list[Velocity]] = {}
+    for bearing, lim in sorted(openshc.bearings.items()):
+        if bearing == 360 or lim.linear_speed <= 0.0:
+            continue
+        scale = 1.0 if unit else 2.0 * lim.linear_speed  # 'real' inputs: beyond the limit, which caps them
+        # the walker reads bearing b's limits for every direction from b up to the next bearing: try three of them
+        angles = [math.radians(bearing + step * k / SECTOR_SAMPLES) for k in range(SECTOR_SAMPLES)]
+        linear[bearing] = [(scale * math.cos(a), scale * math.sin(a), 0.0) for a in angles]
+    turn = 1.0 if unit else 2.0 * max(lim.angular_speed for lim in openshc.bearings.values())
+    return linear, [(0.0, 0.0, turn), (0.0, 0.0, -turn)]
+
+
+def failing_directions(robot: Robot, gait: Gait, shares: SpeedShares) -> list[Velocity]:
+    """The trial velocities whose walk at ``shares`` is not clean (empty: every bearing and turning walks clean)."""
+    trial = _trial(robot, gait)
+    if trial is None:
+        return []
+    clean, openshc, unit = trial
+    linear, turning = _directions(openshc, unit)
+    return [v for velocities in linear.values() for v in velocities if not clean(v, shares)] + [
+        v for v in turning if not clean(v, shares)]
+
+
+def trial_shares(robot: Robot, gait: Gait) -> SpeedShares:
+    """Bisect each bearing's (and turning's) share until its trial walk is clean."""
+    trial = _trial(robot, gait)
+    if trial is None:
+        return UNCHANGED  # never runs: nothing to verify (validate reports why)
+    clean, openshc, unit = trial
+
     def bisect(test: Callable[[float], bool]) -> float:
         if test(1.0):
             return 1.0
@@ -130,34 +173,68 @@ def trial_shares(robot: Robot, gait: Gait) -> SpeedShares:
             low, high = (middle, high) if test(middle) else (low, middle)
         return low
 
-    linear: dict[int, float] = {}
-    keys = sorted(openshc.bearings)
-    step = keys[1] - keys[0]
-    for bearing, lim in sorted(openshc.bearings.items()):
-        if bearing == 360 or lim.linear_speed <= 0.0:
-            continue
-        scale = 1.0 if unit else 2.0 * lim.linear_speed  # 'real' inputs: beyond the limit, which caps them
-        # the walker reads bearing b's limits for every direction from b up to the next bearing: try three of them
-        angles = [math.radians(bearing + step * k / SECTOR_SAMPLES) for k in range(SECTOR_SAMPLES)]
-        velocities = [(scale * math.cos(a), scale * math.sin(a), 0.0) for a in angles]
-        linear[bearing] = bisect(_partial_trial(clean, velocities, bearing))
+    directions, turning = _directions(openshc, unit)
+    linear = {bearing: bisect(_partial_trial(clean, velocities, bearing)) for bearing, velocities in directions.items()}
     linear[360] = linear.get(0, 1.0)
-    turn = 1.0 if unit else 2.0 * max(lim.angular_speed for lim in openshc.bearings.values())
-    angular = bisect(lambda s: all(clean((0.0, 0.0, sign * turn), SpeedShares({}, s)) for sign in (1.0, -1.0)))
+    angular = bisect(lambda s: all(clean(v, SpeedShares({}, s)) for v in turning))
     return SpeedShares(linear, angular)
 
 
-def _partial_trial(clean: Callable[[tuple[float, float, float], SpeedShares], bool],
-                   velocities: list[tuple[float, float, float]], bearing: int) -> Callable[[float], bool]:
+def _partial_trial(clean: Clean, velocities: list[Velocity], bearing: int) -> Callable[[float], bool]:
     """The trial of one bearing at a share: every one of its directions walks clean."""
     return lambda share: all(clean(v, SpeedShares({bearing: share}, 1.0)) for v in velocities)
 
 
 def source_for(robot: Robot) -> ShareSource | None:
-    """The controller's share source for ``robot``: verified when its file asks for it, else None (OpenSHC's)."""
-    if not robot.walker.verify_speed_limits:
-        return None
-    return lambda gait: verified_shares(robot, gait)
+    """The controller's share source for ``robot``: verified by trials when its file asks for it, else the shares
+    its file keeps (:func:`stored_shares`), else None (OpenSHC's limits)."""
+    if robot.walker.verify_speed_limits:
+        return lambda gait: verified_shares(robot, gait)
+    if robot.walker.speed_shares:
+        kept: dict[str, tuple[Gait, SpeedShares]] = {}
+
+        def stored(gait: Gait) -> SpeedShares:
+            known = kept.get(gait.name)
+            if known is None or known[0] is not gait:
+                known = kept[gait.name] = (gait, stored_shares(robot, gait))
+            return known[1]
+        return stored
+    return None
+
+
+def fingerprint(robot: Robot, gait: Gait) -> str:
+    """What stored shares were verified for: a hash of the robot's name, control period, legs (geometry, joint
+    limits and speeds, stance) and IK, of the gait and of the trial's rules. Not of the walker's parameters: like
+    verified limits, stored shares are kept through a change of step frequency, heights or clearance (a sweep's
+    or a study's); a robot file that extends this one (another name), new legs, another IK or another gait has
+    other limits and walks OpenSHC's until its own shares are verified."""
+    digest = hashlib.sha256()
+    digest.update(f"v{VERSION} {TRIAL_STEP_CYCLES} {PROXIMITY_MARGIN} {BISECTION_STEPS} {SECTOR_SAMPLES}".encode())
+    digest.update(robot.model_dump_json(include={"name", "time_delta", "legs", "ik"}).encode())
+    digest.update(gait.model_dump_json().encode())
+    return digest.hexdigest()[:16]
+
+
+def stored_shares(robot: Robot, gait: Gait) -> SpeedShares:
+    """The shares ``robot``'s file keeps for ``gait`` (``walker.speed_shares``), or OpenSHC's limits when it keeps
+    none for that gait or they were verified for another robot or gait (their fingerprint differs: logged)."""
+    entry = robot.walker.speed_shares.get(gait.name)
+    if entry is None:
+        return UNCHANGED
+    if entry.fingerprint != fingerprint(robot, gait):
+        log.info("%s's stored speed shares for %s were verified for another robot or gait (fingerprint %s, now %s):"
+                 " OpenSHC's limits are used", robot.name, gait.name, entry.fingerprint, fingerprint(robot, gait))
+        return UNCHANGED
+    linear = {int(bearing): share for bearing, share in entry.linear.items()}
+    linear[360] = linear.get(0, 1.0)
+    return SpeedShares(linear, entry.turn)
+
+
+def shares_table(robot: Robot, gait: Gait, shares: SpeedShares) -> str:
+    """``shares`` as the robot file's ``[walker.speed_shares.<gait>]`` table (TOML)."""
+    linear = ", ".join(f'"{b}" = {s:.5f}' for b, s in sorted(shares.linear.items()) if b != 360)
+    return (f"[walker.speed_shares.{gait.name}]\nlinear = {{ {linear} }}\nturn = {shares.angular:.5f}\n"
+            f'fingerprint = "{fingerprint(robot, gait)}"\n')
 
 
 def _cache_dir() -> Path:

@@ -128,6 +128,25 @@ class Body(Strict):
     )
 
 
+class StoredShares(Strict):
+    """Speed-limit shares a robot file keeps for one gait (:mod:`shc_cli.control.verified_limits`)."""
+
+    linear: dict[str, Annotated[float, Field(gt=0.0, le=1.0)]] = Field(
+        description="walkspace bearing [deg, as text: \"0\", \"45\", …] → share of its linear speed limit [ratio]")
+    turn: Annotated[float, Field(gt=0.0, le=1.0)] = Field(description="share of the angular speed limit [ratio]")
+    fingerprint: str = Field(description="hash of the robot and gait the shares were verified for (a robot or gait "
+                                         "edited since: the shares are not used)")
+
+    @field_validator("linear")
+    @classmethod
+    def _bearings(cls, linear: dict[str, float]) -> dict[str, float]:
+        """Keys are whole bearings in degrees, 0 ≤ b < 360."""
+        for key in linear:
+            if not key.isdigit() or not 0 <= int(key) < 360:
+                raise ValueError(f"bearing {key!r} must be a whole number of degrees, 0 to 359; e.g. \"45\"")
+        return linear
+
+
 class Walker(Strict):
     """Walk controller parameters (study §4–§6)."""
 
@@ -154,6 +173,10 @@ class Walker(Strict):
     verify_speed_limits: bool = Field(
         False, description="scale OpenSHC's speed limits down per bearing until trial walks keep every joint off its "
                            "limits (shc, docs/deviations.md)")
+    speed_shares: dict[str, StoredShares] = Field(
+        default_factory=dict, description="per gait name: the shares of OpenSHC's speed limits that trial walks "
+        "verified for this robot (docs/experiments/verify_speed_limits.py writes them; used when their fingerprint "
+        "matches the robot and the gait, shc, docs/deviations.md)")
 
     @field_validator("step_frequency")
     @classmethod
