@@ -177,7 +177,8 @@ def test_the_ppo_example_exports_a_policy_that_shc_simulate_runs(tmp_path: Path)
 
     from .conftest import ROOT
 
-    done = subprocess.run([sys.executable, str(ROOT / "docs" / "experiments" / "gym_ppo.py"), "--timesteps", "60",
+    done = subprocess.run([sys.executable, str(ROOT / "docs" / "experiments" / "gym_ppo.py"), "--timesteps", "16",
+                           "--duration", "1",
                            "--save", str(tmp_path / "ppo.npz")], capture_output=True, text=True, timeout=900)
     assert done.returncode == 0, done.stderr
     assert re.search(r"ppo: CoT [\d.]+ against [\d.]+ of the defaults", done.stdout), done.stdout
