@@ -91,10 +91,13 @@ def test_simulate_with_a_gait_policy_walks_at_its_step_frequency(tmp_path: Path)
 @pytest.mark.parametrize(("content", "message"), [
     ("junk", "not a policy file"),
     ("quadruped", "the policy takes 50 observations, bullet gives 94"),
+    ("missing", "missing.npz: no such file"),
 ])
 def test_a_bad_or_unfitting_policy_is_one_line_and_exit_2(content: str, message: str, tmp_path: Path) -> None:
-    file = tmp_path / "p.npz"
-    if content == "junk":
+    file = tmp_path / ("missing.npz" if content == "missing" else "p.npz")
+    if content == "missing":
+        pass
+    elif content == "junk":
         file.write_text("junk")
     else:
         names = observation_names(load_robot(content).robot)

@@ -91,6 +91,8 @@ class Policy:
 
         Raises:
             PolicyFileError: not a readable ``.npz`` policy, or its arrays do not fit together (one line)."""
+        if not path.is_file():
+            raise PolicyFileError(f"{path}: no such file")
         try:
             with np.load(path, allow_pickle=False) as data:
                 arrays = {key: data[key] for key in data.files}
