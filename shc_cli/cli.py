@@ -196,6 +196,7 @@ def simulate(
                                                             "(JSON lines), keyboard, gamepad[:DEVICE].")]
     = "timeline",
     watchdog: Annotated[float, typer.Option(help=SIMULATE["watchdog"].cli_help)] = 0.5,
+    policy: Annotated[Path | None, typer.Option(help=SIMULATE["policy"].cli_help, metavar="FILE")] = None,
 ) -> None:
     """Run the controller on the robot in physics (MuJoCo; PyBullet with --engine): terrains, servos, power, CoT."""
     from shc_cli.loop.gc_pause import paused
@@ -215,7 +216,7 @@ def simulate(
                                    inclination=inclination, admittance=admittance,
                                    fail_leg=",".join(fail_leg) if fail_leg else None, fail_on_fall=fail_on_fall,
                                    overwrite=overwrite, engine=engine, live=live, live_port=live_port,
-                                   realtime=realtime, input_mode=input_mode, watchdog=watchdog)
+                                   realtime=realtime, input_mode=input_mode, watchdog=watchdog, policy=policy)
         run_simulate(options, after=lambda run: finish_outputs(run, bag, video))
 
 
@@ -251,6 +252,10 @@ def run_hw(
     missed_reads_fault: Annotated[int | None, typer.Option(
         metavar="N", help="Consecutive cycles a servo may miss its reading (its last one stands in) before that is "
                           "a fault [default: hardware.missed_reads_fault, 3].")] = None,
+    policy: Annotated[Path | None, typer.Option(
+        metavar="FILE", help="A gait or residual policy file (.npz) acting on the controller while it walks; the "
+                             "start-up, the stop, the clamps and the fault checks are unchanged (docs/gym.md).")]
+    = None,
 ) -> None:
     """Run the controller on the robot's servos (Dynamixel Protocol 2.0 or 1.0, Feetech STS), safely."""
     from shc_cli.commands.run_hw import run_hw as run
@@ -260,7 +265,7 @@ def run_hw(
                        stop_state=stop_state, input_mode=input_mode, velocity=velocity, duration=duration,
                        commands=commands, path=path, out=out, dry_run=dry_run, profile_velocity=profile_velocity,
                        watchdog=watchdog, overwrite=overwrite, live=live, live_port=live_port,
-                       missed_reads_fault=missed_reads_fault))
+                       missed_reads_fault=missed_reads_fault, policy=policy))
 
 
 @app.command()

@@ -22,9 +22,9 @@ from shc_cli.control.controller import Command, Controller, CycleOutput
 from shc_cli.control.states import RobotState
 from shc_cli.control.walk import WalkState
 from shc_cli.domain.config import SimulationConfig
-from shc_cli.gym.actions import GAIT_PARAMETERS, around
 from shc_cli.gym.env import WalkEnv
-from shc_cli.gym.observe import TERMS, observation_names, support_margin
+from shc_cli.loop.policy.actions import GAIT_PARAMETERS, around
+from shc_cli.loop.policy.observe import TERMS, observation_names, support_margin
 from shc_cli.loop.run_inputs import load_inputs
 from shc_cli.loop.run_loop import RunLoop, StartUp
 from shc_cli.spec.robot import Robot
@@ -284,7 +284,7 @@ _UNIT = st.floats(-1.0, 1.0, allow_nan=False)
 @given(st.lists(_UNIT, min_size=4, max_size=4), st.tuples(_UNIT, _UNIT, _UNIT))
 def test_any_gait_action_stays_in_the_ranges_and_the_throttle(action: list[float],
                                                               velocity: tuple[float, float, float]) -> None:
-    from shc_cli.gym.actions import VELOCITY_SCALE, GaitAction
+    from shc_cli.loop.policy.actions import VELOCITY_SCALE, GaitAction
 
     robot = _bullet()
     gait = GaitAction(robot)
@@ -303,7 +303,7 @@ def test_any_gait_action_stays_in_the_ranges_and_the_throttle(action: list[float
 @settings(max_examples=40, deadline=None)
 @given(st.lists(_UNIT, min_size=18, max_size=18))
 def test_any_residual_keeps_the_joint_targets_within_the_limits(action: list[float]) -> None:
-    from shc_cli.gym.actions import ResidualAction
+    from shc_cli.loop.policy.actions import ResidualAction
     from shc_cli.model.chains import Chains
 
     robot = _bullet()
@@ -337,12 +337,12 @@ def test_a_servo_option_changes_the_power_and_an_unknown_number_is_refused() -> 
 def test_a_policy_file_plays_into_a_run_directory(tmp_path: Path) -> None:
     import json
 
-    from shc_cli.gym.policy import LinearPolicy, play
+    from shc_cli.gym.policy import Policy, play
 
     names = observation_names(_bullet())
     file = tmp_path / "gait.npz"
-    LinearPolicy.constant("gait", np.array([0.5, 0.0, 0.0, 0.0]), len(names)).save(file)
-    policy = LinearPolicy.load(file)
+    Policy.constant("gait", np.array([0.5, 0.0, 0.0, 0.0]), len(names)).save(file)
+    policy = Policy.load(file)
     assert policy.action == "gait" and policy(np.ones(len(names), dtype=np.float32)).tolist() == [0.5, 0.0, 0.0, 0.0]
     path = play(policy, tmp_path / "runs", command="0.5,0,0", duration=0.5)
     summary = json.loads((path / "summary.json").read_text())

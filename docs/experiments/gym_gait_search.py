@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from shc_cli.gym.actions import GAIT_PARAMETERS, VELOCITY_SCALE, around
 from shc_cli.gym.env import WalkEnv
-from shc_cli.gym.policy import LinearPolicy
+from shc_cli.loop.policy.actions import GAIT_PARAMETERS, VELOCITY_SCALE, around
+from shc_cli.loop.policy.file import Policy
 
 SPEED_TOLERANCE = 0.05
 """A candidate's mean speed must lie within this share of the defaults' (equal speed)."""
@@ -92,7 +92,7 @@ def main() -> None:
         print(f"iteration {iteration + 1}: best CoT so far {best_cot:.3f}")
     env.close()
     if args.save is not None:
-        LinearPolicy.constant("gait", best, len(env.names)).save(args.save)
+        Policy.constant("gait", best, len(env.names)).save(args.save)
     wall = time.perf_counter() - start
     print(f"found: CoT {best_cot:.3f} against {base_cot:.3f} of the defaults ({100 * (1 - best_cot / base_cot):.0f} % "
           f"lower) at {best_speed:.4f} m/s with {parameters(env, best)}; {episodes} episodes in {wall:.0f} s")

@@ -83,6 +83,7 @@ class SimulationConfig(BaseModel):
             ``commands:FILE``, or a person: ``stdin``, ``keyboard``, ``gamepad[:DEVICE]`` (these imply ``realtime``:
             :attr:`paced`; :mod:`shc_cli.loop.input_choice`).
         watchdog: stdin: seconds without a line before the velocities go to zero [s].
+        policy: a policy file acting on the controller once it runs (:mod:`shc_cli.loop.policy.drive`).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -119,6 +120,7 @@ class SimulationConfig(BaseModel):
     realtime: bool = False
     input_mode: str = "timeline"
     watchdog: float = 0.5
+    policy: Path | None = None
 
     def __init__(self, **options: Any) -> None:
         unknown = [key for key in options if key not in type(self).model_fields]
@@ -343,3 +345,4 @@ class SimulationOptions(TypedDict, total=False):
     input_mode: str
     watchdog: float
     engine: EngineName
+    policy: Path | str | None

@@ -84,6 +84,8 @@ class HardwareConfig(BaseModel):
         live_port: that server's port (0: any free port).
         missed_reads_fault: consecutive cycles without a servo's reading that are a fault (None: the robot file's
             ``hardware.missed_reads_fault``, default 3).
+        policy: a ``gait`` or ``residual`` policy file acting on the controller while it walks
+            (:mod:`shc_cli.loop.policy.drive`; the start-up, stop, clamps and fault checks unchanged).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -108,6 +110,7 @@ class HardwareConfig(BaseModel):
     live: bool = False
     live_port: int = 8765
     missed_reads_fault: int | None = None
+    policy: Path | None = None
 
     @field_validator("missed_reads_fault")
     @classmethod
@@ -197,6 +200,7 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
     from shc_cli.hardware.buses import servo_bus
     from shc_cli.loop.input_choice import commands_file, open_input
     from shc_cli.loop.path_input import keep_path
+    from shc_cli.loop.policy.drive import PolicyDrive
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import ControlledStop, Observer, RunLoop, StartUp
     from shc_cli.loop.session import execute
@@ -210,6 +214,7 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
     inputs = load_inputs(c.robot, c.gait, c.velocity, c.duration, commands_file(c.input_mode, c.commands),
                          default_s=20.0, path=c.path)
     robot, gait = inputs.robot, inputs.gait
+    drive = None if c.policy is None else PolicyDrive.load(c.policy, robot, hardware=True)
     bus = servo_bus(robot, c.ports, c.baud, c.profile_velocity)  # the servo models' protocol
     source: InputSource | None = None
     backend: DynamixelBackend | None = None
@@ -236,10 +241,13 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
         if c.live:
             stream, outputs = open_live(c.live_port, robot, controller, sensors=False, joint_states=True)
             observers.append(outputs)
-        loop = RunLoop(controller, backend, source, LogRecorder(run, robot, backend),
+        loop = RunLoop(controller, backend, source if drive is None else drive.source(source),
+                       LogRecorder(run, robot, backend),
                        StartUp.of(robot, hardware=True),
                        ControlledStop(stop, STOP_TIMEOUT_S), observers=observers, flush_every=100,
                        on_fault=lambda text: event(log, logging.ERROR, "fault_action", "fault: %s — %s", text, action))
+        if drive is not None:
+            drive.join(loop)
 
         def release(result: LoopResult) -> None:
             nonlocal faulted

@@ -84,6 +84,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     from shc_cli.loop.input_choice import commands_file, is_live, open_input
     from shc_cli.loop.path_input import keep_path
     from shc_cli.loop.physics_summary import PhysicsRecord
+    from shc_cli.loop.policy.drive import PolicyDrive
     from shc_cli.loop.run_inputs import load_inputs
     from shc_cli.loop.run_loop import Observer, RunLoop, StartUp
     from shc_cli.loop.session import execute
@@ -101,6 +102,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
                          default_s=20.0, walking=o.walking, robot_change=o.apply_switches, path=o.path)
     by_hand = is_live(o.input_mode)
     robot, gait, failure = failed_legs(inputs.robot, inputs.gait, o.fail_leg, o.velocity)
+    drive = None if o.policy is None else PolicyDrive.load(o.policy, robot)
     options = o.engine_options(robot)
     directory = o.out or default_run_directory("simulate")
     source = open_input(o.input_mode, robot, gait, inputs.commands(), o.watchdog)  # before anything opens
@@ -124,9 +126,12 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
                 clock = wall_clock(robot) if o.paced else None
                 if clock is not None:
                     observers.append(clock)
-                loop = RunLoop(controller, backend, source, LogRecorder(run, robot, backend),
+                loop = RunLoop(controller, backend, source if drive is None else drive.source(source),
+                               LogRecorder(run, robot, backend),
                                StartUp.of(robot),
                                observers=observers, flush_every=FLUSH_PACED if o.paced else 200)
+                if drive is not None:
+                    drive.join(loop)
 
                 def summarise(_: LoopResult) -> RunSummary:  # from the finished log (run.partial)
                     import numpy as np

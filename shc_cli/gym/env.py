@@ -4,9 +4,9 @@ Each episode opens the physics world (:func:`~shc_cli.backends.simulated.open_wo
 its joints and runs the one run loop (:class:`~shc_cli.loop.run_loop.RunLoop`) cycle by cycle: :meth:`WalkEnv.reset`
 runs the start-up to RUNNING, every :meth:`WalkEnv.step` one cycle of the run's command timeline (the
 ``command`` velocity for ``duration`` seconds, as ``shc simulate --velocity --duration``) with the action applied:
-to the command (``gait``) or to the controller's joint targets (``residual``, ``joints``; :mod:`.actions`). The
-episode is terminated when the robot falls and truncated when the timeline is over. Nothing is written unless
-``out=DIR`` (:mod:`.episodes`).
+to the command (``gait``) or to the controller's joint targets (``residual``, ``joints``;
+:mod:`shc_cli.loop.policy.actions`). The episode is terminated when the robot falls and truncated when the
+timeline is over. Nothing is written unless ``out=DIR`` (:mod:`.episodes`).
 """
 
 from __future__ import annotations
@@ -25,9 +25,9 @@ from shc_cli.control.controller import Command, Controller
 from shc_cli.control.states import RobotState
 from shc_cli.control.verified_limits import source_for
 from shc_cli.domain.config import SimulationConfig
-from shc_cli.gym.actions import ACTIONS, ActionName, GaitAction, JointAction, ResidualAction
 from shc_cli.gym.episodes import EpisodeRecord
-from shc_cli.gym.observe import Rewards, fallen, observation_bounds, observation_names, observe
+from shc_cli.loop.policy.actions import ACTIONS, ActionName, GaitAction, JointAction, ResidualAction
+from shc_cli.loop.policy.observe import Rewards, fallen, observation_bounds, observation_names, observe
 from shc_cli.loop.run_inputs import RunInputs, load_inputs
 from shc_cli.loop.run_loop import Adjust, NullRecorder, RunLoop, StartUp
 from shc_cli.model.chains import JointSlots
@@ -60,11 +60,11 @@ class WalkEnv(gymnasium.Env[np.ndarray, np.ndarray]):
 
     Args:
         robot: robot file or bundled name.
-        action: ``"gait"``, ``"residual"`` or ``"joints"`` (:mod:`.actions`).
+        action: ``"gait"``, ``"residual"`` or ``"joints"`` (:mod:`shc_cli.loop.policy.actions`).
         engine: ``"mujoco"`` or ``"pybullet"``.
         terrain: as ``shc simulate --terrain``.
         command: the velocity input (x, y, yaw) in the robot's input mode, or ``"VX,VY,WZ"``.
-        reward: weights of the reward terms by name (:data:`~shc_cli.gym.observe.TERMS`; missing: the default).
+        reward: weights of the reward terms by name (:data:`~shc_cli.loop.policy.observe.TERMS`; missing: default).
         duration: seconds of walking per episode (truncation) [s].
         gait: gait file or name (None: the robot's).
         friction: lateral friction of feet and terrain (as ``shc simulate --friction``).

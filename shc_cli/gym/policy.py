@@ -1,66 +1,35 @@
-"""A policy file for ``shc/Walk-v0`` and playing it through the one loop into a run directory.
+"""Playing a policy file (:class:`~shc_cli.loop.policy.file.Policy`) through ``shc/Walk-v0`` into a run directory,
+and exporting a stable-baselines3 (or sbx) PPO model into one.
 
-A policy file is a ``.npz`` of ``weights`` ``(A, O)``, ``bias`` ``(A,)`` and ``action`` (the action space's name):
-the action is ``clip(weights · observation + bias, −1, 1)`` — a constant action when the weights are zero (what
-docs/experiments/gym_gait_search.py finds), or a linear policy. :func:`play` walks it in an episode written as a
-run directory of ``shc simulate``'s form (the base of a later ``shc simulate --policy FILE``).
+``shc simulate --policy FILE`` runs the same file through the same loop (:mod:`shc_cli.loop.policy.drive`); the
+environment's :func:`play` is the reference it is tested against.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from shc_cli.gym.actions import ACTIONS, ActionName
 from shc_cli.gym.env import WalkEnv
+from shc_cli.loop.policy.actions import RESIDUAL_LIMIT
+from shc_cli.loop.policy.file import Activation, Policy
+
+__all__ = ["Policy", "export_sb3", "play"]
 
 
-@dataclass(frozen=True)
-class LinearPolicy:
-    """``action = clip(weights · observation + bias, −1, 1)`` for one action space."""
-
-    action: ActionName
-    weights: np.ndarray
-    bias: np.ndarray
-
-    @classmethod
-    def constant(cls, action: ActionName, values: np.ndarray, observations: int) -> LinearPolicy:
-        bias = np.asarray(values, dtype=np.float64)
-        return cls(action, np.zeros((len(bias), observations)), bias)
-
-    def __call__(self, observation: np.ndarray) -> np.ndarray:
-        return np.asarray(np.clip(self.weights @ observation + self.bias, -1.0, 1.0), dtype=np.float32)
-
-    def save(self, path: Path) -> None:
-        with path.open("wb") as handle:
-            np.savez(handle, weights=self.weights, bias=self.bias, action=np.array(self.action))
-
-    @classmethod
-    def load(cls, path: Path) -> LinearPolicy:
-        with np.load(path) as data:
-            name = str(data["action"])
-            action = next((known for known in ACTIONS if known == name), None)
-            if action is None:
-                raise ValueError(f"{path}: action '{name}' is not one of {', '.join(ACTIONS)}")
-            weights, bias = np.asarray(data["weights"], dtype=float), np.asarray(data["bias"], dtype=float)
-        if weights.ndim != 2 or bias.shape != (weights.shape[0],):
-            raise ValueError(f"{path}: weights {weights.shape} and bias {bias.shape} do not fit (A, O) and (A,)")
-        return cls(action, weights, bias)
-
-
-def play(policy: LinearPolicy, out: Path, robot: str = "bullet", command: str = "1,0,0", duration: float = 10.0,
+def play(policy: Policy, out: Path, robot: str = "bullet", command: str = "1,0,0", duration: float = 10.0,
          seed: int = 0, engine: str = "mujoco", terrain: str = "flat") -> Path:
     """Walk one episode of ``policy`` (the keywords: :class:`~shc_cli.gym.env.WalkEnv`'s) and write it as the run
     directory ``out/episode-0001``; its path."""
     walk = WalkEnv(robot=robot, action=policy.action, engine=engine, terrain=terrain, command=command,
-                   duration=duration, out=out)
+                   duration=duration, residual_limit=policy.residual_limit, out=out)
     expected = (walk.action_size, len(walk.names))
-    if policy.weights.shape != expected:
+    if (policy.actions, policy.observations) != expected:
         walk.close()
-        raise ValueError(f"policy: weights {policy.weights.shape} do not fit this robot's {expected} "
-                         "(actions, observations)")
+        raise ValueError(f"policy: weights ({policy.actions}, {policy.observations}) do not fit this robot's "
+                         f"{expected} (actions, observations)")
     observation, _ = walk.reset(seed=seed)
     while True:
         observation, _, terminated, truncated, _ = walk.step(policy(observation))
@@ -68,3 +37,38 @@ def play(policy: LinearPolicy, out: Path, robot: str = "bullet", command: str = 
             break
     walk.close()
     return walk.written[-1]
+
+
+def export_sb3(model: Any, env: WalkEnv, normalize: Any = None) -> Policy:
+    """The deterministic action of a stable-baselines3 (or sbx-free torch) ``PPO``/``A2C`` ``MlpPolicy`` ``model``
+    trained on ``env`` as a policy file: its actor network (``mlp_extractor.policy_net`` then ``action_net``) and,
+    when trained under ``VecNormalize`` (``normalize``), its observation statistics.
+
+    Raises:
+        ValueError: the model is not a torch MLP policy of Linear layers and one activation."""
+    import torch
+
+    policy = model.policy
+    modules = [*policy.mlp_extractor.policy_net, policy.action_net]
+    layers: list[tuple[np.ndarray, np.ndarray]] = []
+    activations: set[str] = set()
+    for module in modules:
+        if isinstance(module, torch.nn.Linear):
+            layers.append((module.weight.detach().cpu().numpy().astype(np.float64),
+                           module.bias.detach().cpu().numpy().astype(np.float64)))
+        elif isinstance(module, torch.nn.Tanh | torch.nn.ReLU):
+            activations.add("tanh" if isinstance(module, torch.nn.Tanh) else "relu")
+        else:
+            raise ValueError(f"export: cannot export a {type(module).__name__} layer (Linear, Tanh, ReLU only)")
+    if len(activations) > 1:
+        raise ValueError("export: the actor mixes activations")
+    activation: Activation = "tanh" if "tanh" in activations else "relu" if activations else "identity"
+    mean = std = None
+    clip = 0.0
+    if normalize is not None and getattr(normalize, "norm_obs", False):
+        rms = normalize.obs_rms
+        mean, std = np.asarray(rms.mean, dtype=np.float64), np.sqrt(np.asarray(rms.var) + normalize.epsilon)
+        clip = float(normalize.clip_obs)
+    limit = env.residual.limit if env.residual is not None else RESIDUAL_LIMIT
+    return Policy(env.action_name, tuple(layers), activation, mean, std, clip, tuple(env.names), limit,
+                  {"source": type(model).__name__, "robot": env.robot.name, "command": env.config.velocity})

@@ -200,6 +200,8 @@ class RunLoop(Generic[ReadingT]):
         self._over = False
         self._states: tuple[RobotState | None, WalkState | None] = (None, None)
         self._sensors: Sensors | None = None
+        self.adjust: Adjust | None = None
+        """Changes every cycle's output in :meth:`run` (a policy file's action, :mod:`shc_cli.loop.policy.drive`)."""
 
     def request_stop(self, reason: str) -> None:
         """Stop (or begin the controlled stop) at the next cycle; the first reason is kept."""
@@ -260,8 +262,8 @@ class RunLoop(Generic[ReadingT]):
     def run(self) -> LoopResult:
         """Run until the input is over, a fault, an observer's reason or a stop request."""
         if self.begin():
-            step = self.step
-            while step() is not None:
+            step, adjust = self.step, self.adjust
+            while step(adjust) is not None:
                 pass
         return self.finish()
 
