@@ -19,7 +19,7 @@ from shc_cli.control.admittance import AdmittanceController, tip_forces_from_eff
 from shc_cli.control.autopose import AutoPoser
 from shc_cli.control.bezier import cubic
 from shc_cli.control.gait import StepCycle, step_cycle
-from shc_cli.control.leg_failure import LegFailure
+from shc_cli.control.leg_failure import LegFailure, walk_phase
 from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.manipulation import MAX_MANUAL_LEGS as MAX_MANUAL_LEGS
 from shc_cli.control.manipulation import LegManipulation
@@ -683,7 +683,7 @@ class Controller(LegManipulation):
             manual = (self.leg_modes == LegMode.MANUAL) | (self.leg_modes == LegMode.WALKING_TO_MANUAL)
             self.poser_tips[manual] = self.walker.legs.vectors[manual, stepping.CURRENT]
         if self.failure is not None:
-            self.poser_tips = self.failure.posed(self.poser_tips)
+            self.poser_tips = self.failure.posed(self.poser_tips, walk_phase(self.walker))
         if self.admittance is not None:
             self._apply_admittance(self.admittance)
         ik = self.robot.ik
