@@ -168,7 +168,7 @@ def test_one_retracted_leg_walks_on_without_a_fall_in_mujoco(leg: str, tmp_path:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("legs", ["AL,CR", "BL,BR", "CL,AR"])
-def test_two_opposite_retracted_legs_walk_on_a_swaying_crawl_without_a_fall_in_mujoco(legs: str, tmp_path: Path) -> None:
+def test_two_opposite_retracted_legs_walk_on_a_swaying_crawl_without_a_fall(legs: str, tmp_path: Path) -> None:
     """S2: four legs left, no constant shift holds; the body sways through the crawl (measured 0.039–0.049 m/s
     forward on 20 s, tilt ≤ 0.31 rad)."""
     from shc_cli import api
