@@ -247,7 +247,11 @@ class Controller(LegManipulation):
                  direct_shutdown: bool = False, failure: LegFailure | None = None,
                  speed_shares: ShareSource | None = None) -> None:
         self.robot = robot
-        self.failure = failure
+        self.failure = failure if failure is None or failure.at_s is None else None
+        self.scheduled_failure = failure if failure is not None and failure.at_s is not None else None
+        """Failures declared mid-walk (``LEG@T``): at ``at_s`` seconds of walking the controller changes to their
+        re-planned gait as it changes gaits (the walker stops with every foot down), then holds the failed legs."""
+        self._walking_cycles = 0
         self.speed_shares = speed_shares
         """Shares of OpenSHC's speed limits per gait (a run gives :func:`shc_cli.control.verified_limits.source_for`
         of its robot); None: OpenSHC's (also with a failed leg: the limits are the walking legs' walkspace)."""
@@ -406,6 +410,8 @@ class Controller(LegManipulation):
             self._transition_state()  # in RUNNING the running cycle handles it first (study §9.4)
         if self.state == _RUNNING:
             deviations, clamped = self._running()
+        if self.scheduled_failure is not None:
+            self._schedule_failure(self.scheduled_failure)
         if self.failure is not None:
             self._hold_failed(self.failure)
         limited = self.model.limit_speed(before)
@@ -631,6 +637,22 @@ class Controller(LegManipulation):
         else:
             self.walker.set_cycle(self.cycle, limits)
 
+    def _schedule_failure(self, failure: LegFailure) -> None:
+        """Count walking cycles; at the failure's time request its re-planned gait (:meth:`_change_gait` then
+        installs the failure)."""
+        if self.state == _RUNNING and self.walker is not None and (self._walking_cycles
+                                                                  or self.walker.state != _STOPPED):
+            self._walking_cycles += 1
+        assert failure.at_s is not None and failure.gait is not None
+        due = self._walking_cycles * self.dt >= failure.at_s
+        if due and self.pending_gait is None and self.gait is not failure.gait:
+            self.pending_gait = failure.gait
+
+    def _install_failure(self, failure: LegFailure) -> None:
+        """The declared failure from now on: the walking legs' walkspace and OpenSHC's limits of it."""
+        self.failure, self.scheduled_failure, self.speed_shares = failure, None, None
+        self.walkspace = walkspace(failure.walking(self.planes), self.stance, self.robot.walker.overlapping_walkspaces)
+
     def _hold_failed(self, failure: LegFailure) -> None:
         """Failed legs back at their held pose (before the joint speed guard, which paces the first move)."""
         held = failure.hold(self.model.joints, self.state == _RUNNING)
@@ -732,6 +754,8 @@ class Controller(LegManipulation):
             return
         self.gait = self.pending_gait
         self.pending_gait = None
+        if self.scheduled_failure is not None and self.gait is self.scheduled_failure.gait:
+            self._install_failure(self.scheduled_failure)
         self.cycle = step_cycle(self.gait, self.parameters["step_frequency"], self.dt)
         self.walker.set_cycle(self.cycle, self._limits_for(self.cycle))
         self._reset_auto_pose()

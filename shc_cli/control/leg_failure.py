@@ -60,13 +60,15 @@ SHIFT_RATE_MPS = 0.05
 
 @dataclass(frozen=True)
 class FailedLeg:
-    """One declared failure: the leg id and its mode (one of :data:`MODES`)."""
+    """One declared failure: the leg id, its mode (one of :data:`MODES`) and when it is declared (seconds after
+    walking starts; ``None``: from the start of the run)."""
 
     leg: str
     mode: str = "retracted"
+    at_s: float | None = None
 
     def __str__(self) -> str:
-        return f"{self.leg}:{self.mode}"
+        return f"{self.leg}:{self.mode}" + ("" if self.at_s is None else f"@{self.at_s:g}")
 
 
 def _bad(spec: str, problem: str, fix: str) -> SpecError:
@@ -74,22 +76,34 @@ def _bad(spec: str, problem: str, fix: str) -> SpecError:
 
 
 def parse_failures(specs: Sequence[str], legs: Sequence[str]) -> tuple[FailedLeg, ...]:
-    """``LEG[:MODE]`` specs (each may also be a comma-separated list) → failures, checked against ``legs``.
+    """``LEG[:MODE][@T]`` specs (each may also be a comma-separated list) → failures, checked against ``legs``.
 
     Raises:
         SpecError: an unknown leg or mode, a leg given twice, or fewer than three legs left (one line each).
     """
     failed: list[FailedLeg] = []
     for spec in (part.strip() for text in specs for part in text.split(",") if part.strip()):
-        leg, _, mode = spec.partition(":")
+        body, at, when = spec.partition("@")
+        leg, _, mode = body.partition(":")
         mode = mode or "retracted"
+        at_s: float | None = None
+        if at:
+            try:
+                at_s = float(when)
+            except ValueError:
+                at_s = math.nan
+            if not math.isfinite(at_s) or at_s < 0.0:
+                raise _bad(spec, f"@{when!r} is not a time", "give seconds after walking starts, e.g. BR@5")
         if leg not in legs:
             raise _bad(spec, f"no leg {leg!r} on this robot", f"give one of {', '.join(legs)}")
         if mode not in MODES:
             raise _bad(spec, f"unknown mode {mode!r}", f"give {' or '.join(f'{leg}:{m}' for m in MODES)}")
         if any(f.leg == leg for f in failed):
             raise _bad(spec, f"leg {leg} is failed twice", "give each leg once")
-        failed.append(FailedLeg(leg, mode))
+        failed.append(FailedLeg(leg, mode, at_s))
+    if len({f.at_s for f in failed}) > 1:
+        raise _bad(",".join(map(str, failed)), "legs failed at different times",
+                   "give every leg the same @T (or none)")
     if len(legs) - len(failed) < 3:
         raise _bad(",".join(map(str, failed)), f"{len(legs) - len(failed)} leg(s) left",
                    "a statically stable gait needs at least three: fail fewer legs")
@@ -130,6 +144,10 @@ class LegFailure:
         self._held = chains.take(self.index)
         self.stride_share = 1.0
         """The share of the walking legs' walkspace the re-planned gait holds for (the speed limits' share)."""
+        self.at_s = self.failed[0].at_s if self.failed else None
+        """When the failures are declared, seconds after walking starts (``None``: from the start of the run)."""
+        self.gait: Gait | None = None
+        """The re-planned gait the controller changes to when the failures are declared mid-walk."""
         self.sway = np.zeros((1, 2))
         """The body's sway over the legs left through one gait cycle, ``(K, 2)`` [m] (samples evenly over the
         cycle from the first group's lift-off: :func:`~shc_cli.control.gait_planner.sway_path`)."""
@@ -299,6 +317,11 @@ def adapt(robot: Robot, failed: Sequence[FailedLeg], heading_rad: float = 0.0) -
         stride = walked / share
     stride *= share
     swaying = bool(np.ptp(sway, axis=0).max() > 0.0)
+    failure.gait = gait
+    relocated = any(planned.stance[leg] != stance[leg] for leg in legs)
+    if failure.at_s is not None and relocated:
+        raise _bad(",".join(map(str, failed)), "the legs left only walk with their stance positions moved",
+                   "fail these legs from the start (drop @T)")
     walked_sway = sway_path(planned, stride, heading_rad, MIN_MARGIN_M, SWAY_STRIDE_SHARES,
                             SWAY_RATE_SHARE if swaying else 0.0, reach)  # at the stride walked
     failure.set_sway(sway if walked_sway is None else walked_sway, cycle.period, robot.time_delta)
