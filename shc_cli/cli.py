@@ -356,11 +356,13 @@ def analyze(
     steady: Annotated[bool, typer.Option(help="Only cycles whose desired velocity held for a whole gait cycle.")]
     = False,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing analysis.json and plots at --out.")] = False,
+    reference: Annotated[Path | None, typer.Option(help="An intact run: report each run's speed along the "
+                                                        "commanded heading retained vs its, and falls.")] = None,
 ) -> None:
     """Cost of transport, power, speed, duty factor, slip, stability margins and per-cycle posture of runs."""
     from shc_cli.commands.analyze import run_analyze
 
-    run_analyze(runs, json_output, out, skip, steady, overwrite)
+    run_analyze(runs, json_output, out, skip, steady, overwrite, reference)
 
 
 @app.command()
