@@ -238,7 +238,8 @@ def run_hw(
     = False,
     stop_state: Annotated[str, typer.Option(help="State to shut down to after Ctrl-C or the input's end: packed, "
                                                  "ready or running (just stop walking).")] = "packed",
-    on_fault: Annotated[str, typer.Option(help="On a servo fault: hold or torque-off.")] = "torque-off",
+    on_fault: Annotated[str, typer.Option(help="On a servo fault: hold, torque-off, or adapt (fail its leg, walk on "
+                                               "on the others; exit 5).")] = "torque-off",
     on_stop: Annotated[str, typer.Option(help="After the controlled stop and shut-down: hold or torque-off.")]
     = "torque-off",
     profile_velocity: Annotated[bool, typer.Option(help="Also write Profile Velocity: the servos interpolate "

@@ -637,6 +637,12 @@ class Controller(LegManipulation):
         else:
             self.walker.set_cycle(self.cycle, limits)
 
+    def declare_failure(self, failure: LegFailure) -> None:
+        """Failed legs from this cycle on (a detected fault): held at once (``locked``: where they are), the
+        re-planned gait requested as a gait change (the walker stops, then walks on it)."""
+        failure.at_s = 0.0
+        self.failure = self.scheduled_failure = failure
+
     def _schedule_failure(self, failure: LegFailure) -> None:
         """Count walking cycles; at the failure's time request its re-planned gait (:meth:`_change_gait` then
         installs the failure)."""

@@ -56,6 +56,7 @@ STOP_TIMEOUT_S = 10.0
 """Longest controlled stop and shut-down after Ctrl-C, beyond the sequences' own time, before the torque goes off
 anyway [s]."""
 OnFault = Literal["hold", "torque-off"]
+OnServoFault = Literal["hold", "torque-off", "adapt"]
 
 
 class HardwareConfig(BaseModel):
@@ -74,7 +75,8 @@ class HardwareConfig(BaseModel):
         out: run directory (None: ``runs/<timestamp>-run-hw``).
         dry_run: everything except current-limit, torque-enable and goal writes.
         stop_state: the state to shut down to: ``packed``, ``ready`` or ``running``.
-        on_fault: on a servo fault, ``hold`` or ``torque-off``.
+        on_fault: on a servo fault, ``hold`` or ``torque-off``; ``adapt``: a fault of one leg's servos fails that leg
+            and the others walk on (:mod:`shc_cli.loop.leg_fault`; any other fault: torque off).
         on_stop: after the controlled stop, ``hold`` or ``torque-off``.
         profile_velocity: also write Profile Velocity.
         watchdog: stdin: seconds without a line before the velocity goes to 0 [s].
@@ -92,7 +94,7 @@ class HardwareConfig(BaseModel):
     ports: list[str]
     baud: int | None = None
     gait: str | None = None
-    on_fault: OnFault = "torque-off"
+    on_fault: OnServoFault = "torque-off"
     on_stop: OnFault = "torque-off"
     stop_state: str = "packed"
     input_mode: str = "timeline"
@@ -120,8 +122,11 @@ class HardwareConfig(BaseModel):
     @field_validator("on_fault", "on_stop", mode="before")
     @classmethod
     def _hold_or_off(cls, value: object, info: ValidationInfo) -> object:
-        check_choice("--" + str(info.field_name).replace("_", "-"), value, ("hold", "torque-off"),
-                     "hold or torque-off")
+        if info.field_name == "on_fault":
+            check_choice("--on-fault", value, ("hold", "torque-off", "adapt"), "hold, torque-off or adapt")
+        else:
+            check_choice("--" + str(info.field_name).replace("_", "-"), value, ("hold", "torque-off"),
+                         "hold or torque-off")
         return value
 
     @field_validator("stop_state")
@@ -232,6 +237,11 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
         dt = robot.time_delta
         stop = STATES[c.stop_state]
         action = "holding" if c.on_fault == "hold" else "torque off"
+        absorb = None
+        if c.on_fault == "adapt":
+            from shc_cli.loop.leg_fault import LegFaultAdapter
+
+            absorb = LegFaultAdapter(robot, controller, backend)
         observers: list[Observer[BusState]] = []
         if c.live:
             stream, outputs = open_live(c.live_port, robot, controller, sensors=False, joint_states=True)
@@ -239,7 +249,8 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
         loop = RunLoop(controller, backend, source, LogRecorder(run, robot, backend),
                        StartUp.of(robot, hardware=True),
                        ControlledStop(stop, STOP_TIMEOUT_S), observers=observers, flush_every=100,
-                       on_fault=lambda text: event(log, logging.ERROR, "fault_action", "fault: %s — %s", text, action))
+                       on_fault=lambda text: event(log, logging.ERROR, "fault_action", "fault: %s — %s", text, action),
+                       absorb=absorb)
 
         def release(result: LoopResult) -> None:
             nonlocal faulted
@@ -258,6 +269,7 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
                 "input": "path" if c.path is not None else c.input_mode,
                 "watchdog_trips": getattr(source, "watchdog_trips", 0),
                 "odometry_pose": list(controller.odometry.pose), **path_fields(),
+                "failed_legs": list(backend.failed_legs) if c.on_fault == "adapt" else None,
             })
 
         path, summary, _ = execute(loop, run, summarise, after_loop=release)
