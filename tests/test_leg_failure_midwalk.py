@@ -72,3 +72,22 @@ def test_a_leg_retracted_five_seconds_into_the_walk_is_absorbed_without_a_fall_i
     summary = json.loads((run / "summary.json").read_text())
     assert not summary["fell"] and summary["max_tilt_rad"] < 0.6
     assert summary["forward_distance_m"] > 1.0
+
+
+@pytest.mark.parametrize(("option", "message"), [
+    ("--on-fault", "error: --on-fault: 'bogus' is not hold, torque-off or adapt (use hold, torque-off or adapt)\n"),
+    ("--on-stop", "error: --on-stop: 'bogus' is not hold or torque-off (use hold or torque-off)\n"),
+])
+def test_run_hws_fault_choices_include_adapt_and_a_bad_one_is_one_line(
+        option: str, message: str, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    """``--on-fault adapt`` is a choice (``--on-stop`` has none such); anything else exits 2 before a bus opens."""
+    import sys
+
+    from shc_cli.cli import main
+    from shc_cli.domain.hardware import HardwareConfig
+
+    assert HardwareConfig(robot="bullet", ports=["/dev/null"], on_fault="adapt").on_fault == "adapt"
+    monkeypatch.setattr(sys, "argv", ["shc", "run-hw", "bullet", "--port", "/dev/nonexistent", option, "bogus"])
+    with pytest.raises(SystemExit) as done:
+        main()
+    assert done.value.code == 2 and capsys.readouterr().err == message
