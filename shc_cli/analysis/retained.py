@@ -10,7 +10,7 @@ start-up cycle do not count against the walk).
 from __future__ import annotations
 
 import math
-from typing import Any
+from collections.abc import Mapping
 
 import numpy as np
 
@@ -40,7 +40,8 @@ def heading_speed(log: RunLog, window: metrics.Window) -> float:
     return float(np.median(along / (log.t[ends[1:]] - log.t[ends[:-1]])))
 
 
-def retained(result: dict[str, Any], log: RunLog, window: metrics.Window, reference_mps: float) -> dict[str, Any]:
+def retained(result: Mapping[str, object], log: RunLog, window: metrics.Window,
+             reference_mps: float) -> dict[str, object]:
     """``result`` (one run's analysis) with ``heading_speed_mps``, ``speed_retained`` (its share of
     ``reference_mps``, the intact run's) and ``fell``."""
     speed = heading_speed(log, window)
