@@ -54,6 +54,9 @@ def test_a_leg_failed_mid_walk_is_walked_on_the_intact_gait_then_held_on_the_re_
     stopping = next(c for c, m in walk if m.endswith("→ STOPPING"))
     restarted = [c for c, m in walk if m.endswith("STOPPED → STARTING")][1]
     assert 200 <= stopping - started <= 200 + 250  # requested 2 s (200 cycles) in, the walker stops in a step cycle
+    failures = [(e["cycle"], e["message"]) for e in events if e["event"] == "leg_failure"]  # at the 200th walking cycle
+    assert [m.split(":")[0] for _, m in failures] == ["leg failure declared (BR", "walking on without BR"]
+    assert failures[0][0] == started + 199 and failures[1][0] in range(stopping, restarted + 1)
     joints = _rows(run, "joints.csv")
     names = [n for n in joints[0] if n.startswith("BR_")]
     br = np.array([[float(r[n]) for n in names] for r in joints])

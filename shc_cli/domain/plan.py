@@ -57,6 +57,10 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
     record = PlanRecord(controller)
     start_up = StartUp.of(model)
     observers: list[Observer[None]] = [record]
+    if failure is not None and failure.at_s is not None:
+        from shc_cli.loop.leg_fault import FailureEvents
+
+        observers.append(FailureEvents(controller))
     stream = open_live(live_port, model, controller, sensors=False) if live else None
     if stream is not None:
         observers.append(stream[1])

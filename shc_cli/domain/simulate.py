@@ -130,6 +130,10 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
                 record = PhysicsRecord(robot, backend, o.airborne)
                 counter = None if progress is None or by_hand else _Progress(progress, inputs.cycles)
                 observers: list[Observer[Reading]] = [record] if counter is None else [record, counter]
+                if failure is not None and failure.at_s is not None:
+                    from shc_cli.loop.leg_fault import FailureEvents
+
+                    observers.append(FailureEvents(controller))
                 live = open_live(o.live_port, robot, controller, sensors=True) if o.live else None
                 if live is not None:
                     observers.append(live[1])

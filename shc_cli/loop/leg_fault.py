@@ -66,3 +66,26 @@ class LegFaultAdapter:
               leg, ", ".join(other for other in self.plans if other != leg),
               " → ".join("+".join(group) for group in adapted.planned.groups), adapted.planned.duty_factor)
         return True
+
+
+class FailureEvents:
+    """An observer of the run loop: the cycle a failure declared mid-walk (``--fail-leg LEG@T``) is taken up and
+    the cycle its re-planned gait starts, as events in ``events.log`` (``leg_failure``)."""
+
+    def __init__(self, controller: Controller) -> None:
+        self.controller = controller
+        self.declared = self.walking = False
+
+    def __call__(self, cycle: int, command: object, out: object, reading: object) -> str | None:
+        controller = self.controller
+        scheduled = controller.scheduled_failure
+        if not self.declared and scheduled is not None and controller.pending_gait is scheduled.gait:
+            self.declared = True
+            event(log, logging.INFO, "leg_failure", "leg failure declared (%s): stopping to change to the gait "
+                  "re-planned for the legs left", ", ".join(map(str, scheduled.failed)))
+        failure = controller.failure
+        if not self.walking and self.declared and failure is not None and controller.gait is failure.gait:
+            self.walking = True
+            event(log, logging.INFO, "leg_failure", "walking on without %s: gait %s, duty factor %.3f",
+                  ", ".join(failure.legs), controller.gait.name, controller.cycle.duty_factor)
+        return None
