@@ -120,7 +120,7 @@ def plan(
     live: LiveOption = False,
     live_port: LivePortOption = 8765,
     realtime: Annotated[bool, typer.Option(help="Pace the run to the wall clock.")] = False,
-    fail_leg: Annotated[list[str] | None, typer.Option(metavar="LEG[:MODE]", help=SIMULATE["fail_leg"].help)]
+    fail_leg: Annotated[list[str] | None, typer.Option(metavar="LEG[:MODE][@T]", help=SIMULATE["fail_leg"].help)]
     = None,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
@@ -181,7 +181,7 @@ def simulate(
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
     bag: BagOption = None,
-    fail_leg: Annotated[list[str] | None, typer.Option(metavar="LEG[:MODE]", help=SIMULATE["fail_leg"].help)]
+    fail_leg: Annotated[list[str] | None, typer.Option(metavar="LEG[:MODE][@T]", help=SIMULATE["fail_leg"].help)]
     = None,
     fail_on_fall: Annotated[bool, typer.Option(help="Exit with code 4 when the robot fell.")] = False,
     engine: Annotated[str, typer.Option(help="Physics engine: mujoco or pybullet.")] = "mujoco",
@@ -252,6 +252,8 @@ def run_hw(
     missed_reads_fault: Annotated[int | None, typer.Option(
         metavar="N", help="Consecutive cycles a servo may miss its reading (its last one stands in) before that is "
                           "a fault [default: hardware.missed_reads_fault, 3].")] = None,
+    fail_leg: Annotated[list[str] | None, typer.Option(metavar="LEG[:MODE][@T]", help=SIMULATE["fail_leg"].help)]
+    = None,
 ) -> None:
     """Run the controller on the robot's servos (Dynamixel Protocol 2.0 or 1.0, Feetech STS), safely."""
     from shc_cli.commands.run_hw import run_hw as run
@@ -261,7 +263,7 @@ def run_hw(
                        stop_state=stop_state, input_mode=input_mode, velocity=velocity, duration=duration,
                        commands=commands, path=path, out=out, dry_run=dry_run, profile_velocity=profile_velocity,
                        watchdog=watchdog, overwrite=overwrite, live=live, live_port=live_port,
-                       missed_reads_fault=missed_reads_fault))
+                       missed_reads_fault=missed_reads_fault, fail_leg=",".join(fail_leg) if fail_leg else None))
 
 
 @app.command()

@@ -59,3 +59,41 @@ def test_an_overloaded_femur_fails_its_leg_and_the_others_walk_on_to_the_end(tmp
         assert "BR_femur: overload" in failed["message"] and "leg BR failed" in failed["message"]
         walk = [e["message"] for e in events if e["event"] == "walk_state"]
         assert walk.count("walk state: STOPPED → STARTING") == 2  # walked, stopped for the re-plan, walked on
+
+
+def _goals_of(bus: object, start: int, servo: int) -> list[int]:
+    """The goal ticks written to ``servo`` by each goal SYNC WRITE from packet ``start`` on."""
+    goals = []
+    for packet in bus.packets(start):  # type: ignore[attr-defined]
+        if packet.instruction != p2.SYNC_WRITE or int.from_bytes(packet.params[0:2], "little") != GOAL_POSITION:
+            continue
+        length = int.from_bytes(packet.params[2:4], "little")
+        body = packet.params[4:]
+        goals += [int.from_bytes(body[i + 1:i + 1 + length], "little", signed=True)
+                  for i in range(0, len(body), length + 1) if body[i] == servo]
+    return goals
+
+
+def test_a_declared_failed_leg_is_held_retracted_while_the_others_walk(tmp_path: Path) -> None:
+    """``run-hw --fail-leg BR``: the controller's re-planned walk on the servos; BR's goals settle on the
+    retracted pose and stay there, the others keep moving; exit 0 (declared, not a fault)."""
+    servos = load_robot("bullet").robot.hardware.servos
+    with _bus() as bus:
+        process = subprocess.Popen([*SHC, "run-hw", "bullet", "--port", bus.port, "--out", str(tmp_path / "run"),
+                                    "--velocity", "1,0,0", "--duration", "4", "--fail-leg", "BR"],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        wait_running(tmp_path / "run", process, extra_s=1.0)
+        marker = len(bus.packets())
+        _, stderr = process.communicate(timeout=120)
+        assert process.returncode == 0, stderr
+        summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+        assert summary["gait"] == "planned" and summary["fault"] is None
+        femur, walking = _goals_of(bus, marker, servos["BR_femur"].id), _goals_of(bus, marker, servos["AR_femur"].id)
+        assert len(femur) > 200 and max(femur) - min(femur) == 0  # held once walking
+        assert max(walking) - min(walking) > 50  # the others walk
+
+
+def test_adapt_and_declared_failures_together_are_refused_in_one_line(tmp_path: Path) -> None:
+    result = subprocess.run([*SHC, "run-hw", "bullet", "--port", "/dev/nonexistent", "--fail-leg", "BR",
+                             "--on-fault", "adapt"], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2 and result.stderr.count("\n") == 1 and "--on-fault" in result.stderr

@@ -86,6 +86,8 @@ class HardwareConfig(BaseModel):
         live_port: that server's port (0: any free port).
         missed_reads_fault: consecutive cycles without a servo's reading that are a fault (None: the robot file's
             ``hardware.missed_reads_fault``, default 3).
+        fail_leg: legs declared failed, ``LEG[:MODE][@T]`` comma-separated (:func:`shc_cli.domain.simulate.
+            failed_legs`): the controller holds them and walks the gait re-planned for the legs left.
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -110,6 +112,7 @@ class HardwareConfig(BaseModel):
     live: bool = False
     live_port: int = 8765
     missed_reads_fault: int | None = None
+    fail_leg: str | None = None
 
     @field_validator("missed_reads_fault")
     @classmethod
@@ -197,8 +200,8 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
     pacing (tests: an emulated bus on a virtual clock, :class:`~shc_cli.backends.dynamixel.DynamixelBackend`)."""
     from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Controller
-    from shc_cli.control.verified_limits import source_for
     from shc_cli.domain.live import open_live
+    from shc_cli.domain.simulate import failed_legs, speed_source
     from shc_cli.hardware.buses import servo_bus
     from shc_cli.loop.input_choice import commands_file, open_input
     from shc_cli.loop.path_input import keep_path
@@ -212,9 +215,13 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
     if c.path is not None and c.input_mode != "timeline":
         raise SpecError([Issue(None, None, "--path", f"--path and --input {c.input_mode} both give the run's input",
                                "drop --input (a path is followed by itself)")])
+    if c.fail_leg and c.on_fault == "adapt":
+        raise SpecError([Issue(None, None, "--on-fault", "adapt plans for one failed leg of a robot with every leg "
+                               "walking, and --fail-leg fails legs already", "drop one of --on-fault adapt and "
+                               "--fail-leg")])
     inputs = load_inputs(c.robot, c.gait, c.velocity, c.duration, commands_file(c.input_mode, c.commands),
                          default_s=20.0, path=c.path)
-    robot, gait = inputs.robot, inputs.gait
+    robot, gait, failure = failed_legs(inputs.robot, inputs.gait, c.fail_leg, c.velocity)
     bus = servo_bus(robot, c.ports, c.baud, c.profile_velocity)  # the servo models' protocol
     source: InputSource | None = None
     backend: DynamixelBackend | None = None
@@ -228,7 +235,7 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
         backend = DynamixelBackend(robot, bus, c.dry_run, run, c.on_fault, c.on_stop, clock=clock or time.perf_counter,
                                    sleep=sleep or time.sleep, missed_reads_fault=c.missed_reads_fault)
         controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
-                                direct_shutdown=True, speed_shares=source_for(robot))
+                                direct_shutdown=True, failure=failure, speed_shares=speed_source(robot, failure))
         run.write_robot(robot)
         if inputs.path is not None:
             source.close()
