@@ -1,6 +1,7 @@
-"""Walking on when legs have failed (issue 39, first slice): declared failures from the start of a run.
+"""Walking on when legs have failed (issue 39): declared failures, from the start of a run or mid-walk.
 
-A failure is declared per leg, ``LEG[:MODE]`` (:func:`parse_failures`):
+A failure is declared per leg, ``LEG[:MODE][@T]`` (:func:`parse_failures`; ``@T``: ``T`` seconds after walking
+starts, when the controller changes to the re-planned gait as it changes gaits):
 
 * ``retracted`` (default): the leg is folded clear of the ground and held there (the set-up of Mailer et al.,
   GECCO 2021: coxa 0°, femur up, tibia folded). In shc's joint convention the pose is the first joint at 0
@@ -12,11 +13,12 @@ A failure is declared per leg, ``LEG[:MODE]`` (:func:`parse_failures`):
 
 :func:`adapt` re-plans the robot for the legs left, with no trials: the walkspace of the walking legs gives the
 stride, :func:`~shc_cli.control.gait_planner.plan_gait` the fastest phase table that keeps a static margin over
-the cycle with one constant body shift (``sway=False``), and the shift is applied by moving every stance position
-by its opposite (the body then stands over the legs left); where no table holds on the robot's own stance the
-planner moves the stance positions of the legs left. :class:`LegFailure` is the controller's collaborator: it
-drops the failed legs from the walkspace (so the speed limits are those of the walking legs) and holds their
-joints at the held pose at the end of every cycle (:meth:`LegFailure.hold`).
+the cycle with one constant body shift, else with the body swaying through the cycle
+(:func:`~shc_cli.control.gait_planner.sway_path`); where no table holds on the robot's own stance the planner
+moves the stance positions of the legs left. :class:`LegFailure` is the controller's collaborator: it drops the
+failed legs from the walkspace (so the speed limits are those of the walking legs), holds their joints at the held
+pose at the end of every cycle (:meth:`LegFailure.hold`) and shifts the posed tips by the sway at the walker's
+phase (:meth:`LegFailure.posed`, :func:`walk_phase`).
 """
 
 from __future__ import annotations
@@ -43,7 +45,7 @@ from shc_cli.spec.gait import Gait
 from shc_cli.spec.robot import Robot
 
 MODES = ("retracted", "locked")
-"""The failure modes of this slice (``limp``, ``missing``, ``short`` and ``@T`` come later)."""
+"""The failure modes so far (``limp``, ``missing`` and ``short`` are not done)."""
 GRID_POINTS = 20000
 """Grid points of the retracted-pose search (per joint: the ``(n − 1)``-th root, at least 5)."""
 STRIDE_SHARES = (1.0, 0.75, 0.5, 0.35, 0.25)
