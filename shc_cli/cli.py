@@ -120,7 +120,7 @@ def plan(
     live: LiveOption = False,
     live_port: LivePortOption = 8765,
     realtime: Annotated[bool, typer.Option(help="Pace the run to the wall clock.")] = False,
-    fail_leg: Annotated[list[str] | None, typer.Option(metavar="LEG[:MODE]", help=SIMULATE["fail_leg"].help)]
+    fail_leg: Annotated[list[str] | None, typer.Option(metavar="LEG[:MODE][@T]", help=SIMULATE["fail_leg"].help)]
     = None,
 ) -> None:
     """Run the controller kinematically through start-up and a command timeline; log joints, tips, body."""
@@ -181,7 +181,7 @@ def simulate(
     plots: Annotated[bool, typer.Option(help="Write trajectory.png, power.png and contacts.png.")] = True,
     gui: Annotated[bool, typer.Option(help="Open the PyBullet GUI (needs a display).")] = False,
     bag: BagOption = None,
-    fail_leg: Annotated[list[str] | None, typer.Option(metavar="LEG[:MODE]", help=SIMULATE["fail_leg"].help)]
+    fail_leg: Annotated[list[str] | None, typer.Option(metavar="LEG[:MODE][@T]", help=SIMULATE["fail_leg"].help)]
     = None,
     fail_on_fall: Annotated[bool, typer.Option(help="Exit with code 4 when the robot fell.")] = False,
     engine: Annotated[str, typer.Option(help="Physics engine: mujoco or pybullet.")] = "mujoco",
@@ -239,7 +239,8 @@ def run_hw(
     = False,
     stop_state: Annotated[str, typer.Option(help="State to shut down to after Ctrl-C or the input's end: packed, "
                                                  "ready or running (just stop walking).")] = "packed",
-    on_fault: Annotated[str, typer.Option(help="On a servo fault: hold or torque-off.")] = "torque-off",
+    on_fault: Annotated[str, typer.Option(help="On a servo fault: hold, torque-off, or adapt (fail its leg, walk on "
+                                               "on the others; exit 5).")] = "torque-off",
     on_stop: Annotated[str, typer.Option(help="After the controlled stop and shut-down: hold or torque-off.")]
     = "torque-off",
     profile_velocity: Annotated[bool, typer.Option(help="Also write Profile Velocity: the servos interpolate "
@@ -256,6 +257,8 @@ def run_hw(
         metavar="FILE", help="A gait or residual policy file (.npz) acting on the controller while it walks; the "
                              "start-up, the stop, the clamps and the fault checks are unchanged (docs/gym.md).")]
     = None,
+    fail_leg: Annotated[list[str] | None, typer.Option(metavar="LEG[:MODE][@T]", help=SIMULATE["fail_leg"].help)]
+    = None,
 ) -> None:
     """Run the controller on the robot's servos (Dynamixel Protocol 2.0 or 1.0, Feetech STS), safely."""
     from shc_cli.commands.run_hw import run_hw as run
@@ -265,7 +268,8 @@ def run_hw(
                        stop_state=stop_state, input_mode=input_mode, velocity=velocity, duration=duration,
                        commands=commands, path=path, out=out, dry_run=dry_run, profile_velocity=profile_velocity,
                        watchdog=watchdog, overwrite=overwrite, live=live, live_port=live_port,
-                       missed_reads_fault=missed_reads_fault, policy=policy))
+                       missed_reads_fault=missed_reads_fault, policy=policy,
+                       fail_leg=",".join(fail_leg) if fail_leg else None))
 
 
 @app.command()
@@ -369,11 +373,13 @@ def analyze(
     steady: Annotated[bool, typer.Option(help="Only cycles whose desired velocity held for a whole gait cycle.")]
     = False,
     overwrite: Annotated[bool, typer.Option(help="Replace an existing analysis.json and plots at --out.")] = False,
+    reference: Annotated[Path | None, typer.Option(help="An intact run: report each run's speed along the "
+                                                        "commanded heading retained vs its, and falls.")] = None,
 ) -> None:
     """Cost of transport, power, speed, duty factor, slip, stability margins and per-cycle posture of runs."""
     from shc_cli.commands.analyze import run_analyze
 
-    run_analyze(runs, json_output, out, skip, steady, overwrite)
+    run_analyze(runs, json_output, out, skip, steady, overwrite, reference)
 
 
 @app.command()

@@ -112,3 +112,52 @@ def test_a_reachability_test_that_refuses_every_move_leaves_no_gait() -> None:
     left = [leg for leg in stance if leg not in ("AR", "BR")]
     with pytest.raises(GaitPlanningError):
         plan_gait(stance, left, stride_m=0.15, reach_m=0.2, reachable=lambda leg, xy: False)
+
+
+STANCE = _bullet_stance()
+LEGS = list(STANCE)
+
+
+def _qhull_margin(feet: np.ndarray, com: np.ndarray) -> float:
+    """The distance of ``com`` inside the convex hull of ``feet`` by SciPy's Qhull (independent of the planner's)."""
+    from scipy.spatial import ConvexHull
+
+    equations = ConvexHull(feet).equations
+    return float(np.min(-(equations[:, :2] @ com + equations[:, 2])))
+
+
+@pytest.mark.parametrize("failed", [("AL", "CR"), ("BL", "BR"), ("CL", "AR")])
+def test_the_sway_of_a_four_legged_crawl_keeps_the_margin_at_every_instant_and_stride(failed: tuple[str, ...]) -> None:
+    """S2 (two opposite legs failed): no constant shift holds a crawl on four legs; the sway path keeps the centre
+    of mass ≥ 0.02 m inside the stance feet at every sampled instant, at the full stride and the shorter ones the
+    walker ramps through, moving no faster than twice a stance foot, within the legs' reach."""
+    from shc_cli.control.gait_planner import stance_tips, sway_at, sway_path
+
+    legs = [leg for leg in LEGS if leg not in failed]
+    stride = 0.2
+    with pytest.raises(GaitPlanningError):
+        plan_gait(STANCE, legs, stride, sway=False)
+    planned = plan_gait(STANCE, legs, stride, sway=True)
+    assert planned.duty_factor == pytest.approx(0.75)  # a wave of four single-leg groups
+    path = sway_path(planned, stride, 0.0, 0.02, (0.0, 0.5, 1.0), 2.0, 0.1)
+    assert path is not None and np.abs(path).max() <= 0.1 + 1e-9
+    swing = planned.gait.swing_phase * len(planned.groups) / planned.gait.base_length
+    for share in (0.0, 0.5, 1.0):
+        for i, feet in enumerate(stance_tips(planned.stance, planned.groups, swing, stride * share)):
+            assert _qhull_margin(feet, path[i]) >= 0.02 - 1e-7
+    step = np.abs(np.roll(path, -1, axis=0) - path).max()
+    assert step <= 2.0 * stride / (len(planned.groups) - swing) / 8 + 1e-9
+    assert sway_at(path, 0.0) == pytest.approx(path[0]) and sway_at(path, 1.0) == pytest.approx(path[0])
+    assert sway_at(path, 0.5 / len(path)) == pytest.approx(0.5 * (path[0] + path[1]))
+
+
+def test_a_constant_sway_is_one_shift_and_three_feet_in_a_line_have_none() -> None:
+    """``rate_share`` 0: one shift for the whole cycle; S3's lone left leg lifted leaves three collinear right feet,
+    which no shift within reach can stand on."""
+    from shc_cli.control.gait_planner import sway_path
+
+    planned = plan_gait(STANCE, [leg for leg in LEGS if leg != "BR"], 0.2, sway=False)
+    path = sway_path(planned, 0.2, rate_share=0.0)
+    assert path is not None and np.ptp(path, axis=0).max() <= 1e-9
+    crawl = plan_gait(STANCE, ["AR", "BR", "CR", "BL"], 0.2, sway=True, reach_m=0.1)  # stance moved to hold
+    assert sway_path(crawl, 0.2, 0.0, 0.02, (0.0, 0.5, 1.0), 2.0, 0.1) is None  # but only with a 0.37 m shift

@@ -122,7 +122,8 @@ class DynamixelBackend:
         bus: the opened, checked and configured bus(es).
         dry_run: never enable the torque or write goals.
         run: the run directory (for ``timing.csv``), or None.
-        on_fault: ``"hold"`` or ``"torque-off"`` after a fault.
+        on_fault: ``"hold"`` or ``"torque-off"`` after a fault (``"adapt"``: a fault the run walks on from is no
+            stop; any other turns the torque off).
         on_stop: ``"hold"`` or ``"torque-off"`` after a normal end.
         clock: the monotonic clock [s] (injectable for tests).
         sleep: the wait [s] (injectable for tests).
@@ -156,6 +157,8 @@ class DynamixelBackend:
 
         limit = missed_reads_fault or robot.hardware.missed_reads_fault or MISSED_READS_FAULT
         self.misses = MissedReads([slot.key for slot in bus.slots], bus.layout.rows, bus.layout.cols, limit)
+        self.failed_legs: list[str] = []
+        """Legs set aside after a fault (``--on-fault adapt``): no goal is written to their servos any more."""
 
     def start(self) -> np.ndarray:
         """The servos' present positions (the controller starts from them): read again, up to the missed-reads
@@ -220,16 +223,33 @@ class DynamixelBackend:
         assert state is not None
         if self.misses.fault is not None:
             return self.misses.fault
-        if state.alerts.any():
-            errors = bus.hardware_errors()
-            flagged = [bus.slots[i].key for i in np.flatnonzero(state.alerts)]
+        alerts = state.alerts.copy()
+        alerts[list(bus.skipped)] = False  # a failed leg's servo keeps its error: walked on without it
+        if alerts.any():
+            skipped = {bus.slots[i].key for i in bus.skipped}
+            errors = {key: names for key, names in bus.hardware_errors().items() if key not in skipped}
+            flagged = [bus.slots[i].key for i in np.flatnonzero(alerts)]
             return ("; ".join(f"{key}: {', '.join(names)}" for key, names in errors.items())
                     or f"hardware error alert from {', '.join(flagged)}")
         return None
 
+    def alerting_servos(self) -> list[str]:
+        """The servos (keys, ``LEG_joint``) whose last status carried the hardware-error alert, but for the failed
+        legs'."""
+        assert self.state is not None
+        return [self.bus.slots[i].key for i in np.flatnonzero(self.state.alerts) if i not in self.bus.skipped]
+
+    def fail_leg(self, leg: str) -> None:
+        """No goal to ``leg``'s servos from the next write on (their torque stays as it is: the servos hold their
+        last goal, a faulted one is off by its own protection)."""
+        slots = {i for i, slot in enumerate(self.bus.slots) if slot.key.startswith(f"{leg}_")}
+        self.bus.skipped = frozenset(self.bus.skipped | slots)
+        self.failed_legs.append(leg)
+
     def close(self, faulted: bool = False) -> None:
         """Torque off (or held, ``--on-fault``/``--on-stop``); the bus stays open for the caller to close."""
         release = self.on_fault if faulted else self.on_stop
+        release = "torque-off" if release == "adapt" else release  # a fault adapt did not absorb: the safe stop
         if self.torque_on and release == "torque-off":
             self.bus.torque(False)
             self.torque_on = False

@@ -36,6 +36,12 @@ PATH_COLUMNS = (
     ("time_to_goal_s", "goal s", "{:.1f}"),
 )
 """Columns added when a run walked a path (``--path``): its measures against the ground truth."""
+REFERENCE_COLUMNS = (
+    ("heading_speed_mps", "heading m/s", "{:.4f}"),
+    ("speed_retained", "retained", "{:.0%}"),
+    ("fell", "fell", "{}"),
+)
+"""Columns added with ``--reference``: the speed along the commanded heading, its share of the reference's."""
 
 
 def _cell(value: Any, fmt: str) -> str:
@@ -47,6 +53,7 @@ def _cell(value: Any, fmt: str) -> str:
 def table(results: list[dict[str, Any]]) -> str:
     """One row per run, aligned columns."""
     columns = COLUMNS + (PATH_COLUMNS if any(r.get("waypoints_total") for r in results) else ())
+    columns += REFERENCE_COLUMNS if any("speed_retained" in r for r in results) else ()
     header = ["run", *[h for _, h, _ in columns]]
     rows = [[Path(str(r["run"])).name, *[_cell(r.get(k), f) for k, _, f in columns]] for r in results]
     widths = [max(len(row[i]) for row in [header, *rows]) for i in range(len(header))]
@@ -57,7 +64,7 @@ def table(results: list[dict[str, Any]]) -> str:
 
 
 def run_analyze(runs: list[Path], as_json: bool, out: Path | None, skip: float, steady: bool,
-                overwrite: bool = False) -> None:
+                overwrite: bool = False, reference: Path | None = None) -> None:
     from shc_cli.analysis.metrics import analyze_log, public
     from shc_cli.api import open_run
     from shc_cli.outputs import ensure_dir, refuse_existing, write_text
@@ -75,6 +82,11 @@ def run_analyze(runs: list[Path], as_json: bool, out: Path | None, skip: float, 
 
             raise SpecError([Issue(Path(path), None, "log", f"cannot be analysed: {error}",
                                    "the run's files are damaged: run it again")]) from None
+    if reference is not None:
+        from shc_cli.analysis.retained import heading_speed, retained
+
+        intact = heading_speed(open_run(reference), window)
+        results = [retained(r, log, window, intact) for r, log in zip(results, logs, strict=True)]
     for log in logs:
         note = log.partial_note()
         if note is not None:

@@ -1,8 +1,8 @@
 """How a run command ends: its exit code and the note on its summary line (docs/commands.md, "Exit codes").
 
 0 done (also ``run-hw`` stopped by Ctrl-C: that is how an open-ended run ends), 1 internal error, 2 bad input,
-3 ``run-hw`` ended by a servo fault, 4 ``simulate --fail-on-fall`` and the robot fell, 5 ``simulate``: the physics
-diverged, 130 / 143 ``plan`` or
+3 ``run-hw`` ended by a servo fault, 4 ``simulate --fail-on-fall`` and the robot fell, 5 ``run-hw --on-fault
+adapt`` finished on fewer legs, 6 ``simulate``: the physics diverged, 130 / 143 ``plan`` or
 ``simulate`` stopped by SIGINT / SIGTERM (the run directory is finished, marked ``"complete": false``).
 """
 
@@ -21,6 +21,8 @@ EXIT_FAULT = 3
 """``run-hw``: a servo fault ended the run."""
 EXIT_FELL = 4
 """``simulate --fail-on-fall``: the robot fell."""
+EXIT_FEWER_LEGS = 5
+"""``run-hw --on-fault adapt``: a servo fault failed a leg and the run finished on the legs left."""
 EXIT_DIVERGED = 6
 """``simulate``: the physics blew up (NaN or a runaway body speed); the run directory is kept,
 ``stop_reason: "diverged"``, ``fault`` says what showed it. (5 is kept for a run that finished on fewer legs.)"""

@@ -19,7 +19,7 @@ from shc_cli.control.admittance import AdmittanceController, tip_forces_from_eff
 from shc_cli.control.autopose import AutoPoser
 from shc_cli.control.bezier import cubic
 from shc_cli.control.gait import StepCycle, step_cycle
-from shc_cli.control.leg_failure import LegFailure
+from shc_cli.control.leg_failure import LegFailure, walk_phase
 from shc_cli.control.limits import Limits, generate_limits
 from shc_cli.control.manipulation import MAX_MANUAL_LEGS as MAX_MANUAL_LEGS
 from shc_cli.control.manipulation import LegManipulation
@@ -253,7 +253,11 @@ class Controller(LegManipulation):
                  direct_shutdown: bool = False, failure: LegFailure | None = None,
                  speed_shares: ShareSource | None = None) -> None:
         self.robot = robot
-        self.failure = failure
+        self.failure = failure if failure is None or failure.at_s is None else None
+        self.scheduled_failure = failure if failure is not None and failure.at_s is not None else None
+        """Failures declared mid-walk (``LEG@T``): at ``at_s`` seconds of walking the controller changes to their
+        re-planned gait as it changes gaits (the walker stops with every foot down), then holds the failed legs."""
+        self._walking_cycles = 0
         self.speed_shares = speed_shares
         """Shares of OpenSHC's speed limits per gait (a run gives :func:`shc_cli.control.verified_limits.source_for`
         of its robot); None: OpenSHC's (also with a failed leg: the limits are the walking legs' walkspace)."""
@@ -412,6 +416,8 @@ class Controller(LegManipulation):
             self._transition_state()  # in RUNNING the running cycle handles it first (study §9.4)
         if self.state == _RUNNING:
             deviations, clamped = self._running()
+        if self.scheduled_failure is not None:
+            self._schedule_failure(self.scheduled_failure)
         if self.failure is not None:
             self._hold_failed(self.failure)
         limited = self.model.limit_speed(before)
@@ -637,6 +643,28 @@ class Controller(LegManipulation):
         else:
             self.walker.set_cycle(self.cycle, limits)
 
+    def declare_failure(self, failure: LegFailure) -> None:
+        """Failed legs from this cycle on (a detected fault): held at once (``locked``: where they are), the
+        re-planned gait requested as a gait change (the walker stops, then walks on it)."""
+        failure.at_s = 0.0
+        self.failure = self.scheduled_failure = failure
+
+    def _schedule_failure(self, failure: LegFailure) -> None:
+        """Count walking cycles; at the failure's time request its re-planned gait (:meth:`_change_gait` then
+        installs the failure)."""
+        if self.state == _RUNNING and self.walker is not None and (self._walking_cycles
+                                                                  or self.walker.state != _STOPPED):
+            self._walking_cycles += 1
+        assert failure.at_s is not None and failure.gait is not None
+        due = self._walking_cycles * self.dt >= failure.at_s
+        if due and self.pending_gait is None and self.gait is not failure.gait:
+            self.pending_gait = failure.gait
+
+    def _install_failure(self, failure: LegFailure) -> None:
+        """The declared failure from now on: the walking legs' walkspace and OpenSHC's limits of it."""
+        self.failure, self.scheduled_failure, self.speed_shares = failure, None, None
+        self.walkspace = walkspace(failure.walking(self.planes), self.stance, self.robot.walker.overlapping_walkspaces)
+
     def _hold_failed(self, failure: LegFailure) -> None:
         """Failed legs back at their held pose (before the joint speed guard, which paces the first move)."""
         held = failure.hold(self.model.joints, self.state == _RUNNING)
@@ -689,7 +717,7 @@ class Controller(LegManipulation):
             manual = (self.leg_modes == LegMode.MANUAL) | (self.leg_modes == LegMode.WALKING_TO_MANUAL)
             self.poser_tips[manual] = self.walker.legs.vectors[manual, stepping.CURRENT]
         if self.failure is not None:
-            self.poser_tips = self.failure.posed(self.poser_tips)
+            self.poser_tips = self.failure.posed(self.poser_tips, walk_phase(self.walker))
         if self.admittance is not None:
             self._apply_admittance(self.admittance)
         ik = self.robot.ik
@@ -738,6 +766,8 @@ class Controller(LegManipulation):
             return
         self.gait = self.pending_gait
         self.pending_gait = None
+        if self.scheduled_failure is not None and self.gait is self.scheduled_failure.gait:
+            self._install_failure(self.scheduled_failure)
         self.cycle = step_cycle(self.gait, self.parameters["step_frequency"], self.dt)
         self.walker.set_cycle(self.cycle, self._limits_for(self.cycle))
         self._reset_auto_pose()

@@ -316,3 +316,59 @@ def plan_gait(stance: Mapping[str, tuple[float, float]], legs: Sequence[str], st
         raise GaitPlanningError(f"no gait keeps a {min_margin_m:g} m static margin on legs {', '.join(legs)} "
                                 f"at a {stride_m:g} m stride; shorten the stride")
     return best
+
+
+def sway_path(planned: PlannedGait, stride_m: float, heading_rad: float = 0.0, min_margin_m: float = 0.02,
+              stride_shares: Sequence[float] = (0.0, 0.5, 1.0), rate_share: float = 1.0,
+              max_shift_m: float = MAX_SHIFT_M) -> np.ndarray | None:
+    """The smallest body sway through ``planned``'s cycle that keeps the static margin ≥ ``min_margin_m`` at every
+    sampled instant, ``(K, 2)`` [m] (the centre-of-mass offset from the body origin; ``None``: none does).
+
+    A linear programme (HiGHS): minimise the summed |shift| (L1) subject to every hull edge of the stance feet at
+    each instant keeping the margin, for the walk at each of ``stride_shares`` of ``stride_m`` at once (the walker
+    ramps its stride up and down, so the sway, a function of the phase alone, must hold for the shorter strides
+    too), the sway moving between two samples at most ``rate_share`` × a stance foot's travel at ``stride_m``, and
+    no shift beyond ``max_shift_m`` on either axis (what the legs can reach).
+    """
+    groups = planned.groups
+    swing = planned.gait.swing_phase * len(groups) / planned.gait.base_length
+    per_share = [list(stance_tips(planned.stance, groups, swing, stride_m * share, heading_rad))
+                 for share in stride_shares]
+    k = len(per_share[0])
+    a_rows, b_rows = [], []
+    for instants in per_share:
+        for i, feet in enumerate(instants):
+            hull = _hull(feet) if len(feet) >= 3 else feet
+            if len(hull) < 3:
+                return None
+            normal, offset = _edge_rows(hull)
+            block = np.zeros((len(normal), 4 * k))
+            block[:, 2 * i:2 * i + 2] = -normal  # −n·c ≤ o − m
+            a_rows.append(block)
+            b_rows.append(offset - min_margin_m)
+    eye = np.eye(2 * k)
+    a_rows += [np.hstack([eye, -eye]), np.hstack([-eye, -eye])]  # |c| ≤ u
+    b_rows += [np.zeros(2 * k), np.zeros(2 * k)]
+    step = rate_share * stride_m / (len(groups) - swing) / (SAMPLES_PER_UNIT * 4) if stride_m > 0 else MAX_SHIFT_M
+    for i in range(k):
+        for axis in range(2):
+            row = np.zeros(4 * k)
+            row[2 * i + axis], row[2 * ((i + 1) % k) + axis] = 1.0, -1.0
+            a_rows += [row[None, :], -row[None, :]]
+            b_rows += [np.array([step]), np.array([step])]
+    bounds = [(-max_shift_m, max_shift_m)] * (2 * k) + [(0.0, None)] * (2 * k)
+    result = linprog(c=np.r_[np.zeros(2 * k), np.ones(2 * k)], A_ub=np.concatenate(a_rows),
+                     b_ub=np.concatenate(b_rows), bounds=bounds, method="highs")
+    if not result.success:
+        return None
+    return np.asarray(result.x[:2 * k].reshape(k, 2), dtype=float)
+
+
+def sway_at(path: np.ndarray, phase: float) -> np.ndarray:
+    """The sway ``path`` (:func:`sway_path`, samples evenly over one cycle) at ``phase`` ∈ [0, 1) of the cycle
+    (0: the first group lifts off), linearly interpolated, (x, y) [m]."""
+    k = len(path)
+    position = (phase % 1.0) * k
+    i = int(position) % k
+    fraction = position - int(position)
+    return np.asarray(path[i] * (1.0 - fraction) + path[(i + 1) % k] * fraction, dtype=float)

@@ -1,6 +1,7 @@
-"""Walking on when legs have failed (issue 39, first slice): declared failures from the start of a run.
+"""Walking on when legs have failed (issue 39): declared failures, from the start of a run or mid-walk.
 
-A failure is declared per leg, ``LEG[:MODE]`` (:func:`parse_failures`):
+A failure is declared per leg, ``LEG[:MODE][@T]`` (:func:`parse_failures`; ``@T``: ``T`` seconds after walking
+starts, when the controller changes to the re-planned gait as it changes gaits):
 
 * ``retracted`` (default): the leg is folded clear of the ground and held there (the set-up of Mailer et al.,
   GECCO 2021: coxa 0°, femur up, tibia folded). In shc's joint convention the pose is the first joint at 0
@@ -12,11 +13,12 @@ A failure is declared per leg, ``LEG[:MODE]`` (:func:`parse_failures`):
 
 :func:`adapt` re-plans the robot for the legs left, with no trials: the walkspace of the walking legs gives the
 stride, :func:`~shc_cli.control.gait_planner.plan_gait` the fastest phase table that keeps a static margin over
-the cycle with one constant body shift (``sway=False``), and the shift is applied by moving every stance position
-by its opposite (the body then stands over the legs left); where no table holds on the robot's own stance the
-planner moves the stance positions of the legs left. :class:`LegFailure` is the controller's collaborator: it
-drops the failed legs from the walkspace (so the speed limits are those of the walking legs) and holds their
-joints at the held pose at the end of every cycle (:meth:`LegFailure.hold`).
+the cycle with one constant body shift, else with the body swaying through the cycle
+(:func:`~shc_cli.control.gait_planner.sway_path`); where no table holds on the robot's own stance the planner
+moves the stance positions of the legs left. :class:`LegFailure` is the controller's collaborator: it drops the
+failed legs from the walkspace (so the speed limits are those of the walking legs), holds their joints at the held
+pose at the end of every cycle (:meth:`LegFailure.hold`) and shifts the posed tips by the sway at the walker's
+phase (:meth:`LegFailure.posed`, :func:`walk_phase`).
 """
 
 from __future__ import annotations
@@ -29,9 +31,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
+from shc_cli.control import stepping
 from shc_cli.control.gait import step_cycle
-from shc_cli.control.gait_planner import GaitPlanningError, PlannedGait, plan_gait, stance_tips
+from shc_cli.control.gait_planner import GaitPlanningError, PlannedGait, plan_gait, stance_tips, sway_at, sway_path
 from shc_cli.control.limits import generate_limits
+from shc_cli.control.states import WalkState
+from shc_cli.control.walk import WalkController
 from shc_cli.errors import Issue, SpecError
 from shc_cli.model.chains import Chains, FloatArray
 from shc_cli.model.ik import solve
@@ -40,26 +45,32 @@ from shc_cli.spec.gait import Gait
 from shc_cli.spec.robot import Robot
 
 MODES = ("retracted", "locked")
-"""The failure modes of this slice (``limp``, ``missing``, ``short`` and ``@T`` come later)."""
+"""The failure modes so far (``limp``, ``missing`` and ``short`` are not done)."""
 GRID_POINTS = 20000
 """Grid points of the retracted-pose search (per joint: the ``(n − 1)``-th root, at least 5)."""
 STRIDE_SHARES = (1.0, 0.75, 0.5, 0.35, 0.25)
 """Shares of the walking legs' walkspace stride tried in turn until a generated table holds."""
-SHIFT_CYCLES = 200
-"""Control cycles over which the body shift is eased in once walking runs."""
 MIN_MARGIN_M = 0.02
 """The static margin the re-planned gait keeps at every instant [m]."""
+SWAY_STRIDE_SHARES = (0.0, 0.5, 1.0)
+"""Shares of the planned stride the body sway must hold the margin for at once (the walker ramps its stride)."""
+SWAY_RATE_SHARE = 2.0
+"""Fastest the body sways, relative to a stance foot's speed at the planned stride."""
+SHIFT_RATE_MPS = 0.05
+"""Fastest the body shift moves towards the sway when the sway itself moves slower (walker stopped) [m/s]."""
 
 
 @dataclass(frozen=True)
 class FailedLeg:
-    """One declared failure: the leg id and its mode (one of :data:`MODES`)."""
+    """One declared failure: the leg id, its mode (one of :data:`MODES`) and when it is declared (seconds after
+    walking starts; ``None``: from the start of the run)."""
 
     leg: str
     mode: str = "retracted"
+    at_s: float | None = None
 
     def __str__(self) -> str:
-        return f"{self.leg}:{self.mode}"
+        return f"{self.leg}:{self.mode}" + ("" if self.at_s is None else f"@{self.at_s:g}")
 
 
 def _bad(spec: str, problem: str, fix: str) -> SpecError:
@@ -67,22 +78,34 @@ def _bad(spec: str, problem: str, fix: str) -> SpecError:
 
 
 def parse_failures(specs: Sequence[str], legs: Sequence[str]) -> tuple[FailedLeg, ...]:
-    """``LEG[:MODE]`` specs (each may also be a comma-separated list) → failures, checked against ``legs``.
+    """``LEG[:MODE][@T]`` specs (each may also be a comma-separated list) → failures, checked against ``legs``.
 
     Raises:
         SpecError: an unknown leg or mode, a leg given twice, or fewer than three legs left (one line each).
     """
     failed: list[FailedLeg] = []
     for spec in (part.strip() for text in specs for part in text.split(",") if part.strip()):
-        leg, _, mode = spec.partition(":")
+        body, at, when = spec.partition("@")
+        leg, _, mode = body.partition(":")
         mode = mode or "retracted"
+        at_s: float | None = None
+        if at:
+            try:
+                at_s = float(when)
+            except ValueError:
+                at_s = math.nan
+            if not math.isfinite(at_s) or at_s < 0.0:
+                raise _bad(spec, f"@{when!r} is not a time", "give seconds after walking starts, e.g. BR@5")
         if leg not in legs:
             raise _bad(spec, f"no leg {leg!r} on this robot", f"give one of {', '.join(legs)}")
         if mode not in MODES:
             raise _bad(spec, f"unknown mode {mode!r}", f"give {' or '.join(f'{leg}:{m}' for m in MODES)}")
         if any(f.leg == leg for f in failed):
             raise _bad(spec, f"leg {leg} is failed twice", "give each leg once")
-        failed.append(FailedLeg(leg, mode))
+        failed.append(FailedLeg(leg, mode, at_s))
+    if len({f.at_s for f in failed}) > 1:
+        raise _bad(",".join(map(str, failed)), "legs failed at different times",
+                   "give every leg the same @T (or none)")
     if len(legs) - len(failed) < 3:
         raise _bad(",".join(map(str, failed)), f"{len(legs) - len(failed)} leg(s) left",
                    "a statically stable gait needs at least three: fail fewer legs")
@@ -123,10 +146,18 @@ class LegFailure:
         self._held = chains.take(self.index)
         self.stride_share = 1.0
         """The share of the walking legs' walkspace the re-planned gait holds for (the speed limits' share)."""
+        self.at_s = self.failed[0].at_s if self.failed else None
+        """When the failures are declared, seconds after walking starts (``None``: from the start of the run)."""
+        self.gait: Gait | None = None
+        """The re-planned gait the controller changes to when the failures are declared mid-walk."""
+        self.sway = np.zeros((1, 2))
+        """The body's sway over the legs left through one gait cycle, ``(K, 2)`` [m] (samples evenly over the
+        cycle from the first group's lift-off: :func:`~shc_cli.control.gait_planner.sway_path`)."""
         self.shift = np.zeros(2)
-        """The body's shift over the legs left in the walk plane (x, y) [m], eased in over :data:`SHIFT_CYCLES`."""
-        self._shifted = 0
-        """The share of the walking legs' walkspace the re-planned gait holds for (the speed limits' share)."""
+        """The body's current shift (x, y) in the walk plane [m]: the sway at the walker's phase, reached at no more
+        than the sway's own speed (or :data:`SHIFT_RATE_MPS`) from where it is."""
+        self.max_step_m = 0.0
+        """Largest move of :attr:`shift` in one control cycle [m] (set with the sway)."""
 
     @property
     def legs(self) -> tuple[str, ...]:
@@ -153,12 +184,26 @@ class LegFailure:
             held[i] = pose
         return held
 
-    def posed(self, tips: FloatArray) -> FloatArray:
+    def set_sway(self, sway: FloatArray, period: int, time_delta: float) -> None:
+        """Use ``sway`` (``(K, 2)`` [m] over a cycle of ``period`` control cycles of ``time_delta`` [s]); the shift
+        may move per cycle 1.5 × as far as the sway does between two samples spread over their cycles, and at
+        least :data:`SHIFT_RATE_MPS`."""
+        self.sway = np.asarray(sway, dtype=float)
+        steps = np.abs(np.roll(self.sway, -1, axis=0) - self.sway).max() if len(self.sway) > 1 else 0.0
+        self.max_step_m = max(1.5 * float(steps) * len(self.sway) / max(period, 1), SHIFT_RATE_MPS * time_delta)
+
+    def posed(self, tips: FloatArray, phase: float | None) -> FloatArray:
         """Posed tips ``(L, 3)`` (base_link) with the body shifted by :attr:`shift` (the tips move by its
-        opposite), eased in linearly over the first :data:`SHIFT_CYCLES` calls."""
-        self._shifted = min(self._shifted + 1, SHIFT_CYCLES)
+        opposite): the shift moves towards the sway at ``phase`` of the gait cycle (the walker's; ``None``: not
+        walking, the sway where walking starts), by at most :attr:`max_step_m`."""
+        target = sway_at(self.sway, 0.0 if phase is None else phase)
+        step = target - self.shift
+        distance = float(np.abs(step).max())
+        if distance > self.max_step_m:
+            step *= self.max_step_m / distance
+        self.shift = self.shift + step
         moved = np.array(tips, dtype=float)
-        moved[:, :2] -= self.shift * (self._shifted / SHIFT_CYCLES)
+        moved[:, :2] -= self.shift
         return moved
 
     def active(self) -> np.ndarray | None:
@@ -172,6 +217,17 @@ class LegFailure:
     def tips(self, joints: FloatArray) -> FloatArray:
         """The failed legs' tips at ``joints`` ``(L, n)``, ``(F, 3)`` (base_link) [m]."""
         return self._held.tips(joints[self.index])
+
+
+def walk_phase(walker: WalkController | None) -> float | None:
+    """The walker's place in its gait cycle ∈ [0, 1) (0: the phase every leg starts walking from, when the first
+    group of a generated table lifts off), ``None`` when it is stopped: every leg's phase less its offset is the
+    same once walking starts (they all start at their offset and advance together)."""
+    if walker is None or walker.state == WalkState.STOPPED:
+        return None
+    integers = walker.legs.integers
+    period = walker.cycle.period
+    return float((int(integers[0, stepping.PHASE]) - int(integers[0, stepping.OFFSET])) % period) / period
 
 
 def margin_at(planned: PlannedGait, shift: FloatArray, stride_m: float, heading_rad: float = 0.0) -> float:
@@ -188,23 +244,6 @@ def margin_at(planned: PlannedGait, shift: FloatArray, stride_m: float, heading_
             return -math.inf
         worst = min(worst, float(np.min(-(equations[:, :2] @ shift + equations[:, 2]))))
     return worst
-
-
-def smallest_shift(planned: PlannedGait, stride_m: float, heading_rad: float = 0.0) -> FloatArray:
-    """The planner's body shift scaled down as far as the margin stays ≥ :data:`MIN_MARGIN_M` (the planner
-    maximises the margin, which can ask the legs for a long reach): bisection on the share of the shift (the
-    margin is concave in the shift, so it holds on the whole segment beyond the share found)."""
-    full = np.asarray(planned.body_shift_m[0], dtype=float)
-    if margin_at(planned, np.zeros(2), stride_m, heading_rad) >= MIN_MARGIN_M:
-        return np.zeros(2)
-    low, high = 0.0, 1.0
-    for _ in range(20):
-        mid = 0.5 * (low + high)
-        if margin_at(planned, mid * full, stride_m, heading_rad) >= MIN_MARGIN_M:
-            high = mid
-        else:
-            low = mid
-    return high * full
 
 
 @dataclass(frozen=True)
@@ -227,18 +266,24 @@ class Adapted:
 
 
 def _plan(stance: Mapping[str, tuple[float, float]], legs: Sequence[str], stride_m: float, heading_rad: float,
-          reach_m: float, failed: Sequence[FailedLeg]) -> tuple[PlannedGait, float]:
-    """The gait for the longest share of ``stride_m`` (:data:`STRIDE_SHARES`) a generated table holds for; the
-    stance positions are only moved (``reach_m``, a slow greedy search) at the shortest share."""
+          reach_m: float, failed: Sequence[FailedLeg]) -> tuple[PlannedGait, float, FloatArray]:
+    """The gait for the longest share of ``stride_m`` (:data:`STRIDE_SHARES`) a generated table and a body sway
+    (:func:`~shc_cli.control.gait_planner.sway_path`) hold for; the stance positions are only moved (``reach_m``,
+    a slow greedy search) at the shortest share."""
     for share in STRIDE_SHARES:
-        try:
-            return plan_gait(stance, legs, stride_m * share, heading_rad, MIN_MARGIN_M, name="planned",
-                             sway=False, reach_m=reach_m if share == STRIDE_SHARES[-1] else 0.0), share
-        except GaitPlanningError:
-            continue
-    raise _bad(",".join(map(str, failed)), f"no generated gait keeps a {MIN_MARGIN_M:g} m static margin on legs "
-               f"{', '.join(legs)} with one constant body shift, down to {STRIDE_SHARES[-1]:g} of their stride",
-               "fail fewer legs: a body swaying through the cycle is not applied yet")
+        for sway in (False, True):  # one constant shift where it holds (a steadier walk), else a sway
+            try:
+                planned = plan_gait(stance, legs, stride_m * share, heading_rad, MIN_MARGIN_M, name="planned",
+                                    sway=sway, reach_m=reach_m if share == STRIDE_SHARES[-1] else 0.0)
+            except GaitPlanningError:
+                continue
+            path = sway_path(planned, stride_m * share, heading_rad, MIN_MARGIN_M, SWAY_STRIDE_SHARES,
+                             SWAY_RATE_SHARE if sway else 0.0, reach_m)
+            if path is not None:
+                return planned, share, path
+    raise _bad(",".join(map(str, failed)), f"no generated gait and body sway keep a {MIN_MARGIN_M:g} m static "
+               f"margin on legs {', '.join(legs)}, down to {STRIDE_SHARES[-1]:g} of their stride",
+               "fail fewer legs")
 
 
 def adapt(robot: Robot, failed: Sequence[FailedLeg], heading_rad: float = 0.0) -> Adapted:
@@ -260,7 +305,7 @@ def adapt(robot: Robot, failed: Sequence[FailedLeg], heading_rad: float = 0.0) -
     reach = min(min(plane.values()) for plane in failure.walking(planes).values())
     stride = 2.0 * space[bearing]  # OpenSHC's largest stride; the limits scale it down for the gait's timing
     for _ in range(3):  # the stride the walker will take with the gait chosen for it (a fixed point)
-        planned, share = _plan(stance, legs, stride, heading_rad, reach, failed)
+        planned, share, sway = _plan(stance, legs, stride, heading_rad, reach, failed)
         gait = planned.gait.model_copy(update={"offset_multiplier": {
             leg: planned.gait.offset_multiplier.get(leg, 0) for leg in robot.legs}})
         cycle = step_cycle(gait, robot.walker.step_frequency.default, robot.time_delta)
@@ -273,7 +318,15 @@ def adapt(robot: Robot, failed: Sequence[FailedLeg], heading_rad: float = 0.0) -
             break
         stride = walked / share
     stride *= share
-    failure.shift = smallest_shift(planned, stride, heading_rad)
+    swaying = bool(np.ptp(sway, axis=0).max() > 0.0)
+    failure.gait = gait
+    relocated = any(planned.stance[leg] != stance[leg] for leg in legs)
+    if failure.at_s is not None and relocated:
+        raise _bad(",".join(map(str, failed)), "the legs left only walk with their stance positions moved",
+                   "fail these legs from the start (drop @T)")
+    walked_sway = sway_path(planned, stride, heading_rad, MIN_MARGIN_M, SWAY_STRIDE_SHARES,
+                            SWAY_RATE_SHARE if swaying else 0.0, reach)  # at the stride walked
+    failure.set_sway(sway if walked_sway is None else walked_sway, cycle.period, robot.time_delta)
     legs_spec = {}
     for leg, spec in robot.legs.items():
         x, y = planned.stance.get(leg, stance[leg])

@@ -56,6 +56,7 @@ STOP_TIMEOUT_S = 10.0
 """Longest controlled stop and shut-down after Ctrl-C, beyond the sequences' own time, before the torque goes off
 anyway [s]."""
 OnFault = Literal["hold", "torque-off"]
+OnServoFault = Literal["hold", "torque-off", "adapt"]
 
 
 class HardwareConfig(BaseModel):
@@ -74,7 +75,8 @@ class HardwareConfig(BaseModel):
         out: run directory (None: ``runs/<timestamp>-run-hw``).
         dry_run: everything except current-limit, torque-enable and goal writes.
         stop_state: the state to shut down to: ``packed``, ``ready`` or ``running``.
-        on_fault: on a servo fault, ``hold`` or ``torque-off``.
+        on_fault: on a servo fault, ``hold`` or ``torque-off``; ``adapt``: a fault of one leg's servos fails that leg
+            and the others walk on (:mod:`shc_cli.loop.leg_fault`; any other fault: torque off).
         on_stop: after the controlled stop, ``hold`` or ``torque-off``.
         profile_velocity: also write Profile Velocity.
         watchdog: stdin: seconds without a line before the velocity goes to 0 [s].
@@ -86,6 +88,8 @@ class HardwareConfig(BaseModel):
             ``hardware.missed_reads_fault``, default 3).
         policy: a ``gait`` or ``residual`` policy file acting on the controller while it walks
             (:mod:`shc_cli.loop.policy.drive`; the start-up, stop, clamps and fault checks unchanged).
+        fail_leg: legs declared failed, ``LEG[:MODE][@T]`` comma-separated (:func:`shc_cli.domain.simulate.
+            failed_legs`): the controller holds them and walks the gait re-planned for the legs left.
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -94,7 +98,7 @@ class HardwareConfig(BaseModel):
     ports: list[str]
     baud: int | None = None
     gait: str | None = None
-    on_fault: OnFault = "torque-off"
+    on_fault: OnServoFault = "torque-off"
     on_stop: OnFault = "torque-off"
     stop_state: str = "packed"
     input_mode: str = "timeline"
@@ -111,6 +115,7 @@ class HardwareConfig(BaseModel):
     live_port: int = 8765
     missed_reads_fault: int | None = None
     policy: Path | None = None
+    fail_leg: str | None = None
 
     @field_validator("missed_reads_fault")
     @classmethod
@@ -123,8 +128,11 @@ class HardwareConfig(BaseModel):
     @field_validator("on_fault", "on_stop", mode="before")
     @classmethod
     def _hold_or_off(cls, value: object, info: ValidationInfo) -> object:
-        check_choice("--" + str(info.field_name).replace("_", "-"), value, ("hold", "torque-off"),
-                     "hold or torque-off")
+        if info.field_name == "on_fault":
+            check_choice("--on-fault", value, ("hold", "torque-off", "adapt"), "hold, torque-off or adapt")
+        else:
+            check_choice("--" + str(info.field_name).replace("_", "-"), value, ("hold", "torque-off"),
+                         "hold or torque-off")
         return value
 
     @field_validator("stop_state")
@@ -195,8 +203,8 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
     pacing (tests: an emulated bus on a virtual clock, :class:`~shc_cli.backends.dynamixel.DynamixelBackend`)."""
     from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Controller
-    from shc_cli.control.verified_limits import source_for
     from shc_cli.domain.live import open_live
+    from shc_cli.domain.simulate import failed_legs, speed_source
     from shc_cli.hardware.buses import servo_bus
     from shc_cli.loop.input_choice import commands_file, open_input
     from shc_cli.loop.path_input import keep_path
@@ -211,9 +219,13 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
     if c.path is not None and c.input_mode != "timeline":
         raise SpecError([Issue(None, None, "--path", f"--path and --input {c.input_mode} both give the run's input",
                                "drop --input (a path is followed by itself)")])
+    if c.fail_leg and c.on_fault == "adapt":
+        raise SpecError([Issue(None, None, "--on-fault", "adapt plans for one failed leg of a robot with every leg "
+                               "walking, and --fail-leg fails legs already", "drop one of --on-fault adapt and "
+                               "--fail-leg")])
     inputs = load_inputs(c.robot, c.gait, c.velocity, c.duration, commands_file(c.input_mode, c.commands),
                          default_s=20.0, path=c.path)
-    robot, gait = inputs.robot, inputs.gait
+    robot, gait, failure = failed_legs(inputs.robot, inputs.gait, c.fail_leg, c.velocity)
     drive = None if c.policy is None else PolicyDrive.load(c.policy, robot, hardware=True)
     bus = servo_bus(robot, c.ports, c.baud, c.profile_velocity)  # the servo models' protocol
     source: InputSource | None = None
@@ -228,7 +240,7 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
         backend = DynamixelBackend(robot, bus, c.dry_run, run, c.on_fault, c.on_stop, clock=clock or time.perf_counter,
                                    sleep=sleep or time.sleep, missed_reads_fault=c.missed_reads_fault)
         controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
-                                direct_shutdown=True, speed_shares=source_for(robot))
+                                direct_shutdown=True, failure=failure, speed_shares=speed_source(robot, failure))
         run.write_robot(robot)
         if inputs.path is not None:
             source.close()
@@ -237,6 +249,11 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
         dt = robot.time_delta
         stop = STATES[c.stop_state]
         action = "holding" if c.on_fault == "hold" else "torque off"
+        absorb = None
+        if c.on_fault == "adapt":
+            from shc_cli.loop.leg_fault import LegFaultAdapter
+
+            absorb = LegFaultAdapter(robot, controller, backend)
         observers: list[Observer[BusState]] = []
         if c.live:
             stream, outputs = open_live(c.live_port, robot, controller, sensors=False, joint_states=True)
@@ -245,7 +262,8 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
                        LogRecorder(run, robot, backend),
                        StartUp.of(robot, hardware=True),
                        ControlledStop(stop, STOP_TIMEOUT_S), observers=observers, flush_every=100,
-                       on_fault=lambda text: event(log, logging.ERROR, "fault_action", "fault: %s — %s", text, action))
+                       on_fault=lambda text: event(log, logging.ERROR, "fault_action", "fault: %s — %s", text, action),
+                       absorb=absorb)
         if drive is not None:
             drive.join(loop)
 
@@ -266,6 +284,7 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
                 "input": "path" if c.path is not None else c.input_mode,
                 "watchdog_trips": getattr(source, "watchdog_trips", 0),
                 "odometry_pose": list(controller.odometry.pose), **path_fields(),
+                "failed_legs": list(backend.failed_legs) if c.on_fault == "adapt" else None,
             })
 
         path, summary, _ = execute(loop, run, summarise, after_loop=release)

@@ -109,9 +109,9 @@ SIMULATE: dict[str, Option] = {option.name: option for option in (
     Option("imu_posing", bool, None, "OpenSHC IMU levelling [default: robot file]."),
     Option("inclination", str, None, "Inclination posing: off, openshc or support_centroid [default: robot file]."),
     Option("admittance", bool, None, "Admittance control [default: robot file]."),
-    Option("fail_leg", str, None, "Failed legs from the start, LEG[:MODE] (repeatable, or comma-separated), MODE "
-           "retracted (default: folded clear of the ground) or locked (held where walking begins); the gait is "
-           "re-planned for the legs left."),
+    Option("fail_leg", str, None, "Failed legs, LEG[:MODE][@T] (repeatable, or comma-separated), MODE "
+           "retracted (default: folded clear of the ground) or locked (held where walking begins); from the start, "
+           "or T s after walking starts; the gait is re-planned for the legs left."),
     Option("fail_on_fall", bool, False, "Exit with code 4 when the robot fell."),
     Option("overwrite", bool, False, "Replace an existing run directory at --out (when the new run finishes)."),
     Option("engine", str, "mujoco", "Physics engine: mujoco or pybullet."),

@@ -37,8 +37,7 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
     """
     from shc_cli.backends.kinematic import KinematicBackend
     from shc_cli.control.controller import Controller
-    from shc_cli.control.verified_limits import source_for
-    from shc_cli.domain.simulate import failed_legs
+    from shc_cli.domain.simulate import failed_legs, speed_source
     from shc_cli.loop.path_input import keep_path
     from shc_cli.loop.plan_summary import PlanRecord, plan_summary
     from shc_cli.loop.run_inputs import load_inputs
@@ -50,7 +49,7 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
     model, walked_gait, failure = failed_legs(inputs.robot, inputs.gait, fail_leg, velocity)
     directory = out or default_run_directory("plan")
     controller = Controller(model, walked_gait, pose_sets=inputs.pose_sets, failure=failure,
-                            speed_shares=None if failure else source_for(model))
+                            speed_shares=speed_source(model, failure))
     writer = RunWriter(directory, model, overwrite)
     writer.write_robot(model)
     source = inputs.source(controller)
@@ -58,6 +57,10 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
     record = PlanRecord(controller)
     start_up = StartUp.of(model)
     observers: list[Observer[None]] = [record]
+    if failure is not None and failure.at_s is not None:
+        from shc_cli.loop.leg_fault import FailureEvents
+
+        observers.append(FailureEvents(controller))
     stream = open_live(live_port, model, controller, sensors=False) if live else None
     if stream is not None:
         observers.append(stream[1])

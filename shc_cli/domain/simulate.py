@@ -16,6 +16,7 @@ if TYPE_CHECKING:
     from shc_cli.backends.engine import Reading
     from shc_cli.control.controller import Command, CycleOutput
     from shc_cli.control.leg_failure import LegFailure
+    from shc_cli.control.speed_shares import ShareSource
     from shc_cli.loop.run_loop import LoopResult
     from shc_cli.record.summary import RunSummary
     from shc_cli.spec.gait import Gait
@@ -61,12 +62,24 @@ def failed_legs(robot: Robot, gait: Gait, fail_leg: str | None, velocity: str = 
         vx, vy = 1.0, 0.0
     adapted = adapt(robot, failed, math.atan2(vy, vx) if (vx or vy) else 0.0)
     planned = adapted.planned
-    event(log, logging.INFO, "leg_failure", "failed legs %s: walking on %s with a generated gait (%s, duty "
+    at = adapted.failure.at_s
+    event(log, logging.INFO, "leg_failure", "failed legs %s%s: walking on %s with a generated gait (%s, duty "
           "factor %.3f, static margin %.3f m at a %.3f m stride, body shifted %+.3f, %+.3f m)",
-          ", ".join(map(str, failed)), ", ".join(leg for leg in robot.legs if leg not in adapted.failure.legs),
+          ", ".join(map(str, failed)), "" if at is None else f" (declared {at:g} s after walking starts)",
+          ", ".join(leg for leg in robot.legs if leg not in adapted.failure.legs),
           " → ".join("+".join(group) for group in planned.groups), planned.duty_factor, planned.margin_m,
           adapted.stride_m, planned.body_shift_m[0][0], planned.body_shift_m[0][1], terminal=False)
+    if at is not None:  # the intact robot walks until the failure is declared (the controller then re-plans)
+        return robot, gait, adapted.failure
     return adapted.robot, adapted.gait, adapted.failure
+
+
+def speed_source(robot: Robot, failure: LegFailure | None) -> ShareSource | None:
+    """The verified speed shares of ``robot`` unless legs have failed from the start (then OpenSHC's limits of
+    the walking legs' walkspace; a failure declared mid-walk drops the shares when it is declared)."""
+    from shc_cli.control.verified_limits import source_for
+
+    return source_for(robot) if failure is None or failure.at_s is not None else None
 
 
 def simulate(config: SimulationConfig | None = None, progress: OnProgress | None = None) -> RunResult:
@@ -78,7 +91,6 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     """
     from shc_cli.backends.simulated import SimulatedBackend, open_world
     from shc_cli.control.controller import Controller
-    from shc_cli.control.verified_limits import source_for
     from shc_cli.errors import Issue, SpecError
     from shc_cli.events import event
     from shc_cli.loop.input_choice import commands_file, is_live, open_input
@@ -111,7 +123,7 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
             world = open_world(robot, options)
             with SimulatedBackend(robot, world) as backend:
                 controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
-                                        failure=failure, speed_shares=None if failure else source_for(robot))
+                                        failure=failure, speed_shares=speed_source(robot, failure))
                 run.write_robot(robot)
                 if inputs.path is not None:
                     source.close()
@@ -120,6 +132,10 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
                 record = PhysicsRecord(robot, backend, o.airborne)
                 counter = None if progress is None or by_hand else _Progress(progress, inputs.cycles)
                 observers: list[Observer[Reading]] = [record] if counter is None else [record, counter]
+                if failure is not None and failure.at_s is not None:
+                    from shc_cli.loop.leg_fault import FailureEvents
+
+                    observers.append(FailureEvents(controller))
                 live = open_live(o.live_port, robot, controller, sensors=True) if o.live else None
                 if live is not None:
                     observers.append(live[1])

@@ -145,6 +145,9 @@ class ServoBus:
             so the servos interpolate between goals.
     """
 
+    skipped: frozenset[int] = frozenset()
+    """Slots no goal is written to any more (a failed leg's servos, ``run-hw --on-fault adapt``)."""
+
     def __init__(self, robot: Robot, ports: list[str] | str, baud: int | None = None,
                  profile_velocity: bool = False) -> None:
         hardware = robot.hardware
@@ -434,11 +437,15 @@ class ServoBus:
             writer = GroupSyncWrite(line.port, self._handler, address, length)
             payload = bytearray()
             for index in line.slots:
+                if index in self.skipped:
+                    continue
                 data = int(ticks[index]).to_bytes(4, "little", signed=True)
                 if self.profile_velocity:
                     data = int(speed[index]).to_bytes(4, "little") + data
                 writer.addParam(self.slots[index].servo_id, data)
                 payload += bytes([self.slots[index].servo_id]) + data
+            if not payload:
+                continue
             if p2.needs_stuffing(bytes(payload)):
                 raise HardwareError(f"{line.name}: a goal payload contains FF FF FD, which dynamixel-sdk would send "
                                     "unstuffed")

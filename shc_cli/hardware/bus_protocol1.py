@@ -384,12 +384,13 @@ class Protocol1Bus(ServoBus):
             if not line.slots:
                 continue
             data = {}
-            for index in line.slots:
+            for index in (i for i in line.slots if i not in self.skipped):
                 payload = int(ticks[index]).to_bytes(2, "little")
                 if self.profile_velocity:
                     payload += self._speed_payload(int(speed[index]))
                 data[self.slots[index].servo_id] = payload
-            self._sync_write(line, address, length, data)
+            if data:
+                self._sync_write(line, address, length, data)
 
     def _goal_layout(self) -> tuple[int, int]:
         """(address, length) of the goal write: Goal Position, + Moving Speed with ``profile_velocity``."""

@@ -172,18 +172,24 @@ class RunLoop(Generic[ReadingT]):
         observers: called after each recorded cycle; a returned text stops the run.
         flush_every: flush the recorder every this many cycles.
         on_fault: told each fault's text as it happens (e.g. to print it).
+        absorb: told a fault mid-run before it stops the run; True: walked on from it (the run stops only if the
+            backend still reports one).
     """
 
     def __init__(self, controller: Controller, backend: Backend[ReadingT], source: InputSource,
                  recorder: Recorder[ReadingT],
                  start_up: StartUp | None, controlled_stop: ControlledStop | None = None,
                  observers: Sequence[Observer[ReadingT]] = (), flush_every: int = 200,
-                 on_fault: Callable[[str], None] | None = None) -> None:
+                 on_fault: Callable[[str], None] | None = None,
+                 absorb: Callable[[str], bool] | None = None) -> None:
         self.controller, self.backend, self.source, self.recorder = controller, backend, source, recorder
         self.start_up, self.controlled_stop = start_up, controlled_stop
         self.observers = list(observers)
         self.flush_every = flush_every
         self.on_fault = on_fault
+        self.absorb = absorb
+        """Told a fault mid-run first: True when it was walked on from (``run-hw --on-fault adapt``), which ends
+        no run unless the backend still reports a fault."""
         self.dt = controller.robot.time_delta
         self.started = start_up is None
         self.stop_reason: str | None = None
@@ -305,6 +311,8 @@ class RunLoop(Generic[ReadingT]):
         backend.advance()
         reading = backend.read()
         fault = backend.fault()
+        if fault is not None and self.absorb is not None and self.absorb(fault):
+            fault = backend.fault()  # what is left once the failed legs' servos are set aside
         if fault is not None:  # the reading is not trusted: no row, no further target
             self._fault(fault)
             self._over = True

@@ -223,6 +223,8 @@ class RunSummary(BaseModel):
     missed_reads_fault: NonNegativeInt | None = Field(None, description="run-hw, ros on a bus: consecutive cycles "
                                                                         "without a servo's reading that are a fault "
                                                                         "(hardware.missed_reads_fault).")
+    failed_legs: list[str] | None = Field(None, description="run-hw --on-fault adapt: the legs failed by a servo "
+                                                            "fault and walked on without (empty: none).")
     fault: str | None = Field(None, description="run-hw: the fault that ended the run (names the servo); null "
                                                 "when none.")
     stopped_by_request: bool | None = Field(None, description="run-hw: the run ended by a stop request or the "
