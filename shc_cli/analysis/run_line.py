@@ -65,7 +65,7 @@ def simulation_line(summary: RunSummary, terrain: str, path: Path, note: str = "
                      else f"CoT: {NOT_MEASURED}")
     line = ", ".join(parts)
     if summary.fell:
-        line += ", FELL"
+        line += f", FELL ({summary.fall})" if summary.fall else ", FELL"
     elif walking:
         line += progress_note(summary)
         if window > 0.0:
