@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from shc_cli.control.controller import Command, Controller, RobotState
-from shc_cli.loop.physics_summary import FALL_TILT, PhysicsRecord
+from shc_cli.loop.physics_summary import DIVERGED, FALL_TILT, MAX_BODY_SPEED, START_UP_GRACE_S, PhysicsRecord
 from shc_cli.spec.loading import bundled, load_gait, load_robot
 
 from .conftest import ROOT
@@ -67,25 +67,49 @@ def test_every_bundled_robot_stands_above_the_ground(robot: str) -> None:
 
 
 def _record(state: RobotState, rpy: tuple[float, float, float], height: float) -> tuple[str | None, PhysicsRecord]:
+    """A fall check of ``bullet`` fed one reading at cycle 3, and again as long after as a start-up fall waits
+    (:data:`START_UP_GRACE_S`, 2 s): what the second call says (the first said nothing unless RUNNING)."""
     robot = load_robot("bullet").robot
     backend = SimpleNamespace(world=SimpleNamespace(physics_time=0.0))
     record = PhysicsRecord(robot, backend, airborne=False)  # type: ignore[arg-type]
     reading = SimpleNamespace(rpy=np.array(rpy), body_height=height, position=np.zeros(3),
                               linear_velocity=np.zeros(3))
-    return record(3, None, SimpleNamespace(robot_state=state), reading), record  # type: ignore[arg-type]
+    out = SimpleNamespace(robot_state=state)
+    first = record(3, None, out, reading)  # type: ignore[arg-type]
+    if state == RobotState.RUNNING:
+        return first, record
+    assert first is None and not record.fell
+    later = 3 + round(START_UP_GRACE_S / robot.time_delta)
+    return record(later, None, out, reading), record  # type: ignore[arg-type]
 
 
 @pytest.mark.parametrize("state", [RobotState.PACKED, RobotState.READY, RobotState.UNKNOWN])
 def test_a_flip_during_start_up_is_a_fall(state: RobotState) -> None:
+    """Confirmed 2 s later (a blow-up would show its speed by then), dated by the cycle it was first seen."""
     reason, record = _record(state, (0.0, FALL_TILT + 0.05, 0.0), 0.05)
     assert reason == "fell" and record.fell and record.fall is not None
-    assert record.fall.startswith("flipped during start-up at 0.03 s")
+    assert record.fall.startswith("flipped during start-up at 0.03 s"), record.fall
     assert record.max_tilt == 0.0 and record.whole_max_tilt == pytest.approx(FALL_TILT + 0.05)
 
 
+def test_a_blow_up_after_a_start_up_flip_is_named_diverged() -> None:
+    """A reading past MAX_BODY_SPEED within the grace: the run stops as diverged, not fallen."""
+    robot = load_robot("bullet").robot
+    record = PhysicsRecord(robot, SimpleNamespace(world=SimpleNamespace(physics_time=0.0)),  # type: ignore[arg-type]
+                           airborne=False)
+    out = SimpleNamespace(robot_state=RobotState.READY)
+    flipped = SimpleNamespace(rpy=np.array([FALL_TILT + 0.1, 0.0, 0.0]), body_height=0.1, position=np.zeros(3),
+                              linear_velocity=np.zeros(3))
+    assert record(5, None, out, flipped) is None  # type: ignore[arg-type]
+    fast = SimpleNamespace(rpy=flipped.rpy, body_height=0.1, position=np.zeros(3),
+                           linear_velocity=np.array([0.0, 0.0, MAX_BODY_SPEED + 1.0]))
+    assert record(30, None, out, fast) == DIVERGED  # type: ignore[arg-type]
+    assert not record.fell
+
+
 def test_a_launch_is_a_fall_and_a_low_body_during_start_up_is_not() -> None:
-    """bullet: body clearance 0.14 m … its legs' length; thrown up past twice the two; a body still on the ground
-    while it starts up (height 0) is the start, not a collapse."""
+    """bullet: thrown up past twice its body clearance plus its legs' length; a body still on the ground while
+    it starts up (height 0) is the start, not a collapse; while walking it is."""
     robot = load_robot("bullet").robot
     legs = max(sum(math.hypot(j.r, j.d) for j in leg.joints.values()) for leg in robot.legs.values())
     limit = 2.0 * (robot.walker.body_clearance + legs)
@@ -100,7 +124,8 @@ def test_a_launch_is_a_fall_and_a_low_body_during_start_up_is_not() -> None:
 def test_a_robot_thrown_up_in_its_start_up_stops_as_fallen_exit_4(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """The robot validate refuses, simulated anyway (the check switched off): its knees start in the floor and
     MuJoCo throws it up in its first cycles. Before, falls were checked only while walking: it flew on with
-    ``fell: false``. Now the run stops there, says how, and exits 4 with --fail-on-fall."""
+    ``fell: false``. Now the run stops 2 s later (:data:`START_UP_GRACE_S`), says how and when, and exits 4 with
+    --fail-on-fall."""
     import shc_cli.validation
 
     monkeypatch.setattr(shc_cli.validation, "_standing_in_ground", lambda loaded, robot: [])
@@ -111,7 +136,8 @@ def test_a_robot_thrown_up_in_its_start_up_stops_as_fallen_exit_4(tmp_path: Path
     assert code == 4, out + err
     assert summary["fell"] is True and summary["stop_reason"] == "fell"
     assert summary["fall"].startswith("thrown up during start-up")
-    assert summary["sim_time_s"] < 1.0  # stopped within its start-up (6 s)
+    assert summary["fall"].startswith("thrown up during start-up at 0.09 s")
+    assert summary["sim_time_s"] < 3.0  # stopped 2 s after, within its start-up (6 s)
     assert "FELL (thrown up during start-up" in out
 
 

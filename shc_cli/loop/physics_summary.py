@@ -4,8 +4,9 @@
 cycle, start-up included, body tilt above :data:`FALL_TILT` (a flip) or (on the ground) the body higher than
 :data:`LAUNCH_SHARE` of its standing height plus a leg's length (thrown up: a knee pushed through the floor);
 while RUNNING also the body lower than :data:`FALL_HEIGHT_SHARE` of the body clearance (a start-up rises from the
-ground) — and times the RUNNING part. Its summary is made from the finished log (``log.csv``, read back): the
-speeds, power and cost of transport are :func:`shc_cli.analysis.metrics.walk_figures` over the RUNNING rows, the numbers
+ground); a fall seen during start-up is confirmed :data:`START_UP_GRACE_S` later — and times the RUNNING part.
+Its summary is made from the finished log (``log.csv``, read back): the speeds, power and cost of transport are
+:func:`shc_cli.analysis.metrics.walk_figures` over the RUNNING rows, the numbers
 ``shc analyze`` gives for the same window.
 """
 
@@ -44,6 +45,10 @@ _MAX_SPEED_SQUARED = MAX_BODY_SPEED * MAX_BODY_SPEED
 LAUNCH_SHARE = 2.0
 """The robot was launched when its body is higher above the terrain than this many times its standing height
 plus its longest leg's length (no gait lifts a body above the height its straight legs reach)."""
+START_UP_GRACE_S = 2.0
+"""A fall seen during start-up stops the run this long after it [s] (at once once RUNNING), unless the physics
+diverges first: a blow-up tips the body over before its speed shows it (ATHENA at a 20 Hz physics rate flips at
+1.0 s and passes :data:`MAX_BODY_SPEED` at 2.0 s), and a diverged run says what to change."""
 DIVERGED = "diverged"
 """The stop reason of a run whose physics blew up (:meth:`PhysicsRecord.__call__`)."""
 
@@ -75,6 +80,8 @@ class PhysicsRecord:
         self.log: RunLog | None = None
         """The finished log, once :meth:`summary` has read it."""
         self._running_since: tuple[float, float] | None = None
+        self._pending: tuple[int, str] | None = None
+        """A fall seen during start-up (its cycle and how), confirmed :data:`START_UP_GRACE_S` later."""
 
     def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: Reading) -> str | None:
         self.cycles += 1
@@ -93,16 +100,16 @@ class PhysicsRecord:
         height = reading.body_height
         low = running and height < self.low_height and not self.airborne
         high = height > self.high_height and not self.airborne
-        if angle > FALL_TILT or low or high:
+        if self._pending is None and (angle > FALL_TILT or low or high):
             phase = "walking" if running else "during start-up"
             how = "flipped" if angle > FALL_TILT else ("thrown up" if high else "collapsed")
-            self.fell = True
-            self.fall = (f"{how} {phase} at {cycle * self.robot.time_delta:.2f} s: body tilt {angle:.3f} rad (limit "
-                         f"{FALL_TILT:g}), height {height:.3f} m (limits {self.low_height:.3f} … "
-                         f"{self.high_height:.3f})")
-            event(log, logging.WARNING, "fell", "fell: body tilt %.3f rad (limit %.3f), height %.3f m (limits %.3f … "
-                  "%.3f), %s %s", angle, FALL_TILT, height, self.low_height, self.high_height, how, phase,
-                  cycle=cycle, terminal=False)
+            self._pending = (cycle, f"{how} {phase} at {cycle * self.robot.time_delta:.2f} s: body tilt {angle:.3f} "
+                                    f"rad (limit {FALL_TILT:g}), height {height:.3f} m (limits {self.low_height:.3f} "
+                                    f"… {self.high_height:.3f})")
+        if self._pending is not None and (running or (cycle - self._pending[0]) * self.robot.time_delta
+                                          >= START_UP_GRACE_S):
+            self.fell, self.fall = True, self._pending[1]
+            event(log, logging.WARNING, "fell", "fell: %s", self.fall, cycle=self._pending[0], terminal=False)
             return "fell"
         return None
 
