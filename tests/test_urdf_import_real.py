@@ -29,6 +29,7 @@ DESCRIPTIONS = {
     "octapod": (DATA / "octapod_spider_sai_raghava.urdf", 8),
     "solo12": (DATA / "solo12_odri.urdf", 4),
     "spot_micro": (DATA / "spot_micro_mike4192.urdf", 4),
+    "hexaross": (DATA / "hexaross_description" / "urdf" / "hexapod.urdf", 6),
 }
 FALLS: set[str] = set()
 """Descriptions that fall in 10 s of simulation, and why: tests/data/robots/README.md (Spot Micro fell until the
