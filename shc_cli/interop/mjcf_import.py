@@ -67,7 +67,7 @@ def load(path: Path) -> tuple[Any, list[str]]:
                        "reads no mesh; a body's mass or inertia from its meshes is then lost)"]
 
 
-def _without_meshes(path: Path) -> Any:
+def _without_meshes(path: Path) -> object:
     """``path`` compiled with every mesh geom and mesh asset deleted (MuJoCo's MjSpec), or the first line of
     MuJoCo's error if it still fails."""
     import mujoco
