@@ -23,15 +23,18 @@ def test_a_missing_mesh_file_is_left_out_with_a_note(tmp_path: Path, capsys, mon
     pytest.importorskip("mujoco")
     text = QUADRUPED.read_text()
     meshed = text.replace('<compiler angle="radian"/>', '<compiler angle="radian" meshdir="assets"/>\n'
-                          '  <asset><mesh name="trunk_mesh" file="trunk.stl"/></asset>', 1).replace(
+                          '  <asset><mesh name="trunk_mesh" file="trunk.stl"/><texture type="2d" name="skin" '
+                          'file="skin.png"/><material name="skin" texture="skin"/></asset>', 1).replace(
         '<geom type="box" size="0.19 0.05 0.055"/>',
-        '<geom type="box" size="0.19 0.05 0.055"/>\n      <geom class="visual" type="mesh" mesh="trunk_mesh"/>', 1)
+        '<geom type="box" size="0.19 0.05 0.055" material="skin"/>\n      <geom class="visual" type="mesh" '
+        'mesh="trunk_mesh"/>', 1)
     assert meshed.count("trunk_mesh") == 2
     source = tmp_path / "mjcf_quadruped.xml"
     source.write_text(meshed)
     code, out, err = run(["import", "mjcf", str(source), "--out", str(tmp_path / "meshed")], capsys, monkeypatch)
     assert code == 0, err
-    assert "note: a mesh file is missing (assets/trunk.stl): loaded without the mesh geoms and assets" in out, out
+    assert "note: a file it names is missing (assets/trunk.stl): loaded without its mesh geoms, meshes and textures" \
+        in out, out
     assert "largest tip difference to MuJoCo's (mj_kinematics)" in out
     code, _, err = run(["import", "mjcf", str(QUADRUPED), "--out", str(tmp_path / "plain")], capsys, monkeypatch)
     assert code == 0, err

@@ -46,9 +46,10 @@ def _fail(path: Path, problem: str, fix: str) -> SpecError:
 def load(path: Path) -> tuple[Any, list[str]]:
     """MuJoCo's compiled model of ``path`` and the notes on how it was loaded (one line if MuJoCo refuses it).
 
-    Mesh files the MJCF names but that are not there (a description copied without its assets, a repository whose
-    large meshes did not come with it) do not stop the import, which reads no mesh: the file is compiled again
-    without its mesh geoms and mesh assets (:func:`_without_meshes`) and a note names the missing file."""
+    Mesh or texture files the MJCF names but that are not there (a description copied without its assets, a
+    repository whose large meshes did not come with it) do not stop the import, which reads neither: the file is
+    compiled again without its mesh geoms, meshes and textures (:func:`_without_meshes`) and a note names the
+    missing file."""
     import mujoco
 
     if not path.is_file():
@@ -63,13 +64,13 @@ def load(path: Path) -> tuple[Any, list[str]]:
             raise _fail(path, f"MuJoCo cannot load it: {model}",
                         "check the MJCF (python -m mujoco.viewer opens it)") from None
         missing = first.split("Error opening file", 1)[1].strip(" :'\"")
-        return model, [f"a mesh file is missing ({missing}): loaded without the mesh geoms and assets (the import "
-                       "reads no mesh; a body's mass or inertia from its meshes is then lost)"]
+        return model, [f"a file it names is missing ({missing}): loaded without its mesh geoms, meshes and textures "
+                       "(the import reads none; a body's mass or inertia from its meshes is then lost)"]
 
 
 def _without_meshes(path: Path) -> object:
-    """``path`` compiled with every mesh geom and mesh asset deleted (MuJoCo's MjSpec), or the first line of
-    MuJoCo's error if it still fails."""
+    """``path`` compiled with every mesh geom, mesh and texture deleted (MuJoCo's MjSpec; materials keep their
+    colours), or the first line of MuJoCo's error if it still fails."""
     import mujoco
 
     try:
@@ -78,6 +79,10 @@ def _without_meshes(path: Path) -> object:
             spec.delete(geom)
         for mesh in list(spec.meshes):
             spec.delete(mesh)
+        for texture in list(spec.textures):  # image files go missing with the meshes
+            spec.delete(texture)
+        for material in spec.materials:
+            material.textures = [""] * len(material.textures)
         return spec.compile()
     except (ValueError, RuntimeError) as error:
         lines = str(error).strip().splitlines()
