@@ -24,6 +24,9 @@ REACH_TOLERANCE = 0.001
 MIN_STANCE_SEPARATION = 0.02
 """Smallest distance between two legs' stance positions [m] (or two foot diameters, if larger)."""
 MIN_LEGS_IN_STANCE = 2
+GROUND_TOLERANCE = 0.002
+"""How far a link's joint origins may reach below the ground in the standing pose before validation refuses it
+[m]."""
 
 
 def check_robot(loaded: LoadedRobot) -> list[Issue]:
@@ -34,6 +37,8 @@ def check_robot(loaded: LoadedRobot) -> list[Issue]:
         issues = _mirrors(loaded, robot)
     if not issues:
         issues = _stance_reachable(loaded, robot)
+    if not issues:
+        issues = _standing_in_ground(loaded, robot)
     if not issues:
         issues = _hardware(loaded, robot)
     return one_per_mistake(issues, loaded.mirrors)
@@ -260,6 +265,53 @@ def _stance_reachable(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
                 "move the stance towards the leg's base, lower walker.body_clearance or widen the joint limits",
             ))
     return issues
+
+
+def standing_depths(robot: Robot) -> list[tuple[str, float]]:
+    """How far below the ground each link stands in the pose the direct start-up ends in (``plan_direct_startup``
+    from OpenSHC's initial joints, the body at ``body_clearance`` and the feet on the ground), deepest first: the
+    body box and, per leg, the link each joint moves — the straight line between its joint's origin and the next
+    (a knee), not the simulation's capsule round it (:mod:`shc_cli.model.body`) — as ``(name, depth [m])`` for
+    those deeper than :data:`GROUND_TOLERANCE`. The ground is where the simulation stands the feet: the largest
+    foot radius below the walk plane."""
+    from shc_cli.control.startup import plan_direct_startup
+    from shc_cli.model.body import body_model
+    from shc_cli.model.chains import Chains
+
+    chains = Chains.from_robot(robot)
+    model = body_model(robot)
+    ground = -robot.walker.body_clearance - max(leg.foot.radius for leg in model.legs)
+    depths = []
+    torso = model.torso
+    depths.append(("body", ground - (torso.com[2] - torso.size[2] / 2.0)))
+    standing = plan_direct_startup(robot, chains, chains.default_joints())
+    origins = chains.frames_in_base(standing[None])[0][:, :, :3, 3]
+    for i, leg in enumerate(model.legs):
+        for k, segment in enumerate(leg.segments):
+            lowest = min(float(origins[i, k, 2]), float(origins[i, k + 1, 2]))
+            depths.append((f"link {segment.link} (leg {leg.id})", ground - lowest))
+    deep = [(name, depth) for name, depth in depths if depth > GROUND_TOLERANCE]
+    return sorted(deep, key=lambda item: -item[1])
+
+
+def _standing_in_ground(loaded: LoadedRobot, robot: Robot) -> list[Issue]:
+    """No link of the standing pose the direct start-up reaches may stand in the ground (a knee below the feet:
+    the physics would throw the robot up as it rises). Not checked with the stepped start-up sequence, whose
+    pose comes from the pack/unpack configurations."""
+    if robot.start_up.sequence:
+        return []
+    deep = standing_depths(robot)
+    if not deep:
+        return []
+    name, depth = deep[0]
+    more = f" (and {len(deep) - 1} more links)" if len(deep) > 1 else ""
+    return [loaded.issue(
+        ("walker", "body_clearance"),
+        f"the standing pose puts {name} {depth:.3f} m below the ground{more}: the start-up would push it "
+        "through the floor",
+        "raise walker.body_clearance, move the stances so the knees stay above the feet, or set joint limits that "
+        "keep them up",
+    )]
 
 
 def _unpacked(robot: Robot, joints: int) -> np.ndarray:

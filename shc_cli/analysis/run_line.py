@@ -8,7 +8,9 @@ means nothing). The air and standing scenarios (SA, WA, SG) have no walking by d
 
 A walk that went somewhere but badly says so (:func:`walk_warnings`): statically unstable (the centre of mass
 outside the stance feet's support polygon more than half the time) or slipping (the feet slide more than
-:data:`SLIP_SHARE` of the distance walked) — an imported robot can walk a metre that way and look fine.
+:data:`SLIP_SHARE` of the distance walked) — an imported robot can walk a metre that way and look fine — or short
+of the distance asked (under :data:`~shc_cli.analysis.shortfall.SHORT_SHARE` of it), with the joint that saturated
+and the foot that slipped (:mod:`shc_cli.analysis.shortfall`).
 """
 
 from __future__ import annotations
@@ -65,7 +67,7 @@ def simulation_line(summary: RunSummary, terrain: str, path: Path, note: str = "
                      else f"CoT: {NOT_MEASURED}")
     line = ", ".join(parts)
     if summary.fell:
-        line += ", FELL"
+        line += f", FELL ({summary.fall})" if summary.fall else ", FELL"
     elif walking:
         line += progress_note(summary)
         if window > 0.0:
@@ -85,6 +87,7 @@ def walk_warnings(path: Path, summary: RunSummary) -> list[str]:
 
     from shc_cli.analysis import metrics
     from shc_cli.analysis.progress import cycle_path_length
+    from shc_cli.analysis.shortfall import SHORT_SHARE, shortfall_reasons
     from shc_cli.errors import ShcError
     from shc_cli.record.runread import read_run
 
@@ -110,6 +113,12 @@ def walk_warnings(path: Path, summary: RunSummary) -> list[str]:
     if not summary.no_progress and distance > 0.0 and slip > SLIP_SHARE * distance:
         warnings.append(f"feet slip {slip:.3f} m each over {distance:.3f} m walked ({100 * slip / distance:.0f} %, "
                         f"above {100 * SLIP_SHARE:.0f} %)")
+    share = summary.walked_share
+    if share is not None and share < SHORT_SHARE and (summary.commanded_distance_m or 0.0) > 0.0:
+        reasons = shortfall_reasons(log, rows, distance, SLIP_SHARE)
+        why = "; ".join(reasons) if reasons else "no joint saturated and no foot slipped"
+        warnings.append(f"walked {100 * share:.0f} % of the {summary.commanded_distance_m:.2f} m commanded "
+                        f"(under {100 * SHORT_SHARE:.0f} %): {why}")
     return warnings
 
 

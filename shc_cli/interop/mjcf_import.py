@@ -14,7 +14,8 @@ joint vectors.
 * **Joints**: a hinge is revolute (angle 0 at ``qpos0``, MuJoCo's ``ref``; limits ``range − ref``; a hinge
   without ``range`` continuous), a slide prismatic, a ball floating (refused in a leg).
 * **Geoms**: spheres, boxes, cylinders and capsules (as cylinders) are the URDF's geometry, collision if their
-  ``contype`` or ``conaffinity`` is not 0, else visual; meshes and planes are not written.
+  ``contype`` or ``conaffinity`` is not 0, else visual; meshes and planes are not written (missing mesh files are
+  left out with a note: :func:`load`).
 * **Effort**: the joint's ``actuatorfrcrange``, else its actuator's ``forcerange``, else a motor's ``ctrlrange``
   times its gear. MJCF has no speed limit: shc's default ``max_vel`` is used.
 """
@@ -42,18 +43,50 @@ def _fail(path: Path, problem: str, fix: str) -> SpecError:
     return SpecError([Issue(path, None, "", problem, fix)])
 
 
-def load(path: Path) -> Any:
-    """MuJoCo's compiled model of ``path`` (one line if MuJoCo refuses it)."""
+def load(path: Path) -> tuple[Any, list[str]]:
+    """MuJoCo's compiled model of ``path`` and the notes on how it was loaded (one line if MuJoCo refuses it).
+
+    Mesh or texture files the MJCF names but that are not there (a description copied without its assets, a
+    repository whose large meshes did not come with it) do not stop the import, which reads neither: the file is
+    compiled again without its mesh geoms, meshes and textures (:func:`_without_meshes`) and a note names the
+    missing file."""
     import mujoco
 
     if not path.is_file():
         raise _fail(path, "file not found", "check the path")
     try:
-        return mujoco.MjModel.from_xml_path(str(path))
+        return mujoco.MjModel.from_xml_path(str(path)), []
     except ValueError as error:
         lines = str(error).strip().splitlines()
-        raise _fail(path, f"MuJoCo cannot load it: {lines[0] if lines else 'error'}",
-                    "check the MJCF (python -m mujoco.viewer opens it)") from None
+        first = lines[0] if lines else "error"
+        model = _without_meshes(path) if "Error opening file" in first else first
+        if isinstance(model, str):  # refused for another reason (with its meshes left out, that reason)
+            raise _fail(path, f"MuJoCo cannot load it: {model}",
+                        "check the MJCF (python -m mujoco.viewer opens it)") from None
+        missing = first.split("Error opening file", 1)[1].strip(" :'\"")
+        return model, [f"a file it names is missing ({missing}): loaded without its mesh geoms, meshes and textures "
+                       "(the import reads none; a body's mass or inertia from its meshes is then lost)"]
+
+
+def _without_meshes(path: Path) -> object:
+    """``path`` compiled with every mesh geom, mesh and texture deleted (MuJoCo's MjSpec; materials keep their
+    colours), or the first line of MuJoCo's error if it still fails."""
+    import mujoco
+
+    try:
+        spec = mujoco.MjSpec.from_file(str(path))
+        for geom in [g for g in spec.geoms if g.type == mujoco.mjtGeom.mjGEOM_MESH]:
+            spec.delete(geom)
+        for mesh in list(spec.meshes):
+            spec.delete(mesh)
+        for texture in list(spec.textures):  # image files go missing with the meshes
+            spec.delete(texture)
+        for material in spec.materials:
+            material.textures = [""] * len(material.textures)
+        return spec.compile()
+    except (ValueError, RuntimeError) as error:
+        lines = str(error).strip().splitlines()
+        return lines[0] if lines else "error"
 
 
 def _frame(pos: Any, quat: Any) -> FloatArray:
@@ -266,8 +299,9 @@ def import_mjcf(file: Path, out: Path | None = None, name: str | None = None, le
     from shc_cli.interop.urdf_import import import_urdf
     from shc_cli.spec.loading import load_robot
 
-    model = load(file)
+    model, loading = load(file)
     converted = convert(file, model)
+    converted.notes[:0] = loading
     result = import_urdf(file, out, name, legs, tips, clearance, reach, snap, None, forward, base,
                          given=converted.urdf, command="mjcf", overwrite=overwrite)
     robot = load_robot(result.robot_path).robot

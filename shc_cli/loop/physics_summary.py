@@ -1,9 +1,12 @@
 """Fall detection and the physics run's summary (engine-independent: they read a backend's reading and the log).
 
-:class:`PhysicsRecord` is an observer of the run loop: it stops the run when the robot has fallen — body tilt
-above :data:`FALL_TILT`, or (on the ground) the body lower than :data:`FALL_HEIGHT_SHARE` of the body clearance —
-and times the RUNNING part. Its summary is made from the finished log (``log.csv``, read back): the speeds, power
-and cost of transport are :func:`shc_cli.analysis.metrics.walk_figures` over the RUNNING rows, the numbers
+:class:`PhysicsRecord` is an observer of the run loop: it stops the run when the robot has fallen — from the first
+cycle, start-up included, body tilt above :data:`FALL_TILT` (a flip) or (on the ground) the body higher than
+:data:`LAUNCH_SHARE` of its standing height plus a leg's length (thrown up: a knee pushed through the floor);
+while RUNNING also the body lower than :data:`FALL_HEIGHT_SHARE` of the body clearance (a start-up rises from the
+ground); a fall seen during start-up is confirmed :data:`START_UP_GRACE_S` later — and times the RUNNING part.
+Its summary is made from the finished log (``log.csv``, read back): the speeds, power and cost of transport are
+:func:`shc_cli.analysis.metrics.walk_figures` over the RUNNING rows, the numbers
 ``shc analyze`` gives for the same window.
 """
 
@@ -39,6 +42,13 @@ MAX_BODY_SPEED = 20.0
 """Body speed above which the physics has diverged [m/s] (a walking robot moves well under 2 m/s, one falling
 from its height under 5 m/s: beyond this the simulation is blowing up, e.g. energy gained at each contact)."""
 _MAX_SPEED_SQUARED = MAX_BODY_SPEED * MAX_BODY_SPEED
+LAUNCH_SHARE = 2.0
+"""The robot was launched when its body is higher above the terrain than this many times its standing height
+plus its longest leg's length (no gait lifts a body above the height its straight legs reach)."""
+START_UP_GRACE_S = 2.0
+"""A fall seen during start-up stops the run this long after it [s] (at once once RUNNING), unless the physics
+diverges first: a blow-up tips the body over before its speed shows it (ATHENA at a 20 Hz physics rate flips at
+1.0 s and passes :data:`MAX_BODY_SPEED` at 2.0 s), and a diverged run says what to change."""
 DIVERGED = "diverged"
 """The stop reason of a run whose physics blew up (:meth:`PhysicsRecord.__call__`)."""
 
@@ -60,10 +70,18 @@ class PhysicsRecord:
         self.diverged: str | None = None
         """What showed the physics had blown up (the run stopped, ``stop_reason`` :data:`DIVERGED`), or None."""
         self.low_height = FALL_HEIGHT_SHARE * robot.walker.body_clearance
+        self.high_height = LAUNCH_SHARE * (robot.walker.body_clearance + leg_length(robot))
+        """Body height above which the robot was thrown up [m]."""
+        self.whole_max_tilt = 0.0
+        """The largest tilt of the whole run, start-up included [rad] (``max_tilt`` is RUNNING's)."""
+        self.fall: str | None = None
+        """How the robot fell (the summary's ``fall``), or None."""
         self.started = time.perf_counter()
         self.log: RunLog | None = None
         """The finished log, once :meth:`summary` has read it."""
         self._running_since: tuple[float, float] | None = None
+        self._pending: tuple[int, str] | None = None
+        """A fall seen during start-up (its cycle and how), confirmed :data:`START_UP_GRACE_S` later."""
 
     def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: Reading) -> str | None:
         self.cycles += 1
@@ -72,16 +90,27 @@ class PhysicsRecord:
         speed_squared = vx * vx + vy * vy + vz * vz
         if not (speed_squared <= _MAX_SPEED_SQUARED and math.isfinite(x + y + z)):  # NaN fails both
             return self._blew_up(cycle, reading, speed_squared)
-        if out.robot_state == RobotState.RUNNING:
+        angle = tilt(reading.rpy)
+        self.whole_max_tilt = max(self.whole_max_tilt, angle)
+        running = out.robot_state == RobotState.RUNNING
+        if running:
             if self._running_since is None:
                 self._running_since = (time.perf_counter(), self.backend.world.physics_time)
-            self.max_tilt = max(self.max_tilt, tilt(reading.rpy))
-            low = reading.body_height < self.low_height
-            if self.max_tilt > FALL_TILT or (low and not self.airborne):
-                self.fell = True
-                event(log, logging.WARNING, "fell", "fell: body tilt %.3f rad (limit %.3f), height %.3f m (limit %.3f)",
-                      self.max_tilt, FALL_TILT, reading.body_height, self.low_height, cycle=cycle, terminal=False)
-                return "fell"
+            self.max_tilt = max(self.max_tilt, angle)
+        height = reading.body_height
+        low = running and height < self.low_height and not self.airborne
+        high = height > self.high_height and not self.airborne
+        if self._pending is None and (angle > FALL_TILT or low or high):
+            phase = "walking" if running else "during start-up"
+            how = "flipped" if angle > FALL_TILT else ("thrown up" if high else "collapsed")
+            self._pending = (cycle, f"{how} {phase} at {cycle * self.robot.time_delta:.2f} s: body tilt {angle:.3f} "
+                                    f"rad (limit {FALL_TILT:g}), height {height:.3f} m (limits {self.low_height:.3f} "
+                                    f"… {self.high_height:.3f})")
+        if self._pending is not None and (running or (cycle - self._pending[0]) * self.robot.time_delta
+                                          >= START_UP_GRACE_S):
+            self.fell, self.fall = True, self._pending[1]
+            event(log, logging.WARNING, "fell", "fell: %s", self.fall, cycle=self._pending[0], terminal=False)
+            return "fell"
         return None
 
     def _blew_up(self, cycle: int, reading: Reading, speed_squared: float) -> str:
@@ -150,6 +179,7 @@ class PhysicsRecord:
             "walked_m": walked,
             "max_tilt_rad": self.max_tilt,
             "fell": self.fell,
+            **({"fall": self.fall} if self.fall is not None else {}),
             **({"fault": self.diverged} if self.diverged is not None else {}),
             **final_poses(finished),
         })
@@ -162,6 +192,14 @@ class PhysicsRecord:
         log = self.log if self.log is not None else read_tables(directory, self.robot)
         return {"t": log.t, "position": log.position, "power": log.power, "contact": log.contact,
                 "running": log.running, "yaw": log.rpy[:, 2], "odometry": log.odometry}
+
+
+def leg_length(robot: Robot) -> float:
+    """The longest leg's length: the sum of its links' lengths (DH offsets), from its first joint to its tip [m]."""
+    from shc_cli.model.body import joint_offset
+
+    return max(sum(math.dist((0.0, 0.0, 0.0), joint_offset(joint)) for joint in leg.joints.values())
+               for leg in robot.legs.values())
 
 
 def final_poses(log: RunLog | None) -> dict[str, list[float]]:

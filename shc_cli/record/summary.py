@@ -176,6 +176,8 @@ class RunSummary(BaseModel):
                                                                     "[rad].")
     fell: bool | None = Field(None, description="simulate: the robot fell (tilt or height check); the run stopped "
                                                 "there.")
+    fall: str | None = Field(None, description="simulate, when it fell: how (flipped, thrown up or collapsed), "
+                                               "when (during start-up or walking) and the tilt and height.")
 
     # the simulated world
     seed: int | None = Field(None, description="simulate: seed of every random thing.")
