@@ -91,9 +91,12 @@ class PhysicsRecord:
         event(log, logging.WARNING, "diverged", "%s", self.diverged, cycle=cycle, terminal=False)
         return DIVERGED
 
-    def summary(self, directory: Path, scenario: str, gait: str, controller: Controller) -> RunSummary:
+    def summary(self, directory: Path, scenario: str, gait: str, controller: Controller,
+                fields: dict[str, object] | None = None) -> RunSummary:
         """The summary from the finished log in ``directory`` (the run directory, still ``.partial``); paper eq. 22
-        cost of transport over the RUNNING window: mean power / (m·g·v) (WG only)."""
+        cost of transport over the RUNNING window: mean power / (m·g·v) (WG only). ``fields``: the run's other
+        fields (its engine, the fields every run shares, :class:`~shc_cli.loop.assembly.Finished`), made into the
+        summary with these (a field of both: ``fields``' value)."""
         from shc_cli.analysis.metrics import walk_figures
         from shc_cli.record.runread import read_tables
 
@@ -152,6 +155,7 @@ class PhysicsRecord:
             "fell": self.fell,
             **({"fault": self.diverged} if self.diverged is not None else {}),
             **final_poses(finished),
+            **(fields or {}),
         })
 
     def plot_series(self, directory: Path) -> dict[str, Any]:

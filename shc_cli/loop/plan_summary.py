@@ -61,11 +61,13 @@ def eq16_speed(controller: Controller, linear_input: tuple[float, float]) -> flo
     return stride * cycle.frequency / cycle.duty_factor
 
 
-def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, seconds: float, directory: Path
-                 ) -> RunSummary:
+def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, seconds: float, directory: Path,
+                 fields: dict[str, object] | None = None) -> RunSummary:
     """Cycles, speeds (achieved by the stance feet vs paper eq. 16), odometry, IK statistics; the ideal body path's
     speeds from the finished tables in ``directory`` (the run directory, still ``.partial``) as ``shc analyze``
-    gives them (:func:`shc_cli.analysis.metrics.walk_figures` over the RUNNING rows)."""
+    gives them (:func:`shc_cli.analysis.metrics.walk_figures` over the RUNNING rows). ``fields``: the run's other
+    fields (the fields every run shares, :class:`~shc_cli.loop.assembly.Finished`; a field of both: ``fields``'
+    value)."""
     dt = robot.time_delta
     outputs = record.outputs
     cycle = controller.cycle
@@ -123,4 +125,5 @@ def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, secon
         "ik_clamp_count": sum(o.ik_clamped for o in outputs),
         "wall_time_s": seconds,
         "walkspace": {str(b): r for b, r in controller.walkspace.items()},
+        **(fields or {}),
     })
