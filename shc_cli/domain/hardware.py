@@ -237,14 +237,14 @@ def _on_servos(parts: Assembly, c: HardwareConfig, inputs: RunInputs, clock: Cal
     dt = robot.time_delta
 
     def summarise(finished: Finished) -> RunSummary:
-        from shc_cli.record.summary import RunSummary
+        from shc_cli.record.summary_kinds import summary_of
 
         result = finished.result
         if len(backend.cycle_times) > 20 and sum(t > dt for t in backend.cycle_times) / len(backend.cycle_times) \
                 > 0.05:
             event(log, logging.WARNING, "overruns", "warning: the loop missed its %.0f ms period in %d of %d "
                   "cycles", dt * 1e3, backend.overruns, result.cycles)
-        return RunSummary.model_validate({
+        return summary_of(("hardware",), {
             **bus_run_fields(robot, controller, backend, result, c.dry_run, stop.name), **backend.statistics(),
             "input": "path" if c.path is not None else c.input_mode,
             "watchdog_trips": getattr(source, "watchdog_trips", 0),

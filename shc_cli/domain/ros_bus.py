@@ -68,7 +68,7 @@ def _on_bus(parts: Assembly, node: Node, c: NodeConfig, robot: Robot, gait: Gait
     from shc_cli.loop.input_sources import STATES
     from shc_cli.loop.run_loop import ControlledStop
     from shc_cli.record.runlog import LogRecorder, RunDirectory
-    from shc_cli.record.summary import RunSummary
+    from shc_cli.record.summary_kinds import summary_of
 
     bus = parts.closing(servo_bus(robot, list(c.ports), c.baud, c.profile_velocity))
     prepare_bus(bus, robot, c.dry_run)
@@ -105,7 +105,7 @@ def _on_bus(parts: Assembly, node: Node, c: NodeConfig, robot: Robot, gait: Gait
         return None
 
     def summarise(finished: Finished) -> RunSummary:
-        return RunSummary.model_validate({
+        return summary_of(("hardware", "ros"), {
             **bus_run_fields(robot, controller, backend, finished.result, c.dry_run, stop.name), "backend": "bus",
             "ros_master": node.master_uri, "node": node.name, **finished.shared})
 

@@ -176,7 +176,8 @@ def _run_outputs_only(node: Node, config: NodeConfig, robot: Robot, gait: Gait, 
 
         def summarise(finished: Finished) -> RunSummary:
             return plan_summary(robot, controller, record, time.perf_counter() - started, finished.directory, {
-                "backend": config.backend, "ros_master": node.master_uri, "node": node.name, **finished.shared})
+                "backend": config.backend, "ros_master": node.master_uri, "node": node.name, **finished.shared},
+                                ("plan", "ros"))
 
         return RunSpec(controller, KinematicBackend(), session.source, writer, None, writer, summarise,
                        observers=[record, session.outputs], live=stream, pacing=session.clock,
@@ -220,7 +221,7 @@ def _run_simulated(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pos
             return record.summary(finished.directory, sim.scenario, controller.gait.name, controller, {
                 "cycles": record.cycles, "engine": world.name, "engine_version": world.version,
                 "engine_warnings": world.warnings, "backend": config.backend, "ros_master": node.master_uri,
-                "node": node.name, **finished.shared})
+                "node": node.name, **finished.shared}, ("simulate", "ros"))
 
         return RunSpec(controller, backend, session.source, LogRecorder(run, robot, backend), None, run, summarise,
                        observers=[record, session.outputs], live=stream, pacing=session.clock,
