@@ -21,7 +21,7 @@ from collections.abc import Callable, Sequence
 from contextlib import AbstractContextManager, ExitStack
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Generic, TypeVar
+from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
 
 from shc_cli.loop.run_loop import ControlledStop, LoopResult, Observer, ReadingT, Recorder, RunLoop, StartUp
 
@@ -33,6 +33,16 @@ if TYPE_CHECKING:
     from shc_cli.record.summary import RunSummary
 
 T = TypeVar("T")
+
+
+class Closable(Protocol):
+    """Anything with a ``close()`` (an input, a servo bus, a live server)."""
+
+    def close(self) -> object:
+        ...
+
+
+ClosableT = TypeVar("ClosableT", bound=Closable)
 
 OnProgress = Callable[[int, int], None]
 """Told ``(walked cycles, cycles to walk)`` before the run, every :data:`PROGRESS_EVERY` walking cycles and
@@ -159,10 +169,9 @@ class Assembly:
         """Enter ``manager`` (a run directory, a backend); it exits when the run is over."""
         return self._stack.enter_context(manager)
 
-    def closing(self, thing: T, close: Callable[[], object] | None = None) -> T:
-        """``thing`` (an input, a servo bus, a live server), closed by ``close`` (default its ``close()``) when the
-        run is over."""
-        self._stack.callback(close if close is not None else thing.close)  # type: ignore[attr-defined]
+    def closing(self, thing: ClosableT) -> ClosableT:
+        """``thing`` (an input, a servo bus, a live server), closed when the run is over."""
+        self._stack.callback(thing.close)
         return thing
 
     def callback(self, call: Callable[[], object]) -> None:

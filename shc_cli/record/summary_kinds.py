@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping
-from typing import Any, Literal
+from typing import Literal, cast
 
-from pydantic import BaseModel, ConfigDict, create_model
+from pydantic import BaseModel, ConfigDict
 
 from shc_cli.record.summary import RunSummary
 
@@ -59,11 +59,10 @@ def kind_model(*kinds: Kind) -> type[BaseModel]:
     """The model of a summary of ``kinds`` (``("simulate", "ros")``: ``shc ros`` on an engine): :data:`SHARED` and
     the kinds' fields, each as :class:`RunSummary` declares it; any other field is refused."""
     names = {*SHARED, *(name for kind in kinds for name in KINDS[kind])}
-    fields: dict[str, Any] = {name: (info.annotation, info) for name, info in RunSummary.model_fields.items()
-                              if name in names}
-    title = "".join(kind.title() for kind in kinds) + "Summary"
-    model: type[BaseModel] = create_model(title, __config__=ConfigDict(extra="forbid"), **fields)
-    return model
+    kept = {name: info for name, info in RunSummary.model_fields.items() if name in names}
+    namespace: dict[str, object] = {"__annotations__": {name: info.annotation for name, info in kept.items()},
+                                    "model_config": ConfigDict(extra="forbid"), "__module__": __name__, **kept}
+    return cast("type[BaseModel]", type("".join(kind.title() for kind in kinds) + "Summary", (BaseModel,), namespace))
 
 
 def summary_of(kinds: tuple[Kind, ...], fields: Mapping[str, object]) -> RunSummary:
