@@ -9,7 +9,7 @@ prints. Two places read the records:
   :func:`event`) goes to ``events.log`` only: the command reports it itself (the summary line says FELL, a fault or
   an engine note is printed by the command). Without the CLI (the Python API), a run prints its warnings as Python's
   own last-resort handler would, unless the application configured logging itself.
-* a run's ``events.log`` — :func:`recording` (while :func:`shc_cli.loop.session.execute` runs the loop and
+* a run's ``events.log`` — :func:`recording` (while :func:`shc_cli.loop.assembly.assemble` runs the loop and
   finishes the directory): one JSON object per line, INFO and above, with the keys ``time`` (UTC, ISO 8601 with
   milliseconds), ``cycle`` (the control cycle, ``null`` outside the loop), ``level`` (``info``, ``notice``,
   ``warning``, ``error``), ``event`` (a short name: ``robot_state``, ``walk_state``, ``fell``, ``fault``,

@@ -41,11 +41,11 @@ from shc_cli.loop.input_sources import STATES
 if TYPE_CHECKING:
     from collections.abc import Callable
 
-    from shc_cli.backends.base import InputSource
     from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Controller
     from shc_cli.hardware.bus import BusState, ServoBus
-    from shc_cli.live.foxglove_server import FoxgloveTransport
+    from shc_cli.loop.assembly import Assembly, Finished, RunSpec
+    from shc_cli.loop.run_inputs import RunInputs
     from shc_cli.loop.run_loop import LoopResult
     from shc_cli.record.summary import RunSummary
     from shc_cli.spec.robot import Robot
@@ -201,19 +201,9 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
     """Start up, run the input on the servos, stop and shut down safely; returns the run directory and its summary
     (``summary["fault"]`` names a servo fault). ``clock`` [s] and ``sleep`` replace the wall clock of the cycle's
     pacing (tests: an emulated bus on a virtual clock, :class:`~shc_cli.backends.dynamixel.DynamixelBackend`)."""
-    from shc_cli.backends.dynamixel import DynamixelBackend
-    from shc_cli.control.controller import Controller
-    from shc_cli.domain.live import open_live
-    from shc_cli.domain.simulate import failed_legs, speed_source
-    from shc_cli.hardware.buses import servo_bus
-    from shc_cli.loop.input_choice import commands_file, open_input
-    from shc_cli.loop.path_input import keep_path
-    from shc_cli.loop.policy.drive import PolicyDrive
+    from shc_cli.loop.assembly import assemble
+    from shc_cli.loop.input_choice import commands_file
     from shc_cli.loop.run_inputs import load_inputs
-    from shc_cli.loop.run_loop import ControlledStop, Observer, RunLoop, StartUp
-    from shc_cli.loop.session import execute
-    from shc_cli.record.runlog import LogRecorder, RunDirectory, default_run_directory
-    from shc_cli.record.summary import RunSummary
 
     c = config
     if c.path is not None and c.input_mode != "timeline":
@@ -225,75 +215,91 @@ def run_hardware(config: HardwareConfig, clock: Callable[[], float] | None = Non
                                "--fail-leg")])
     inputs = load_inputs(c.robot, c.gait, c.velocity, c.duration, commands_file(c.input_mode, c.commands),
                          default_s=20.0, path=c.path)
+    return RunResult(*assemble(lambda parts: _on_servos(parts, c, inputs, clock, sleep)).pair)
+
+
+def _on_servos(parts: Assembly, c: HardwareConfig, inputs: RunInputs, clock: Callable[[], float] | None,
+               sleep: Callable[[float], None] | None) -> RunSpec[BusState]:
+    """run-hw's run specification: the checked bus, the input, the backend on the bus, the controller from the
+    measured joints, a controlled stop, the release of the torque as soon as the loop ends (and whatever happens)."""
+    from shc_cli.backends.dynamixel import DynamixelBackend
+    from shc_cli.control.controller import Controller
+    from shc_cli.domain.live import live_observer
+    from shc_cli.domain.simulate import failed_legs, speed_source
+    from shc_cli.hardware.buses import servo_bus
+    from shc_cli.loop.assembly import RunSpec
+    from shc_cli.loop.input_choice import open_input
+    from shc_cli.loop.path_input import keep_path
+    from shc_cli.loop.policy.drive import PolicyDrive
+    from shc_cli.loop.run_loop import ControlledStop, StartUp
+    from shc_cli.record.runlog import LogRecorder, RunDirectory, default_run_directory
+
     robot, gait, failure = failed_legs(inputs.robot, inputs.gait, c.fail_leg, c.velocity)
     drive = None if c.policy is None else PolicyDrive.load(c.policy, robot, hardware=True)
-    bus = servo_bus(robot, c.ports, c.baud, c.profile_velocity)  # the servo models' protocol
-    source: InputSource | None = None
-    backend: DynamixelBackend | None = None
-    stream: FoxgloveTransport | None = None
-    faulted = False
-    try:
-        source = open_input(c.input_mode, robot, gait, inputs.commands(), c.watchdog)
-        prepare_bus(bus, robot, c.dry_run)
-        directory = c.out or default_run_directory("run-hw")
-        run = RunDirectory(directory, c.overwrite)
-        backend = DynamixelBackend(robot, bus, c.dry_run, run, c.on_fault, c.on_stop, clock=clock or time.perf_counter,
-                                   sleep=sleep or time.sleep, missed_reads_fault=c.missed_reads_fault)
-        controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
-                                direct_shutdown=True, failure=failure, speed_shares=speed_source(robot, failure))
-        run.write_robot(robot)
-        if inputs.path is not None:
-            source.close()
-            source = inputs.source(controller)
-        path_fields = keep_path(source, run.partial)
-        dt = robot.time_delta
-        stop = STATES[c.stop_state]
-        action = "holding" if c.on_fault == "hold" else "torque off"
-        absorb = None
-        if c.on_fault == "adapt":
-            from shc_cli.loop.leg_fault import LegFaultAdapter
+    bus = parts.closing(servo_bus(robot, c.ports, c.baud, c.profile_velocity))  # the servo models' protocol
+    source = parts.closing(open_input(c.input_mode, robot, gait, inputs.commands(), c.watchdog))
+    prepare_bus(bus, robot, c.dry_run)
+    run = parts.enter(RunDirectory(c.out or default_run_directory("run-hw"), c.overwrite))
+    backend = DynamixelBackend(robot, bus, c.dry_run, run, c.on_fault, c.on_stop, clock=clock or time.perf_counter,
+                               sleep=sleep or time.sleep, missed_reads_fault=c.missed_reads_fault)
+    release = Release(backend)
+    parts.callback(release.close)  # torque off (or held) also when the run raised
+    controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
+                            direct_shutdown=True, failure=failure, speed_shares=speed_source(robot, failure))
+    run.write_robot(robot)
+    if inputs.path is not None:
+        source.close()
+        source = inputs.source(controller)
+    path_fields = keep_path(source, run.partial)
+    if drive is not None:
+        source = drive.source(source)
+    absorb = None
+    if c.on_fault == "adapt":
+        from shc_cli.loop.leg_fault import LegFaultAdapter
 
-            absorb = LegFaultAdapter(robot, controller, backend)
-        observers: list[Observer[BusState]] = []
-        if c.live:
-            stream, outputs = open_live(c.live_port, robot, controller, sensors=False, joint_states=True)
-            observers.append(outputs)
-        loop = RunLoop(controller, backend, source if drive is None else drive.source(source),
-                       LogRecorder(run, robot, backend),
-                       StartUp.of(robot, hardware=True),
-                       ControlledStop(stop, STOP_TIMEOUT_S), observers=observers, flush_every=100,
-                       on_fault=lambda text: event(log, logging.ERROR, "fault_action", "fault: %s — %s", text, action),
-                       absorb=absorb)
-        if drive is not None:
-            drive.join(loop)
+        absorb = LegFaultAdapter(robot, controller, backend)
+    stop = STATES[c.stop_state]
+    dt = robot.time_delta
 
-        def release(result: LoopResult) -> None:
-            nonlocal faulted
-            faulted = result.fault is not None
-            assert backend is not None
-            backend.close(faulted)
+    def summarise(finished: Finished) -> RunSummary:
+        from shc_cli.record.summary_kinds import summary_of
 
-        def summarise(result: LoopResult) -> RunSummary:
-            assert backend is not None
-            if len(backend.cycle_times) > 20 and sum(t > dt for t in backend.cycle_times) / len(backend.cycle_times) \
-                    > 0.05:
-                event(log, logging.WARNING, "overruns", "warning: the loop missed its %.0f ms period in %d of %d "
-                      "cycles", dt * 1e3, backend.overruns, result.cycles)
-            return RunSummary.model_validate({
-                **bus_run_fields(robot, controller, backend, result, c.dry_run, stop.name), **backend.statistics(),
-                "input": "path" if c.path is not None else c.input_mode,
-                "watchdog_trips": getattr(source, "watchdog_trips", 0),
-                "odometry_pose": list(controller.odometry.pose), **path_fields(),
-                "failed_legs": list(backend.failed_legs) if c.on_fault == "adapt" else None,
-            })
+        result = finished.result
+        if len(backend.cycle_times) > 20 and sum(t > dt for t in backend.cycle_times) / len(backend.cycle_times) \
+                > 0.05:
+            event(log, logging.WARNING, "overruns", "warning: the loop missed its %.0f ms period in %d of %d "
+                  "cycles", dt * 1e3, backend.overruns, result.cycles)
+        return summary_of(("hardware",), {
+            **bus_run_fields(robot, controller, backend, result, c.dry_run, stop.name), **backend.statistics(),
+            "input": "path" if c.path is not None else c.input_mode,
+            "watchdog_trips": getattr(source, "watchdog_trips", 0),
+            "odometry_pose": list(controller.odometry.pose), **finished.shared,
+            "failed_legs": list(backend.failed_legs) if c.on_fault == "adapt" else None,
+        })
 
-        path, summary, _ = execute(loop, run, summarise, after_loop=release)
-    finally:
-        if backend is not None:
-            backend.close(faulted)  # torque off (or held) also when the loop raised
-        if source is not None:
-            source.close()
-        bus.close()
-        if stream is not None:
-            stream.close()
-    return RunResult(path, summary)
+    return RunSpec(controller, backend, source, LogRecorder(run, robot, backend), StartUp.of(robot, hardware=True),
+                   run, summarise, ControlledStop(stop, STOP_TIMEOUT_S),
+                   live=live_observer(parts, c.live, c.live_port, robot, controller, sensors=False, joint_states=True),
+                   path_fields=path_fields, after_loop=release, flush_every=100,
+                   on_fault=fault_action(c.on_fault), absorb=absorb, on_loop=None if drive is None else drive.join)
+
+
+def fault_action(on_fault: str) -> Callable[[str], None]:
+    """Told a servo fault's text: the event naming it and what is done (holding, or the torque off)."""
+    action = "holding" if on_fault == "hold" else "torque off"
+    return lambda text: event(log, logging.ERROR, "fault_action", "fault: %s — %s", text, action)
+
+
+class Release:
+    """Releases the servos (torque off or held, :meth:`DynamixelBackend.close`) right after the loop ends — held on
+    a fault — and again when the run is over, whatever happened (closing twice is harmless)."""
+
+    def __init__(self, backend: DynamixelBackend) -> None:
+        self.backend, self.faulted = backend, False
+
+    def __call__(self, result: LoopResult) -> None:
+        self.faulted = result.fault is not None
+        self.backend.close(self.faulted)
+
+    def close(self) -> None:
+        self.backend.close(self.faulted)

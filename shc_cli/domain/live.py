@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from shc_cli.control.controller import Controller
     from shc_cli.live.foxglove_server import FoxgloveTransport
+    from shc_cli.loop.assembly import Assembly
     from shc_cli.loop.pacing import WallClock
     from shc_cli.ros.outputs import NodeOutputs
     from shc_cli.spec.robot import Robot
@@ -31,6 +32,17 @@ def open_live(port: int, robot: Robot, controller: Controller, sensors: bool,
                           walkspace=lambda: controller.walkspace, joint_states=joint_states,
                           ideal=ideal_odometry(controller))
     return transport, outputs
+
+
+def live_observer(parts: Assembly, enabled: bool, port: int, robot: Robot, controller: Controller, sensors: bool,
+                  joint_states: bool = False) -> NodeOutputs | None:
+    """With ``enabled`` (``--live``): :func:`open_live`'s observer, its server closed by the run's assembly
+    (:class:`~shc_cli.loop.assembly.Assembly`) when the run is over; None without."""
+    if not enabled:
+        return None
+    transport, outputs = open_live(port, robot, controller, sensors, joint_states)
+    parts.closing(transport)
+    return outputs
 
 
 def wall_clock(robot: Robot) -> WallClock:

@@ -7,10 +7,11 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from shc_cli.domain.live import open_live, wall_clock
+from shc_cli.domain.live import live_observer, wall_clock
 from shc_cli.domain.result import RunResult
 
 if TYPE_CHECKING:
+    from shc_cli.loop.assembly import Assembly, Finished, RunSpec
     from shc_cli.record.summary import RunSummary
 
 
@@ -35,55 +36,50 @@ def plan(robot: str = "bullet", gait: str | None = None, velocity: str = "1,0,0"
         path: a path file the follower walks (instead of ``velocity`` or ``commands``), steering by the odometry.
         fail_leg: failed legs, ``LEG[:MODE]`` comma-separated (:func:`shc_cli.domain.simulate.failed_legs`).
     """
-    from shc_cli.backends.kinematic import KinematicBackend
-    from shc_cli.control.controller import Controller
-    from shc_cli.domain.simulate import failed_legs, speed_source
-    from shc_cli.loop.path_input import keep_path
-    from shc_cli.loop.plan_summary import PlanRecord, plan_summary
+    from shc_cli.loop.assembly import assemble
     from shc_cli.loop.run_inputs import load_inputs
-    from shc_cli.loop.run_loop import Observer, RunLoop, StartUp
-    from shc_cli.loop.session import execute
-    from shc_cli.record.runlog import RunWriter, default_run_directory
 
     inputs = load_inputs(robot, gait, velocity, duration, commands, default_s=10.0, check_fit=True, path=path)
-    model, walked_gait, failure = failed_legs(inputs.robot, inputs.gait, fail_leg, velocity)
-    directory = out or default_run_directory("plan")
-    controller = Controller(model, walked_gait, pose_sets=inputs.pose_sets, failure=failure,
-                            speed_shares=speed_source(model, failure))
-    writer = RunWriter(directory, model, overwrite)
-    writer.write_robot(model)
-    source = inputs.source(controller)
-    path_fields = keep_path(source, writer.partial)
-    record = PlanRecord(controller)
-    start_up = StartUp.of(model)
-    observers: list[Observer[None]] = [record]
-    if failure is not None and failure.at_s is not None:
-        from shc_cli.loop.leg_fault import FailureEvents
 
-        observers.append(FailureEvents(controller))
-    stream = open_live(live_port, model, controller, sensors=False) if live else None
-    if stream is not None:
-        observers.append(stream[1])
-    clock = wall_clock(model) if realtime else None
-    if clock is not None:
-        observers.append(clock)
-    loop = RunLoop(controller, KinematicBackend(), source, writer,
-                   start_up, observers=observers, flush_every=500)
-    started = time.perf_counter()
+    def build(parts: Assembly) -> RunSpec[None]:
+        from shc_cli.backends.kinematic import KinematicBackend
+        from shc_cli.control.controller import Controller
+        from shc_cli.domain.simulate import failed_legs, speed_source
+        from shc_cli.loop.assembly import RunSpec
+        from shc_cli.loop.path_input import keep_path
+        from shc_cli.loop.plan_summary import PlanRecord, plan_summary
+        from shc_cli.loop.run_loop import Observer, StartUp
+        from shc_cli.record.runlog import RunWriter, default_run_directory
 
-    def plot(folder: Path) -> None:
-        from shc_cli.plots import plot_plan
+        model, walked_gait, failure = failed_legs(inputs.robot, inputs.gait, fail_leg, velocity)
+        directory = out or default_run_directory("plan")
+        controller = Controller(model, walked_gait, pose_sets=inputs.pose_sets, failure=failure,
+                                speed_shares=speed_source(model, failure))
+        writer = RunWriter(directory, model, overwrite)
+        parts.enter(writer)  # its tables closed and its signals restored also when the run raises
+        writer.write_robot(model)
+        source = inputs.source(controller)
+        path_fields = keep_path(source, writer.partial)
+        record = PlanRecord(controller)
+        observers: list[Observer[None]] = [record]
+        if failure is not None and failure.at_s is not None:
+            from shc_cli.loop.leg_fault import FailureEvents
 
-        plot_plan(model, record.outputs, folder, gait=" → ".join(record.gaits) or inputs.gait.name)
+            observers.append(FailureEvents(controller))
+        stream = live_observer(parts, live, live_port, model, controller, sensors=False)
+        started = time.perf_counter()
 
-    def summarise(_: object) -> RunSummary:
-        summary = plan_summary(model, controller, record, time.perf_counter() - started, writer.partial)
-        summary = summary.updated(**path_fields(), **(clock.statistics() if clock is not None else {}))
-        return summary
+        def plot(folder: Path) -> None:
+            from shc_cli.plots import plot_plan
 
-    try:
-        path, summary, _ = execute(loop, writer, summarise, plot if plots else None)
-    finally:
-        if stream is not None:
-            stream[0].close()
-    return RunResult(path, summary)
+            plot_plan(model, record.outputs, folder, gait=" → ".join(record.gaits) or inputs.gait.name)
+
+        def summarise(finished: Finished) -> RunSummary:
+            return plan_summary(model, controller, record, time.perf_counter() - started, finished.directory,
+                                finished.shared)
+
+        return RunSpec(controller, KinematicBackend(), source, writer, StartUp.of(model), writer, summarise,
+                       observers=observers, live=stream, pacing=wall_clock(model) if realtime else None,
+                       path_fields=path_fields, plot=plot if plots else None, flush_every=500)
+
+    return RunResult(*assemble(build).pair)

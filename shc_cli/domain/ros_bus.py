@@ -23,14 +23,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from shc_cli.domain.result import RunResult
-from shc_cli.events import event
 
 if TYPE_CHECKING:
-    from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Command, CycleOutput
     from shc_cli.domain.ros_config import NodeConfig
     from shc_cli.hardware.bus import BusState, ServoBus
-    from shc_cli.loop.run_loop import LoopResult
+    from shc_cli.loop.assembly import Assembly, Finished, RunSpec
+    from shc_cli.loop.run_loop import RunLoop
     from shc_cli.record.summary import RunSummary
     from shc_cli.ros.transport import Node
     from shc_cli.spec.autopose import AutoPoseSet
@@ -48,80 +47,73 @@ def run_on_bus(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pose_se
     Raises:
         HardwareError: the bus refused to start (one line), before the torque goes on and anything is written.
     """
+    from shc_cli.loop.assembly import assemble
+
+    return RunResult(*assemble(lambda parts: _on_bus(parts, node, config, robot, gait, pose_sets, gaits, directory,
+                                                     on_ready)).pair)
+
+
+def _on_bus(parts: Assembly, node: Node, c: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
+            gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunSpec[BusState]:
+    """The node's run specification on the servos: the checked bus, the session, the wait for OPERATIONAL, the
+    backend, a controlled stop at the deadline, the release of the torque as soon as the loop ends."""
     from shc_cli.backends.dynamixel import DynamixelBackend
     from shc_cli.control.controller import Controller
     from shc_cli.control.verified_limits import source_for
-    from shc_cli.domain.hardware import STOP_TIMEOUT_S, bus_run_fields, prepare_bus
-    from shc_cli.domain.live import open_live
+    from shc_cli.domain.hardware import STOP_TIMEOUT_S, Release, bus_run_fields, fault_action, prepare_bus
+    from shc_cli.domain.live import live_observer
     from shc_cli.domain.ros_session import NodeSession
     from shc_cli.hardware.buses import servo_bus
+    from shc_cli.loop.assembly import RunSpec
     from shc_cli.loop.input_sources import STATES
-    from shc_cli.loop.run_loop import ControlledStop, Observer, RunLoop
-    from shc_cli.loop.session import execute
+    from shc_cli.loop.run_loop import ControlledStop
     from shc_cli.record.runlog import LogRecorder, RunDirectory
-    from shc_cli.record.summary import RunSummary
+    from shc_cli.record.summary_kinds import summary_of
 
-    c = config
-    bus = servo_bus(robot, list(c.ports), c.baud, c.profile_velocity)
-    backend: DynamixelBackend | None = None
-    stream = None
-    faulted = False
-    try:
-        prepare_bus(bus, robot, c.dry_run)
-        joints = bus.read_state().positions
-        controller = Controller(robot, gait, joints=joints, pose_sets=pose_sets, direct_shutdown=True,
-                                speed_shares=source_for(robot))
-        session = NodeSession(node, c, robot, controller, gaits, sensors=False, joint_states=True)
-        session.ready(node, c, robot, gait, on_ready)
-        # the torque goes on once the remote is OPERATIONAL (Ctrl-C meanwhile: nothing commanded, nothing written)
-        operational = session.remote.wait_operational(float("inf"))
-        if operational:
-            _answering(bus)
-            _unmoved(bus, robot, joints)
-        run = RunDirectory(directory, c.overwrite)
-        run.write_robot(robot)
-        path_fields = session.keep_path(run.partial)
-        backend = DynamixelBackend(robot, bus, c.dry_run or not operational, run, c.on_fault, c.on_stop)
-        backend.start()  # the goals start from the joints now (as the controller's, within MOVED_LIMIT)
-        stop = STATES[c.stop_state]
-        action = "holding" if c.on_fault == "hold" else "torque off"
-        loop: RunLoop[BusState]
+    bus = parts.closing(servo_bus(robot, list(c.ports), c.baud, c.profile_velocity))
+    prepare_bus(bus, robot, c.dry_run)
+    joints = bus.read_state().positions
+    controller = Controller(robot, gait, joints=joints, pose_sets=pose_sets, direct_shutdown=True,
+                            speed_shares=source_for(robot))
+    session = NodeSession(node, c, robot, controller, gaits, sensors=False, joint_states=True)
+    session.ready(node, c, robot, gait, on_ready)
+    # the torque goes on once the remote is OPERATIONAL (Ctrl-C meanwhile: nothing commanded, nothing written)
+    operational = session.remote.wait_operational(float("inf"))
+    if operational:
+        _answering(bus)
+        _unmoved(bus, robot, joints)
+    run = parts.enter(RunDirectory(directory, c.overwrite))
+    run.write_robot(robot)
+    path_fields = session.keep_path(run.partial)
+    backend = DynamixelBackend(robot, bus, c.dry_run or not operational, run, c.on_fault, c.on_stop)
+    release = Release(backend)
+    parts.callback(release.close)  # torque off (or held) also when the run raised
+    backend.start()  # the goals start from the joints now (as the controller's, within MOVED_LIMIT)
+    stop = STATES[c.stop_state]
+    loop: RunLoop[BusState] | None = None
 
-        def deadline(cycle: int, command: Command, out: CycleOutput, reading: object) -> str | None:
-            """The duration has passed: walk to a stop and shut down (not an abrupt end, on servos)."""
-            if session.limit is not None and time.monotonic() >= session.limit and not loop.requested:
-                loop.request_stop("end")
-            return None
+    def started(running: RunLoop[BusState]) -> None:
+        nonlocal loop
+        loop = running
+        session.watch(running)
 
-        observers: list[Observer[BusState]] = [session.outputs, session.clock, deadline]
-        if c.live:
-            stream, live_outputs = open_live(c.live_port, robot, controller, sensors=False, joint_states=True)
-            observers.insert(1, live_outputs)
-        loop = RunLoop(controller, backend, session.source, LogRecorder(run, robot, backend), None,
-                       ControlledStop(stop, STOP_TIMEOUT_S), observers=observers, flush_every=100,
-                       on_fault=lambda text: event(log, logging.ERROR, "fault_action", "fault: %s — %s", text, action))
-        session.requested = lambda: loop.requested
+    def deadline(cycle: int, command: Command, out: CycleOutput, reading: object) -> str | None:
+        """The duration has passed: walk to a stop and shut down (not an abrupt end, on servos)."""
+        if session.limit is not None and time.monotonic() >= session.limit and loop is not None \
+                and not loop.requested:
+            loop.request_stop("end")
+        return None
 
-        def release(result: LoopResult) -> None:
-            nonlocal faulted
-            faulted = result.fault is not None
-            assert backend is not None
-            backend.close(faulted)
+    def summarise(finished: Finished) -> RunSummary:
+        return summary_of(("hardware", "ros"), {
+            **bus_run_fields(robot, controller, backend, finished.result, c.dry_run, stop.name), "backend": "bus",
+            "ros_master": node.master_uri, "node": node.name, **finished.shared})
 
-        def summarise(result: LoopResult) -> RunSummary:
-            assert backend is not None
-            return RunSummary.model_validate({
-                **bus_run_fields(robot, controller, backend, result, c.dry_run, stop.name), "backend": "bus",
-                "ros_master": node.master_uri, "node": node.name, **session.clock.statistics(), **path_fields()})
-
-        path, summary, _ = execute(loop, run, summarise, after_loop=release)
-    finally:
-        if backend is not None:
-            backend.close(faulted)  # torque off (or held) also when the loop raised
-        bus.close()
-        if stream is not None:
-            stream.close()
-    return RunResult(path, summary)
+    return RunSpec(controller, backend, session.source, LogRecorder(run, robot, backend), None, run, summarise,
+                   ControlledStop(stop, STOP_TIMEOUT_S), observers=[session.outputs],
+                   live=live_observer(parts, c.live, c.live_port, robot, controller, sensors=False, joint_states=True),
+                   pacing=session.clock, late_observers=[deadline], path_fields=path_fields, after_loop=release,
+                   on_loop=started, flush_every=100, on_fault=fault_action(c.on_fault))
 
 
 def _answering(bus: ServoBus, tries: int = 3) -> None:

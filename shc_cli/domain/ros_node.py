@@ -16,7 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
-from shc_cli.domain.live import open_live
+from shc_cli.domain.live import live_observer
 from shc_cli.domain.result import RunResult
 from shc_cli.domain.ros_config import BACKENDS as BACKENDS
 from shc_cli.domain.ros_config import SERVER
@@ -24,6 +24,8 @@ from shc_cli.domain.ros_config import NodeBackend as NodeBackend
 from shc_cli.domain.ros_config import NodeConfig as NodeConfig
 
 if TYPE_CHECKING:
+    from shc_cli.backends.engine import Reading
+    from shc_cli.loop.assembly import Assembly, Finished, RunSpec
     from shc_cli.record.summary import RunSummary
     from shc_cli.ros.node import RosNode
     from shc_cli.ros.transport import Node
@@ -148,46 +150,43 @@ def _run(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: di
 def _run_outputs_only(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
                       gaits: dict[str, Gait], directory: Path, on_ready: Callable[[str], None] | None) -> RunResult:
     """Backend none: the controller's targets are taken as reached (OpenSHC with a hardware node of the user's)."""
-    from shc_cli.control.controller import Controller
-    from shc_cli.control.verified_limits import source_for
-    from shc_cli.domain.ros_session import NodeSession
-    from shc_cli.loop.plan_summary import PlanRecord, plan_summary
-    from shc_cli.loop.run_loop import Observer, RunLoop
-    from shc_cli.loop.session import execute
-    from shc_cli.record.runlog import RunWriter
-    from shc_cli.ros.measured import MeasuredBackend, MeasuredInputs
+    from shc_cli.loop.assembly import assemble
 
-    # OpenSHC's start-up: /joint_states, /imu/data and /tip_states subscribed, the measured joints waited for
-    measured = MeasuredInputs(node, robot)
-    controller = Controller(robot, gait, joints=measured.wait_for_joints(config.joint_states_timeout),
-                            pose_sets=pose_sets, speed_shares=source_for(robot))
-    writer = RunWriter(directory, robot, config.overwrite)
-    writer.write_robot(robot)
-    record = PlanRecord(controller)
-    session = NodeSession(node, config, robot, controller, gaits, sensors=False)
-    observers: list[Observer[None]] = [record, measured.feed_efforts(session.outputs), session.outputs,
-                                       session.clock, session.deadline]
-    stream = open_live(config.live_port, robot, controller, sensors=False) if config.live else None
-    if stream is not None:
-        observers.insert(3, stream[1])
-    path_fields = session.keep_path(writer.partial)
-    loop = RunLoop(controller, MeasuredBackend(measured), session.source, writer, None, observers=observers,
-                   flush_every=100)
-    session.requested = lambda: loop.requested
-    session.ready(node, config, robot, gait, on_ready)
-    started = time.perf_counter()
+    def build(parts: Assembly) -> RunSpec[None]:
+        from shc_cli.control.controller import Controller
+        from shc_cli.control.verified_limits import source_for
+        from shc_cli.domain.ros_session import NodeSession
+        from shc_cli.loop.assembly import RunSpec
+        from shc_cli.loop.plan_summary import PlanRecord, plan_summary
+        from shc_cli.record.runlog import RunWriter
+        from shc_cli.ros.measured import MeasuredBackend, MeasuredInputs
 
-    def summarise(_: object) -> RunSummary:
-        summary = plan_summary(robot, controller, record, time.perf_counter() - started, writer.partial)
-        return summary.updated(backend=config.backend, ros_master=node.master_uri, node=node.name,
-                               **session.clock.statistics(), **path_fields())
+        # OpenSHC's start-up: /joint_states, /imu/data and /tip_states subscribed, the measured joints waited for
+        measured = MeasuredInputs(node, robot)
+        controller = Controller(robot, gait, joints=measured.wait_for_joints(config.joint_states_timeout),
+                                pose_sets=pose_sets, speed_shares=source_for(robot))
+        writer = RunWriter(directory, robot, config.overwrite)
+        parts.enter(writer)
+        writer.write_robot(robot)
+        record = PlanRecord(controller)
+        session = NodeSession(node, config, robot, controller, gaits, sensors=False)
+        stream = live_observer(parts, config.live, config.live_port, robot, controller, sensors=False)
+        path_fields = session.keep_path(writer.partial)
+        session.ready(node, config, robot, gait, on_ready)
+        started = time.perf_counter()
 
-    try:
-        path, summary, _ = execute(loop, writer, summarise, None)
-    finally:
-        if stream is not None:
-            stream[0].close()
-    return RunResult(path, summary)
+        def summarise(finished: Finished) -> RunSummary:
+            return plan_summary(robot, controller, record, time.perf_counter() - started, finished.directory, {
+                "backend": config.backend, "ros_master": node.master_uri, "node": node.name, **finished.shared},
+                                ("plan", "ros"))
+
+        return RunSpec(controller, MeasuredBackend(measured), session.source, writer, None, writer, summarise,
+                       observers=[record, measured.feed_efforts(session.outputs), session.outputs], live=stream,
+                       pacing=session.clock,
+                       late_observers=[session.deadline], path_fields=path_fields, on_loop=session.watch,
+                       flush_every=100)
+
+    return RunResult(*assemble(build).pair)
 
 
 def _run_simulated(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pose_sets: dict[str, AutoPoseSet],
@@ -195,45 +194,40 @@ def _run_simulated(node: Node, config: NodeConfig, robot: Robot, gait: Gait, pos
     """A physics engine: the robot simulated in real time, its measured joints, IMU, foot forces and power published
     (``/joint_states``, ``/imu/data``, ``/<LEG>/foot_force``, ``/shc/power``) — OpenSHC's Gazebo set-up without
     Gazebo. The engine's options are ``shc simulate``'s defaults for the robot (flat ground, 400 Hz)."""
-    from shc_cli.backends.engine import Reading
-    from shc_cli.backends.simulated import SimulatedBackend, open_world
-    from shc_cli.control.controller import Controller
-    from shc_cli.control.verified_limits import source_for
-    from shc_cli.domain.config import SimulationConfig
-    from shc_cli.domain.ros_session import NodeSession
-    from shc_cli.loop.physics_summary import PhysicsRecord
-    from shc_cli.loop.run_loop import Observer, RunLoop
-    from shc_cli.loop.session import execute
-    from shc_cli.record.runlog import LogRecorder, RunDirectory
+    from shc_cli.loop.assembly import assemble
 
-    sim = SimulationConfig(robot=config.robot, engine=config.backend)
-    with RunDirectory(directory, config.overwrite) as run:
+    def build(parts: Assembly) -> RunSpec[Reading]:
+        from shc_cli.backends.simulated import SimulatedBackend, open_world
+        from shc_cli.control.controller import Controller
+        from shc_cli.control.verified_limits import source_for
+        from shc_cli.domain.config import SimulationConfig
+        from shc_cli.domain.ros_session import NodeSession
+        from shc_cli.loop.assembly import RunSpec
+        from shc_cli.loop.physics_summary import PhysicsRecord
+        from shc_cli.record.runlog import LogRecorder, RunDirectory
+
+        sim = SimulationConfig(robot=config.robot, engine=config.backend)
+        run = parts.enter(RunDirectory(directory, config.overwrite))
         world = open_world(robot, sim.engine_options(robot))
-        with SimulatedBackend(robot, world) as backend:
-            controller = Controller(robot, gait, joints=backend.start(), pose_sets=pose_sets,
-                                    speed_shares=source_for(robot))
-            run.write_robot(robot)
-            record = PhysicsRecord(robot, backend, sim.airborne)
-            session = NodeSession(node, config, robot, controller, gaits, sensors=True)
-            observers: list[Observer[Reading]] = [record, session.outputs, session.clock, session.deadline]
-            stream = open_live(config.live_port, robot, controller, sensors=True) if config.live else None
-            if stream is not None:
-                observers.insert(2, stream[1])
-            path_fields = session.keep_path(run.partial)
-            loop = RunLoop(controller, backend, session.source, LogRecorder(run, robot, backend), None,
-                           observers=observers, flush_every=100)
-            session.requested = lambda: loop.requested
-            session.ready(node, config, robot, gait, on_ready)
+        backend = parts.enter(SimulatedBackend(robot, world))
+        controller = Controller(robot, gait, joints=backend.start(), pose_sets=pose_sets,
+                                speed_shares=source_for(robot))
+        run.write_robot(robot)
+        record = PhysicsRecord(robot, backend, sim.airborne)
+        session = NodeSession(node, config, robot, controller, gaits, sensors=True)
+        stream = live_observer(parts, config.live, config.live_port, robot, controller, sensors=True)
+        path_fields = session.keep_path(run.partial)
+        session.ready(node, config, robot, gait, on_ready)
 
-            def summarise(_: object) -> RunSummary:
-                return record.summary(run.partial, sim.scenario, controller.gait.name, controller).updated(
-                    cycles=record.cycles, engine=world.name, engine_version=world.version,
-                    engine_warnings=world.warnings, backend=config.backend, ros_master=node.master_uri, node=node.name,
-                    **session.clock.statistics(), **path_fields())
+        def summarise(finished: Finished) -> RunSummary:
+            return record.summary(finished.directory, sim.scenario, controller.gait.name, controller, {
+                "cycles": record.cycles, "engine": world.name, "engine_version": world.version,
+                "engine_warnings": world.warnings, "backend": config.backend, "ros_master": node.master_uri,
+                "node": node.name, **finished.shared}, ("simulate", "ros"))
 
-            try:
-                path, summary, _ = execute(loop, run, summarise, None)
-            finally:
-                if stream is not None:
-                    stream[0].close()
-    return RunResult(path, summary)
+        return RunSpec(controller, backend, session.source, LogRecorder(run, robot, backend), None, run, summarise,
+                       observers=[record, session.outputs], live=stream, pacing=session.clock,
+                       late_observers=[session.deadline], path_fields=path_fields, on_loop=session.watch,
+                       flush_every=100)
+
+    return RunResult(*assemble(build).pair)

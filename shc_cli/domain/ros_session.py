@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from shc_cli.control.controller import Controller
     from shc_cli.domain.ros_config import NodeConfig
+    from shc_cli.loop.run_loop import ReadingT, RunLoop
     from shc_cli.ros.transport import Node
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
@@ -50,6 +51,10 @@ class NodeSession:
             name = "path.toml" if self.path.source.suffix.lower() == ".toml" else "path.csv"
             shutil.copyfile(self.path.source, directory / name)
         return lambda: {**({"path_file": name} if name else {}), **self.source.summary()}
+
+    def watch(self, loop: RunLoop[ReadingT]) -> None:
+        """Ask ``loop`` whether a stop was requested (the run assembler tells the loop before it runs)."""
+        self.requested = lambda: loop.requested
 
     def stopped(self) -> bool:
         """A stop was requested, or the duration passed (also while waiting for OPERATIONAL)."""

@@ -4,20 +4,22 @@ logged and summarised in a run directory. Never prints; the command prints the s
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from shc_cli.domain.config import SimulationConfig
-from shc_cli.domain.live import open_live, wall_clock
+from shc_cli.domain.live import live_observer, wall_clock
 from shc_cli.domain.result import RunResult
+from shc_cli.loop.assembly import OnProgress as OnProgress
 
 if TYPE_CHECKING:
-    from shc_cli.backends.engine import Reading
-    from shc_cli.control.controller import Command, CycleOutput
+    from shc_cli.backends.engine import Engine, Reading
+    from shc_cli.control.controller import Controller
     from shc_cli.control.leg_failure import LegFailure
     from shc_cli.control.speed_shares import ShareSource
-    from shc_cli.loop.run_loop import LoopResult
+    from shc_cli.loop.assembly import Assembly, Finished, RunSpec
+    from shc_cli.loop.physics_summary import PhysicsRecord
+    from shc_cli.loop.run_inputs import RunInputs
     from shc_cli.record.summary import RunSummary
     from shc_cli.spec.gait import Gait
     from shc_cli.spec.robot import Robot
@@ -89,117 +91,95 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
     Raises:
         ShcError: bad input (one line), before anything is written.
     """
-    from shc_cli.backends.simulated import SimulatedBackend, open_world
-    from shc_cli.control.controller import Controller
     from shc_cli.errors import Issue, SpecError
     from shc_cli.events import event
-    from shc_cli.loop.input_choice import commands_file, is_live, open_input
+    from shc_cli.loop.assembly import assemble
+    from shc_cli.loop.input_choice import commands_file
+    from shc_cli.loop.run_inputs import load_inputs
+
+    c = config or SimulationConfig()
+    check_display(c.gui)
+    for warning in c.warnings():  # legal but degenerate values (friction 0)
+        event(log, logging.WARNING, "degenerate_option", "warning: %s", warning)
+    if c.path is not None and c.input_mode != "timeline":
+        raise SpecError([Issue(None, None, "--path", f"--path and --input {c.input_mode} both give the run's input",
+                               "drop --input (a path is followed by itself)")])
+    inputs = load_inputs(c.robot, c.gait, c.velocity, c.duration, commands_file(c.input_mode, c.commands),
+                         default_s=20.0, walking=c.walking, robot_change=c.apply_switches, path=c.path)
+    return RunResult(*assemble(lambda parts: _simulation(parts, c, inputs, progress)).pair)
+
+
+def _simulation(parts: Assembly, c: SimulationConfig, inputs: RunInputs, progress: OnProgress | None
+                ) -> RunSpec[Reading]:
+    """The simulation's run specification: the world and the backend, the controller from its start joints, the
+    log, the fall detector (:class:`~shc_cli.loop.physics_summary.PhysicsRecord`) and its summary."""
+    from shc_cli.backends.simulated import SimulatedBackend, open_world
+    from shc_cli.control.controller import Controller
+    from shc_cli.loop.assembly import Progress, RunSpec
+    from shc_cli.loop.input_choice import is_live, open_input
     from shc_cli.loop.path_input import keep_path
     from shc_cli.loop.physics_summary import PhysicsRecord
     from shc_cli.loop.policy.drive import PolicyDrive
-    from shc_cli.loop.run_inputs import load_inputs
-    from shc_cli.loop.run_loop import Observer, RunLoop, StartUp
-    from shc_cli.loop.session import execute
+    from shc_cli.loop.run_loop import Observer, StartUp
     from shc_cli.record.runlog import LogRecorder, RunDirectory, default_run_directory
+
+    by_hand = is_live(c.input_mode)
+    robot, gait, failure = failed_legs(inputs.robot, inputs.gait, c.fail_leg, c.velocity)
+    drive = None if c.policy is None else PolicyDrive.load(c.policy, robot)
+    options = c.engine_options(robot)
+    directory = c.out or default_run_directory("simulate")
+    source = parts.closing(open_input(c.input_mode, robot, gait, inputs.commands(), c.watchdog))  # before the rest
+    run = parts.enter(RunDirectory(directory, c.overwrite))  # refuses an existing --out before the physics opens
+    world = open_world(robot, options)
+    backend = parts.enter(SimulatedBackend(robot, world))
+    controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
+                            failure=failure, speed_shares=speed_source(robot, failure))
+    run.write_robot(robot)
+    if inputs.path is not None:
+        source.close()
+        source = inputs.source(controller)
+    record = PhysicsRecord(robot, backend, c.airborne)
+    observers: list[Observer[Reading]] = [record]
+    if failure is not None and failure.at_s is not None:
+        from shc_cli.loop.leg_fault import FailureEvents
+
+        observers.append(FailureEvents(controller))
+
+    def summarise(finished: Finished) -> RunSummary:  # from the finished log
+        return _summary(record, finished, c, controller, world, by_hand)
+
+    def plot(folder: Path) -> None:
+        from shc_cli.plots import plot_simulation
+
+        plot_simulation(robot, record.plot_series(folder), folder, gait=controller.gait.name)
+
+    path_fields = keep_path(source, run.partial)
+    if drive is not None:
+        source = drive.source(source)
+    return RunSpec(controller, backend, source, LogRecorder(run, robot, backend), StartUp.of(robot), run, summarise,
+                   observers=observers, progress=None if progress is None or by_hand else Progress(progress,
+                                                                                                  inputs.cycles),
+                   live=live_observer(parts, c.live, c.live_port, robot, controller, sensors=True),
+                   pacing=wall_clock(robot) if c.paced else None, path_fields=path_fields,
+                   plot=plot if c.plots else None, flush_every=FLUSH_PACED if c.paced else 200,
+                   on_loop=None if drive is None else drive.join)
+
+
+def _summary(record: PhysicsRecord, finished: Finished, c: SimulationConfig, controller: Controller,
+             world: Engine, by_hand: bool) -> RunSummary:
+    """The simulation's summary, made once from the finished log: the physics record's figures, the world, the
+    seed and versions, and the fields every run shares."""
+    import numpy as np
+
     from shc_cli.version import __version__
 
-    o = config or SimulationConfig()
-    check_display(o.gui)
-    for warning in o.warnings():  # legal but degenerate values (friction 0)
-        event(log, logging.WARNING, "degenerate_option", "warning: %s", warning)
-    if o.path is not None and o.input_mode != "timeline":
-        raise SpecError([Issue(None, None, "--path", f"--path and --input {o.input_mode} both give the run's input",
-                               "drop --input (a path is followed by itself)")])
-    inputs = load_inputs(o.robot, o.gait, o.velocity, o.duration, commands_file(o.input_mode, o.commands),
-                         default_s=20.0, walking=o.walking, robot_change=o.apply_switches, path=o.path)
-    by_hand = is_live(o.input_mode)
-    robot, gait, failure = failed_legs(inputs.robot, inputs.gait, o.fail_leg, o.velocity)
-    drive = None if o.policy is None else PolicyDrive.load(o.policy, robot)
-    options = o.engine_options(robot)
-    directory = o.out or default_run_directory("simulate")
-    source = open_input(o.input_mode, robot, gait, inputs.commands(), o.watchdog)  # before anything opens
-    try:
-        with RunDirectory(directory, o.overwrite) as run:  # refuses an existing --out before the physics opens
-            world = open_world(robot, options)
-            with SimulatedBackend(robot, world) as backend:
-                controller = Controller(robot, gait, joints=backend.start(), pose_sets=inputs.pose_sets,
-                                        failure=failure, speed_shares=speed_source(robot, failure))
-                run.write_robot(robot)
-                if inputs.path is not None:
-                    source.close()
-                    source = inputs.source(controller)
-                path_fields = keep_path(source, run.partial)
-                record = PhysicsRecord(robot, backend, o.airborne)
-                counter = None if progress is None or by_hand else _Progress(progress, inputs.cycles)
-                observers: list[Observer[Reading]] = [record] if counter is None else [record, counter]
-                if failure is not None and failure.at_s is not None:
-                    from shc_cli.loop.leg_fault import FailureEvents
-
-                    observers.append(FailureEvents(controller))
-                live = open_live(o.live_port, robot, controller, sensors=True) if o.live else None
-                if live is not None:
-                    observers.append(live[1])
-                clock = wall_clock(robot) if o.paced else None
-                if clock is not None:
-                    observers.append(clock)
-                loop = RunLoop(controller, backend, source if drive is None else drive.source(source),
-                               LogRecorder(run, robot, backend),
-                               StartUp.of(robot),
-                               observers=observers, flush_every=FLUSH_PACED if o.paced else 200)
-                if drive is not None:
-                    drive.join(loop)
-
-                def summarise(_: LoopResult) -> RunSummary:  # from the finished log (run.partial)
-                    import numpy as np
-
-                    if counter is not None:
-                        counter.stop()
-                    return record.summary(run.partial, o.scenario, controller.gait.name, controller).updated(
-                        seed=o.seed, terrain=str(world.terrain.spec), engine=world.name, engine_version=world.version,
-                        engine_warnings=world.warnings,
-                        versions={"shc": __version__, world.name: world.version, "numpy": np.__version__},
-                        **(clock.statistics() if clock is not None else {}), **path_fields(),
-                        **({"input": o.input_mode} if by_hand else {}))
-
-                def plot(folder: Path) -> None:
-                    from shc_cli.plots import plot_simulation
-
-                    plot_simulation(robot, record.plot_series(folder), folder, gait=controller.gait.name)
-
-                try:
-                    path, summary, _ = execute(loop, run, summarise, plot if o.plots else None)
-                finally:
-                    if live is not None:
-                        live[0].close()
-    finally:
-        source.close()  # a keyboard's terminal leaves cbreak mode
-    return RunResult(path, summary)
+    return record.summary(finished.directory, c.scenario, controller.gait.name, controller, {
+        "seed": c.seed, "terrain": str(world.terrain.spec), "engine": world.name, "engine_version": world.version,
+        "engine_warnings": world.warnings,
+        "versions": {"shc": __version__, world.name: world.version, "numpy": np.__version__},
+        **({"input": c.input_mode} if by_hand else {}), **finished.shared})
 
 
 FLUSH_PACED = 20
 """A run paced to the wall clock flushes its log every this many cycles (0.2 s at 100 Hz): ``shc view --follow``
 shows it that fresh."""
-OnProgress = Callable[[int, int], None]
-"""Told ``(walked cycles, cycles to walk)`` before the run, every :data:`PROGRESS_EVERY` walking cycles and
-``(total, total)`` when the run ends (e.g. a progress bar)."""
-PROGRESS_EVERY = 50
-
-
-
-
-class _Progress:
-    """Counts the walking cycles for an :data:`OnProgress` (an observer of the loop)."""
-
-    def __init__(self, on_progress: OnProgress, total: int) -> None:
-        self.on_progress, self.total, self.walked = on_progress, total, 0
-        on_progress(0, total)
-
-    def __call__(self, cycle: int, command: Command, out: CycleOutput, reading: object) -> str | None:
-        if command.state_request is None or out.robot_state.name == "RUNNING":
-            self.walked += 1
-            if self.walked % PROGRESS_EVERY == 0:
-                self.on_progress(self.walked, self.total)
-        return None
-
-    def stop(self) -> None:
-        self.on_progress(self.total, self.total)

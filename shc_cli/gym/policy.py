@@ -46,7 +46,7 @@ def export_sb3(model: Any, env: WalkEnv, normalize: Any = None) -> Policy:
 
     Raises:
         ValueError: the model is not a torch MLP policy of Linear layers and one activation."""
-    import torch
+    import torch  # type: ignore[import-not-found,unused-ignore]
 
     policy = model.policy
     modules = [*policy.mlp_extractor.policy_net, policy.action_net]

@@ -23,13 +23,14 @@ import numpy as np
 from shc_cli.backends.engine import tilt
 from shc_cli.control.controller import RobotState
 from shc_cli.events import event
-from shc_cli.record.summary import RunSummary
+from shc_cli.record.summary_kinds import Kind, summary_of
 
 if TYPE_CHECKING:
     from shc_cli.backends.engine import Reading
     from shc_cli.backends.simulated import SimulatedBackend
     from shc_cli.control.controller import Command, Controller, CycleOutput
     from shc_cli.record.runread import RunLog
+    from shc_cli.record.summary import RunSummary
     from shc_cli.spec.robot import Robot
 
 log = logging.getLogger(__name__)
@@ -120,9 +121,13 @@ class PhysicsRecord:
         event(log, logging.WARNING, "diverged", "%s", self.diverged, cycle=cycle, terminal=False)
         return DIVERGED
 
-    def summary(self, directory: Path, scenario: str, gait: str, controller: Controller) -> RunSummary:
+    def summary(self, directory: Path, scenario: str, gait: str, controller: Controller,
+                fields: dict[str, object] | None = None, kinds: tuple[Kind, ...] = ("simulate",)) -> RunSummary:
         """The summary from the finished log in ``directory`` (the run directory, still ``.partial``); paper eq. 22
-        cost of transport over the RUNNING window: mean power / (m·g·v) (WG only)."""
+        cost of transport over the RUNNING window: mean power / (m·g·v) (WG only). ``fields``: the run's other
+        fields (its engine, the fields every run shares, :class:`~shc_cli.loop.assembly.Finished`), made into the
+        summary with these (a field of both: ``fields``' value), a summary of ``kinds``
+        (:func:`~shc_cli.record.summary_kinds.summary_of`)."""
         from shc_cli.analysis.metrics import walk_figures
         from shc_cli.record.runread import read_tables
 
@@ -149,7 +154,7 @@ class PhysicsRecord:
             progress = progress_fields(0.0, 0.0, 0.0)
             distance = forward = speed = path_speed = commanded = 0.0
             power, mass, cot, cot_displacement, walked = None, body_mass(robot), None, None, 0.0
-        return RunSummary.model_validate({
+        return summary_of(kinds, {
             "robot": robot.name,
             "gait": gait,
             "scenario": scenario,
@@ -182,6 +187,7 @@ class PhysicsRecord:
             **({"fall": self.fall} if self.fall is not None else {}),
             **({"fault": self.diverged} if self.diverged is not None else {}),
             **final_poses(finished),
+            **(fields or {}),
         })
 
     def plot_series(self, directory: Path) -> dict[str, Any]:

@@ -18,6 +18,7 @@ import numpy as np
 from shc_cli.control.controller import Command, Controller, CycleOutput, RobotState
 from shc_cli.control.walk import WalkState
 from shc_cli.record.summary import RunSummary
+from shc_cli.record.summary_kinds import Kind, summary_of
 from shc_cli.spec.robot import Robot
 
 
@@ -61,11 +62,13 @@ def eq16_speed(controller: Controller, linear_input: tuple[float, float]) -> flo
     return stride * cycle.frequency / cycle.duty_factor
 
 
-def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, seconds: float, directory: Path
-                 ) -> RunSummary:
+def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, seconds: float, directory: Path,
+                 fields: dict[str, object] | None = None, kinds: tuple[Kind, ...] = ("plan",)) -> RunSummary:
     """Cycles, speeds (achieved by the stance feet vs paper eq. 16), odometry, IK statistics; the ideal body path's
     speeds from the finished tables in ``directory`` (the run directory, still ``.partial``) as ``shc analyze``
-    gives them (:func:`shc_cli.analysis.metrics.walk_figures` over the RUNNING rows)."""
+    gives them (:func:`shc_cli.analysis.metrics.walk_figures` over the RUNNING rows). ``fields``: the run's other
+    fields (the fields every run shares, :class:`~shc_cli.loop.assembly.Finished`; a field of both: ``fields``'
+    value); a summary of ``kinds`` (:func:`~shc_cli.record.summary_kinds.summary_of`)."""
     dt = robot.time_delta
     outputs = record.outputs
     cycle = controller.cycle
@@ -95,7 +98,7 @@ def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, secon
     else:  # stopped before its first cycle
         path_speed = displacement_speed = commanded = 0.0
         progress = progress_fields(0.0, 0.0, 0.0)
-    return RunSummary.model_validate({
+    return summary_of(kinds, {
         "robot": robot.name,
         "gait": controller.gait.name,
         "gaits": record.gaits or [controller.gait.name],
@@ -123,4 +126,5 @@ def plan_summary(robot: Robot, controller: Controller, record: PlanRecord, secon
         "ik_clamp_count": sum(o.ik_clamped for o in outputs),
         "wall_time_s": seconds,
         "walkspace": {str(b): r for b, r in controller.walkspace.items()},
+        **(fields or {}),
     })

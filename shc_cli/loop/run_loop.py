@@ -7,7 +7,7 @@ controlled stop — requests towards the stop state), the controller step with t
 shown to a source that steers by it (:class:`~shc_cli.backends.base.FeedbackSource`: a path follower), the
 targets applied, one control period, the reading, the fault check, the recorder's row, the observers (who may
 stop the run: a fall). It stops when the input is over, on a fault, on an observer's reason or on a stop request
-(SIGINT/SIGTERM via :func:`shc_cli.loop.session.interrupts`, or :meth:`RunLoop.request_stop`). Robot and walk state
+(SIGINT/SIGTERM via :func:`shc_cli.loop.assembly.assemble`, or :meth:`RunLoop.request_stop`). Robot and walk state
 changes, faults, stop requests and the end are logged as events (:mod:`shc_cli.events`: the run's ``events.log``).
 :meth:`RunLoop.run` is :meth:`RunLoop.begin`, :meth:`RunLoop.step` until it returns ``None``, :meth:`RunLoop.finish`;
 the Gymnasium environment (:mod:`shc_cli.gym`) calls them itself, one cycle a step, with an :data:`Adjust` of the

@@ -3,7 +3,7 @@
 A run directory (:class:`~shc_cli.record.runlog.RunDirectory`) catches both signals as soon as it is created, so a
 signal while the physics opens or the controller is built is not lost: the loop, once it starts, stops at its
 first cycle and the run directory is finished like any interrupted run (``summary.json`` with ``"complete":
-false``). :func:`shc_cli.loop.session.execute` routes the signals to the loop while it runs; a repeated signal while
+false``). :func:`shc_cli.loop.assembly.assemble` routes the signals to the loop while it runs; a repeated signal while
 the run is finishing skips what is left (the plots). Only the main thread can handle signals: elsewhere (a sweep's
 worker thread) nothing is installed.
 """

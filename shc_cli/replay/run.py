@@ -65,8 +65,10 @@ def replay(recorded: Recorded, robot: Robot, gait: Gait, pose_sets: dict[str, Au
         return None
 
     from shc_cli.backends.kinematic import KinematicBackend
-    from shc_cli.loop.run_loop import NullRecorder, RunLoop, SequenceInput
+    from shc_cli.loop.assembly import RunSpec, assemble
+    from shc_cli.loop.run_loop import NullRecorder, SequenceInput
 
     commands = SequenceInput(inputs.command(cycle) for cycle in range(recorded.cycles))
-    RunLoop(controller, KinematicBackend(), commands, NullRecorder(), start_up=None, observers=[observe]).run()
+    assemble(lambda _: RunSpec(controller, KinematicBackend(), commands, NullRecorder(), start_up=None,
+                               observers=[observe]))  # no run directory: compared, not recorded
     return Replay(recorded, plan, comparer.result(), robot_states, walk_states, inputs.retimed)
