@@ -39,8 +39,6 @@ TOLERANCES: dict[tuple[str, str, str], tuple[float, float, str]] = {
     ("athena", "flat", "SG"): (SPEED, 0.45, POSITION_SERVO + " (here MuJoCo's is the higher)"),
     ("bullet", "flat", "SG"): (SPEED, 0.45, "standing up from the ground: PyBullet's rigid contacts keep more of the "
                                             "push's internal forces in the stance"),
-    ("octopod", "blocks", "WG"): (0.15, POWER, CRAWL),
-    ("octopod", "stairs:0.04,0.3", "WG"): (SPEED, 0.25, CRAWL + "; " + POSITION_SERVO),
     ("octopod", "flat", "SG"): (SPEED, 0.30, POSITION_SERVO),
     ("quadruped", "flat", "WG"): (SPEED, 0.55, POSITION_SERVO),
     ("quadruped", "ramp:10", "WG"): (0.15, 0.30, "MuJoCo's feet still give a little under the downhill load (the "
