@@ -108,7 +108,8 @@ def test_turning_while_walking_turns_along_each_side_in_proportion_to_the_distan
         x, y, yaw = (float(v) for v in walker.pose)
         velocity = follower.update((x, y, yaw), _limits, DT)
         asked.append(velocity)
-        assert abs(velocity[2]) <= LIMITS.yaw_rate + 1e-9 and math.hypot(velocity[0], velocity[1]) <= LIMITS.speed + 1e-9
+        assert abs(velocity[2]) <= LIMITS.yaw_rate + 1e-9
+        assert math.hypot(velocity[0], velocity[1]) <= LIMITS.speed + 1e-9
         if not follower.done and not follower.turning and len(halfway) == follower.index:
             ax, ay, ayaw = starts[follower.index]
             target = SQUARE[follower.index]
