@@ -4,6 +4,7 @@ path file is one line and exit 2 with nothing written."""
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 from pathlib import Path
@@ -73,10 +74,12 @@ def test_a_toml_path_with_a_tolerance_and_without_headings(tmp_path: Path, capsy
     ("[[waypoint]]\nx = 1.0\n", ":1: waypoint.0.y", "missing required field"),
     ("[[waypoint]]\nx = 1.0\ny = 0.0\nheading = 1.0\n", ":4: waypoint.0.heading", "unknown key 'heading'"),
     ("tolerance = 0.0\n[[waypoint]]\nx = 1.0\ny = 0.0\n", ":1: tolerance", "must be > 0, got 0.0"),
+    ('turn = "while_walking"\n[[waypoint]]\nx = 1.0\ny = 0.0\n', ":1: turn",
+     "'while_walking' is not allowed (use 'at-waypoints' or 'while-walking')"),
 ])
 def test_a_bad_path_file_is_one_line_and_exit_2(text: str, where: str, what: str, tmp_path: Path, capsys,  # type: ignore[no-untyped-def]
                                                  monkeypatch) -> None:
-    file = tmp_path / ("bad.toml" if text.startswith(("[", "tolerance")) else "bad.csv")
+    file = tmp_path / ("bad.toml" if text.startswith(("[", "tolerance", "turn")) else "bad.csv")
     file.write_text(text)
     out = tmp_path / "run"
     for command in (["plan", "--path", str(file), "--out", str(out)],
@@ -87,6 +90,23 @@ def test_a_bad_path_file_is_one_line_and_exit_2(text: str, where: str, what: str
         assert len(lines) == 1 and "Traceback" not in err, err
         assert f"{file}{where}" in lines[0] and what in lines[0], lines[0]
         assert not out.exists() and not out.with_name("run.partial").exists()
+
+
+def test_the_turning_square_is_walked_turning_along_its_sides_by_the_plan(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    """paths/square_2m_turning.toml (headings of arrival, ``turn = "while-walking"``): the kinematic plan reaches 4/4
+    within 2 cm, and halfway along the first side (x = 1 m) the body has turned about 45° (between 35° and 55°)."""
+    out = tmp_path / "turning"
+    code, stdout, err = run(["plan", "--path", str(SQUARE.with_name("square_2m_turning.toml")), "--out", str(out)],
+                            capsys, monkeypatch)
+    assert code == 0, err
+    assert "path: 4/4 waypoints reached (odometry)" in stdout
+    result = _analysis(out, capsys, monkeypatch)
+    errors = result["waypoint_errors_m"]
+    assert result["waypoints_reached"] == 4 and isinstance(errors, list) and max(errors) <= 0.02, result
+    with (out / "body.csv").open(newline="") as handle:
+        body = list(csv.DictReader(handle))
+    halfway = next(row for row in body if float(row["odom_x"]) >= 1.0)
+    assert 35.0 <= math.degrees(float(halfway["odom_yaw"])) <= 55.0, halfway["odom_yaw"]
 
 
 def test_path_and_commands_together_are_refused(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]

@@ -94,6 +94,39 @@ def test_walks_the_square_reaches_every_waypoint_and_stops_at_the_last() -> None
     assert all(a is not None and b is not None and a < b for a, b in itertools.pairwise(times))
 
 
+def test_turning_while_walking_turns_along_each_side_in_proportion_to_the_distance_walked() -> None:
+    """``turn_while_walking``: the heading of arrival is turned to along the segment — halfway along each side the
+    heading is halfway between the two waypoints' (within 5°), the whole square is reached with no turn on the spot
+    longer than a few seconds, and the yaw rate and speed stay within the walker's limits."""
+    options = FollowerOptions(turn_while_walking=True)
+    follower = PathFollower(SQUARE, options)
+    walker = Walker()
+    halfway: list[float] = []
+    asked: list[tuple[float, float, float]] = []
+    starts = [(0.0, 0.0, 0.0), *((w.x, w.y, w.yaw or 0.0) for w in SQUARE[:-1])]
+    for _ in range(round(200.0 / DT)):
+        x, y, yaw = (float(v) for v in walker.pose)
+        velocity = follower.update((x, y, yaw), _limits, DT)
+        asked.append(velocity)
+        assert abs(velocity[2]) <= LIMITS.yaw_rate + 1e-9
+        assert math.hypot(velocity[0], velocity[1]) <= LIMITS.speed + 1e-9
+        if not follower.done and not follower.turning and len(halfway) == follower.index:
+            ax, ay, ayaw = starts[follower.index]
+            target = SQUARE[follower.index]
+            if math.hypot(x - ax, y - ay) >= 1.0:  # halfway along the 2 m side
+                halfway.append(math.degrees(wrap(yaw - (ayaw + wrap((target.yaw or 0.0) - ayaw) / 2.0))))
+        walker.step(velocity_input(velocity, LIMITS, throttle=True))
+        if follower.done and not walker.velocity.any():
+            break
+    assert follower.done and follower.reached == 4
+    assert len(halfway) == 4 and max(abs(h) for h in halfway) <= 5.0, halfway
+    # no turning on the spot (asked to turn faster than 0.05 rad/s while moving slower than 1 cm/s), where the
+    # default follower turns on the spot at every corner
+    _, _, plain = _walk(SQUARE)
+    on_the_spot = [sum(abs(w) > 0.05 and math.hypot(vx, vy) < 0.01 for vx, vy, w in run) * DT for run in (asked, plain)]
+    assert on_the_spot[0] < 0.5 and on_the_spot[1] > 10.0, on_the_spot
+
+
 @settings(max_examples=25, deadline=None)
 @given(st.lists(st.tuples(st.floats(-1.5, 1.5), st.floats(-1.5, 1.5), st.one_of(st.none(), st.floats(-3.1, 3.1))),
                 min_size=1, max_size=3))

@@ -97,7 +97,7 @@ def test_the_default_robot_is_the_papers_bullet_and_its_paper_name_is_the_same_r
     assert paper.model_copy(update={"name": bullet.name, "description": bullet.description, "walker": walker}) == bullet
     assert bullet.total_mass() == pytest.approx(10.07, abs=0.005)  # Table I, arrangement A
     assert (bullet.walker.body_clearance, bullet.walker.swing_height.default) == (0.20, 0.15)  # Table III
-    assert bullet.servo.control == "dynamixel" and bullet.servo.holding_ratio < 1.0
+    assert bullet.servo.control == "dynamixel" and bullet.servo.coulomb_friction > 0.0  # fitted (the default is 0)
     assert b.legs["AR"].joints == openshc.legs["AR"].joints
 
 

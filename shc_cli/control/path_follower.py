@@ -74,6 +74,11 @@ class FollowerOptions:
         gain: position gain along and across the segment [1/s].
         heading_gain: heading gain [1/s].
         timeout_s: time allowed per waypoint before it counts as missed and the follower moves on [s].
+        turn_while_walking: a waypoint's heading is the heading of *arrival*: along each segment the heading goes
+            from the one the segment began with to the waypoint's in proportion to the distance walked (a yaw rate
+            of the heading change × the speed along ÷ the segment's length, plus ``heading_gain`` × the error), so
+            the robot turns as it walks, as an RViz goal sequence asks; the turn on the spot only settles what is
+            left. Off (the default): walk holding the heading, then turn on the spot.
     """
 
     tolerance_m: float = 0.05
@@ -85,6 +90,7 @@ class FollowerOptions:
     gain: float = 1.5
     heading_gain: float = 2.0
     timeout_s: float = 60.0
+    turn_while_walking: bool = False
 
     def __post_init__(self) -> None:
         if not 0.0 < self.arrive_m <= self.tolerance_m:
@@ -227,16 +233,24 @@ class PathFollower:
         along = (target.x - x) * tx + (target.y - y) * ty
         across = (x - ax) * -ty + (y - ay) * tx
         assert self._hold_yaw is not None
-        yaw_error = wrap(self._hold_yaw - yaw)
+        turn = wrap(target.yaw - self._hold_yaw) if o.turn_while_walking and target.yaw is not None else 0.0
+        progress = min(max(1.0 - along / length, 0.0), 1.0) if turn else 0.0
+        yaw_error = wrap(self._hold_yaw + turn * progress - yaw)
         # the limits in the body direction of the intended motion
         wx, wy = tx * along - ty * across, ty * along + tx * across
         c, s = math.cos(yaw), math.sin(yaw)
         limits = limits_for(c * wx + s * wy, -s * wx + c * wy, 0.0)
         w_cap = o.speed_share * limits.yaw_rate
+        brake = o.brake_share * limits.acceleration
         wz = math.copysign(_profile(abs(yaw_error), w_cap, o.brake_share * limits.yaw_acceleration,
                                     o.heading_gain), yaw_error)
+        if turn:  # turning while walking: the walker gives up 1 − |ω|/ω_max of the speed for the yaw rate
+            share = abs(turn) / length * o.speed_share * limits.speed  # yaw rate at full speed along
+            scale = 1.0 / (1.0 + share / limits.yaw_rate) if limits.yaw_rate > 0 else 1.0
+            speed = _profile(abs(along), o.speed_share * limits.speed * scale, brake, o.gain)
+            wz = max(-w_cap, min(w_cap, math.copysign(abs(turn) / length * speed, turn * along)
+                                 + o.heading_gain * yaw_error))
         cap = o.speed_share * limits.speed * (1.0 - abs(wz) / limits.yaw_rate if limits.yaw_rate > 0 else 1.0)
-        brake = o.brake_share * limits.acceleration
         v_along = math.copysign(_profile(abs(along), cap, brake, o.gain), along)
         v_across = max(-cap, min(cap, -o.gain * across))
         vx_w, vy_w = tx * v_along - ty * v_across, ty * v_along + tx * v_across

@@ -52,10 +52,11 @@ class PathInput:
     def __init__(self, path: Path2D, controller: Controller, cycles: int | None = None,
                  options: FollowerOptions | None = None, cycle: int = 0) -> None:
         if options is None:
-            options = FollowerOptions()
+            options = FollowerOptions(turn_while_walking=path.turn_while_walking)
             if path.tolerance_m is not None:
                 options = FollowerOptions(tolerance_m=path.tolerance_m,
-                                          arrive_m=min(options.arrive_m, path.tolerance_m))
+                                          arrive_m=min(options.arrive_m, path.tolerance_m),
+                                          turn_while_walking=path.turn_while_walking)
         self.path = path
         self.follower = PathFollower(path.waypoints, options)
         self.controller = controller

@@ -29,6 +29,7 @@ import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal
 
 from pydantic import Field, ValidationError
 
@@ -64,11 +65,14 @@ class Path2D:
         waypoints: at least one.
         source: the file they were read from (``None``: made in code).
         tolerance_m: the file's own reach tolerance [m] (``None``: the follower's default).
+        turn_while_walking: the headings are headings of arrival, turned to along each segment (the file's
+            ``turn = "while-walking"``); else turned to on the spot at the waypoint.
     """
 
     waypoints: tuple[Waypoint, ...]
     source: Path | None = None
     tolerance_m: float | None = None
+    turn_while_walking: bool = False
 
     @property
     def length_m(self) -> float:
@@ -88,6 +92,9 @@ class PathFile(Strict):
 
     tolerance: float | None = Field(None, gt=0, le=1.0, description="distance within which a waypoint counts as "
                                                                     "reached [m] (default: the follower's, 0.05)")
+    turn: Literal["at-waypoints", "while-walking"] = Field(
+        "at-waypoints", description="where the headings are turned to: on the spot at each waypoint, or along each "
+        "segment (the heading of arrival, as an RViz goal sequence)")
     waypoint: list[_TomlWaypoint] = Field(description="the waypoints, in the order they are walked to")
 
 
@@ -196,4 +203,5 @@ def _load_toml(path: Path) -> Path2D:
             if value is not None:
                 _, line = located.where(("waypoint", index, name))
                 _check(path, line, f"waypoint[{index}].{name}", value, name)
-    return Path2D(tuple(Waypoint(w.x, w.y, w.yaw) for w in loaded.waypoint), path, loaded.tolerance)
+    return Path2D(tuple(Waypoint(w.x, w.y, w.yaw) for w in loaded.waypoint), path, loaded.tolerance,
+                  loaded.turn == "while-walking")

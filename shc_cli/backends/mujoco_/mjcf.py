@@ -16,7 +16,9 @@ simulate the same bodies (``tests/test_engines.py`` checks both engines' foot fr
 Terrain: the infinite ground plane, every box of :meth:`Terrain.boxes` as a static geom, a height field as an
 ``hfield``. Robot geoms are in group 1 and collide only with terrain geoms (group 0): no self-collision, as in
 PyBullet. Friction is mapped to PyBullet's combined contact (docs/physics-model.md): PyBullet multiplies the two
-bodies' coefficients, MuJoCo takes the larger, so every geom gets ``friction²``. Restitution is not mapped: MuJoCo's
+bodies' coefficients, MuJoCo takes the larger, so every geom gets ``friction²``; the cone is elliptic (isotropic, as
+Bullet's) and the friction impedance 10 × the normal one, so loaded feet hold as Bullet's rigid friction does
+(:data:`FRICTION_CONE`, :data:`FRICTION_IMPEDANCE_RATIO`). Restitution is not mapped: MuJoCo's
 only stand-in, an under-damped contact spring, bounces every contact at every speed, while PyBullet gives no
 restitution below its 0.2 m/s threshold — where a walking foot lands. The under-damped spring made ATHENA slip back
 down the 10° ramp (0.009 against PyBullet's 0.039 m/s); PyBullet walks it the same with restitution 0.5 and 0
@@ -47,6 +49,16 @@ the penetration below its surface), the site catches them and nothing of the nex
 count anyway (a touch sensor sees only its own body's contacts)."""
 CONTACT_TIME_CONSTANT = 0.005
 """MuJoCo contact ``solref`` time constant [s]: stiff contacts, ≥ 2 physics steps at 400 Hz."""
+FRICTION_CONE = "elliptic"
+"""MuJoCo's friction cone. Bullet bounds the friction along the contact's sliding direction by ``μ·N`` (its first
+friction direction follows the relative velocity), the same in every direction; MuJoCo's pyramidal cone bounds
+``|f_x| + |f_y| ≤ μ·N`` in the contact frame's axes (0.71 μ on a diagonal), the elliptic cone ``|f_t| ≤ μ·N``
+in every direction, as Bullet."""
+FRICTION_IMPEDANCE_RATIO = 10.0
+"""MuJoCo ``impratio``: the friction constraints' impedance over the normal one's. At 1 a soft contact's friction is
+as soft as its normal force, so a loaded foot creeps under any tangential load (downhill on a ramp, the stance's
+internal forces when standing), where Bullet's rigid friction constraint holds it; 10 stops that creep (measured in
+docs/physics-model.md, "The cross-engine matrix")."""
 STAND_TIME_CONSTANT = 0.005
 """Time constant of the stand's weld [s]."""
 ROBOT_GROUP = 1
@@ -114,7 +126,7 @@ def robot_mjcf(robot: Robot, terrain: Terrain, options: Options) -> str:
     root = ET.Element("mujoco", model=robot.name)
     ET.SubElement(root, "compiler", angle="radian", autolimits="true", inertiafromgeom="false")
     ET.SubElement(root, "option", timestep=_num(options.timestep), gravity=_vec((0.0, 0.0, -GRAVITY)),
-                  integrator="implicitfast", cone="pyramidal")
+                  integrator="implicitfast", cone=FRICTION_CONE, impratio=_num(FRICTION_IMPEDANCE_RATIO))
     mu = options.friction * options.friction
     default = ET.SubElement(root, "default")
     ET.SubElement(default, "geom", friction=f"{_num(mu)} 0.005 0.0001",
