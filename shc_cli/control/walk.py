@@ -63,6 +63,13 @@ class WalkController:
         self.walk_plane_normal = np.array([0.0, 0.0, 1.0])
         self._plane_tips: np.ndarray | None = None
         self._no_contacts = np.zeros(len(self.leg_ids), dtype=np.bool_)
+        self.step_plane: tuple[np.ndarray, np.ndarray] | None = None
+        """This cycle's step-plane input (:mod:`shc_cli.control.step_plane`): each leg's target shift ``(L, 3)``
+        in the walk-plane frame and swing clearance ``(L,)`` [m]; ``None``: blind (OpenSHC's behaviour)."""
+        self.max_plane_slope = 0.0
+        """With a step-plane input, the walk plane's slope is clamped to this (tan of its pitch and roll)."""
+        self._no_offsets = np.zeros((len(self.leg_ids), 3))
+        self._no_clearances = np.zeros(len(self.leg_ids))
 
     @property
     def cycle(self) -> StepCycle:
@@ -112,18 +119,24 @@ class WalkController:
             step_depth: reactive target lowering in rough-terrain mode [m].
         """
         legs = self.legs
+        plane_input = self.step_plane
+        perceive = plane_input is not None
+        offsets, clearances = (self._no_offsets, self._no_clearances) if plane_input is None else plane_input
         state, moved = stepping.walk_update(
             legs.vectors, legs.nodes, legs.floats, legs.integers, self.counters, self._walk, int(self.state),
             self._table, self._bearing_step, *self._cycle_values, self.time_delta, float(linear_input[0]),
             float(linear_input[1]), float(angular_input),
             self._throttle, self.swing_height, self.swing_width, self.walk_plane, self.walk_plane_normal,
             np.asarray(default_body_position, dtype=float), legs_walking, posing_complete, self._limit_out,
-            self.rough_terrain, float(step_depth), contacts is not None,
+            self.rough_terrain or perceive, float(step_depth), contacts is not None,
             self._no_contacts if contacts is None else np.asarray(contacts, dtype=np.bool_),
+            perceive, offsets, clearances,
         )
         if state != self.state:
             self.state = WalkState(state)
-        if moved or self._plane_tips is None:  # the plane only depends on the default tips
+        if plane_input is not None:  # seeing the ground: the plane of the predicted footholds
+            self._update_walk_plane(stepping.TARGET)
+        elif moved or self._plane_tips is None:  # the plane only depends on the default tips
             self._plane_tips = self.legs.vectors[:, stepping.DEFAULT].copy()
             self._update_walk_plane()
 
@@ -152,13 +165,20 @@ class WalkController:
         """Ideal odometry heading [rad]."""
         return float(self._walk[stepping.ODOMETRY_YAW])
 
-    def _update_walk_plane(self) -> None:
-        """Least-squares plane through the legs' default tips (study §7.6)."""
+    def _update_walk_plane(self, slot: int = stepping.DEFAULT) -> None:
+        """Least-squares plane through the legs' default tips (study §7.6).
+
+        With a step-plane input, through the legs' targets (the predicted footholds, ATHENA-style), its slope
+        clamped to :attr:`max_plane_slope`: the body rises and tilts before the feet step up.
+        """
         if len(self.leg_ids) < 3:
             return
-        tips = self.legs.vectors[:, stepping.DEFAULT]
+        tips = self.legs.vectors[:, slot]
         design = np.column_stack([tips[:, 0], tips[:, 1], np.ones(len(tips))])
         self.walk_plane = np.linalg.inv(design.T @ design) @ design.T @ tips[:, 2]
+        if slot != stepping.DEFAULT:
+            limit = self.max_plane_slope
+            self.walk_plane[:2] = np.clip(self.walk_plane[:2], -limit, limit)
         normal = np.array([-self.walk_plane[0], -self.walk_plane[1], 1.0])
         self.walk_plane_normal = normal / np.linalg.norm(normal)
 

@@ -119,6 +119,7 @@ class SimulationConfig(BaseModel):
     realtime: bool = False
     input_mode: str = "timeline"
     watchdog: float = 0.5
+    perception: Literal["off", "rays"] = "off"
 
     def __init__(self, **options: Any) -> None:
         unknown = [key for key in options if key not in type(self).model_fields]

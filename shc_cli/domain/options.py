@@ -121,6 +121,8 @@ SIMULATE: dict[str, Option] = {option.name: option for option in (
     Option("input_mode", str, "timeline", "timeline, commands:FILE, stdin, keyboard or gamepad[:DEVICE]."),
     Option("watchdog", float, 0.5, "stdin: seconds without a line before the velocity goes to 0.", "s", 0.0, 3600.0,
            True, example="0.5"),
+    Option("perception", str, "off", "off (blind, as OpenSHC) or rays: a simulated depth sensor's height map "
+           "shapes footholds, swing height and body height (docs/terrain-adaptation.md)."),
 )}
 """Every option of ``shc simulate``, in its order."""
 

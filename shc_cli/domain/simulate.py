@@ -124,6 +124,12 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
                 clock = wall_clock(robot) if o.paced else None
                 if clock is not None:
                     observers.append(clock)
+                if o.perception == "rays":  # the depth sensor: an observer whose map the commands carry
+                    from shc_cli.loop.perception import RayPerception
+
+                    eyes = RayPerception(robot, world, o.seed)
+                    observers.insert(0, eyes)
+                    source = eyes.wrap(source)
                 loop = RunLoop(controller, backend, source, LogRecorder(run, robot, backend),
                                StartUp.of(robot),
                                observers=observers, flush_every=FLUSH_PACED if o.paced else 200)
@@ -138,7 +144,8 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
                         engine_warnings=world.warnings,
                         versions={"shc": __version__, world.name: world.version, "numpy": np.__version__},
                         **(clock.statistics() if clock is not None else {}), **path_fields(),
-                        **({"input": o.input_mode} if by_hand else {}))
+                        **({"input": o.input_mode} if by_hand else {}),
+                        **({"perception": o.perception} if o.perception != "off" else {}))
 
                 def plot(folder: Path) -> None:
                     from shc_cli.plots import plot_simulation

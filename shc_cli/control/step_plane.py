@@ -1,0 +1,234 @@
+"""The step-plane input: footholds, swing clearance and body height from a height map (issue 40).
+
+OpenSHC has the input and nothing that feeds it: in rough-terrain mode a known step plane under a foot shifts that
+leg's swing target along the walk-plane normal onto it ("proactive" target shifting, study §5.7, §8.4), and its
+code leaves the range sensor that would give it as a TODO. Here a :class:`TerrainMap` — a robot-centred 2.5-D grid
+of terrain heights and the body's pose in the grid's frame, as a depth sensor and the odometry make it — comes in
+with the cycle's :class:`~shc_cli.control.controller.Command` (the controller stays pure), and
+:meth:`StepPlanes.update` turns it into the walker's per-leg inputs (:attr:`WalkController.step_plane`):
+
+* **landing height**: each leg's target is shifted along the vertical by the map's height under it minus the
+  target's own height in the map frame (the step plane of OpenSHC's proactive shift, from the map, not from a
+  touch);
+* **away from edges**: a target whose cell lies within ``edge_margin`` of a height change above ``edge_step``
+  moves to the nearest cell (at most ``max_shift`` away) whose surroundings are level, and lands on the highest
+  point around it;
+* **swing height from obstacles**: before a leg lifts off, its clearance is the walker's swing height or, if
+  higher, the highest point of the map along the straight path from the foot to its target above the higher end,
+  plus ``clearance_margin`` (at most ``max_clearance``); it is kept for the whole swing;
+* **body height and pitch** follow the stance: with the input the walker updates each default tip through where
+  its foot landed (OpenSHC's rough-terrain default-tip update, study §5.5) and the walk plane through them carries
+  the body (§7.6), its slope clamped to ``max_slope``.
+
+Unknown cells (never seen) leave a leg blind: no shift, the walker's swing height. The kernels are compiled: the
+per-cycle cost is a few µs (``benchmarks/bench_height_map.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from shc_cli.model.jit import njit
+
+
+@njit(cache=True)
+def _surroundings(heights, radius):  # type: ignore[no-untyped-def]
+    """Each known cell's highest height and height span over the known cells within ``radius`` cells (an unknown
+    cell: nan and inf)."""
+    n, m = heights.shape
+    top = np.full((n, m), np.nan)
+    span = np.full((n, m), np.inf)
+    for i in range(n):
+        for j in range(m):
+            if math.isnan(heights[i, j]):
+                continue
+            high, low = -np.inf, np.inf
+            for a in range(max(0, i - radius), min(n, i + radius + 1)):
+                for b in range(max(0, j - radius), min(m, j + radius + 1)):
+                    h = heights[a, b]
+                    if not math.isnan(h):
+                        high = max(high, h)
+                        low = min(low, h)
+            top[i, j] = high
+            span[i, j] = high - low
+    return top, span
+
+
+@njit(cache=True)
+def _cell(x, y, cell, ci, cj, half):  # type: ignore[no-untyped-def]
+    return math.floor(x / cell + 0.5) - ci + half, math.floor(y / cell + 0.5) - cj + half
+
+
+@njit(cache=True)
+def _height(top, x, y, cell, ci, cj, half):  # type: ignore[no-untyped-def]
+    i, j = _cell(x, y, cell, ci, cj, half)
+    if 0 <= i < top.shape[0] and 0 <= j < top.shape[1]:
+        return top[i, j]
+    return math.nan
+
+
+@njit(cache=True)
+def _footholds(  # type: ignore[no-untyped-def]
+    heights, top, span, cell, ci, cj, targets, tips, walker_targets, walker_tips, swinging, swing_height, edge_step,
+    reach, clearance_margin, max_clearance, yaw, offsets, clearances,
+):
+    """Per leg: the target shift into ``offsets`` (walk-plane frame) and, for legs not ``swinging``, the swing
+    clearance into ``clearances``. ``targets`` and ``tips`` (L, 3) are in the map frame (their x, y are used),
+    ``walker_targets`` and ``walker_tips`` in the walk-plane frame (their z is used)."""
+    n = top.shape[0]
+    half = n // 2
+    legs = targets.shape[0]
+    # The walk-plane frame's heights in the map: the mean over the stance feet on known cells of (map − walker z).
+    total, count = 0.0, 0
+    for leg in range(legs):
+        if not swinging[leg]:
+            h = _height(heights, tips[leg, 0], tips[leg, 1], cell, ci, cj, half)
+            if not math.isnan(h):
+                total += h - walker_tips[leg, 2]
+                count += 1
+    c, s = math.cos(yaw), math.sin(yaw)
+    for leg in range(legs):
+        if swinging[leg] and math.isnan(clearances[leg]):  # (a map that arrives mid-swing)
+            clearances[leg] = swing_height
+        offsets[leg, 0] = offsets[leg, 1] = offsets[leg, 2] = 0.0
+        if count == 0:
+            if not swinging[leg]:
+                clearances[leg] = swing_height
+            continue
+        reference = total / count
+        tx, ty = targets[leg, 0], targets[leg, 1]
+        i0, j0 = _cell(tx, ty, cell, ci, cj, half)
+        if not (0 <= i0 < n and 0 <= j0 < n) or math.isnan(top[i0, j0]):  # not seen: blind
+            if not swinging[leg]:
+                clearances[leg] = swing_height
+            continue
+        best_i, best_j, best = -1, -1, np.inf
+        if span[i0, j0] <= edge_step:
+            best_i, best_j = i0, j0  # level already: stay
+        else:
+            for di in range(-reach, reach + 1):
+                for dj in range(-reach, reach + 1):
+                    i, j = i0 + di, j0 + dj
+                    if 0 <= i < n and 0 <= j < n and span[i, j] <= edge_step:
+                        distance = di * di + dj * dj
+                        if distance < best:
+                            best_i, best_j, best = i, j, distance
+        dx = dy = 0.0
+        landing = math.nan
+        if best_i >= 0:
+            dx, dy = (best_i - i0) * cell, (best_j - j0) * cell
+            landing = top[best_i, best_j]
+        else:
+            landing = top[i0, j0]  # no level cell near: land on the highest point around the target
+        dz = landing - (walker_targets[leg, 2] + reference)
+        if abs(dz) <= edge_step:  # the map's noise, not a step
+            dz = 0.0
+        offsets[leg, 0] = c * dx + s * dy
+        offsets[leg, 1] = -s * dx + c * dy
+        offsets[leg, 2] = dz
+        if swinging[leg]:
+            continue
+        fx, fy = tx + dx, ty + dy
+        peak = -np.inf
+        for k in range(1, 9):  # the straight path from the foot to its landing point
+            share = k / 9.0
+            h = _height(top, tips[leg, 0] + share * (fx - tips[leg, 0]), tips[leg, 1] + share * (fy - tips[leg, 1]),
+                        cell, ci, cj, half)
+            if not math.isnan(h):
+                peak = max(peak, h)
+        higher = max(walker_tips[leg, 2] + reference, walker_targets[leg, 2] + reference + dz)
+        clearances[leg] = min(max(swing_height, peak - higher + clearance_margin), max(max_clearance, swing_height))
+
+
+@dataclass(frozen=True, eq=False)
+class TerrainMap:
+    """A robot-centred grid of terrain heights and the body's pose in its frame (one scan's fused map).
+
+    Attributes:
+        heights: ``(n, n)`` heights [m] (``nan``: never seen), x index along +x; cell (i, j) is centred on
+            ``((centre_i + i − n//2)·cell, (centre_j + j − n//2)·cell)``.
+        cell: side of a cell [m].
+        centre: the map's middle cell in whole cells of its frame.
+        position: the body's position in the map's frame [m].
+        rotation: the body's orientation (body → map frame, 3×3).
+    """
+
+    heights: np.ndarray
+    cell: float
+    centre: tuple[int, int]
+    position: np.ndarray
+    rotation: np.ndarray
+    _levels: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict, repr=False)
+
+    def levels(self, radius: int) -> tuple[np.ndarray, np.ndarray]:
+        """Each cell's highest height and height span within ``radius`` cells (computed once per map)."""
+        if radius not in self._levels:
+            self._levels[radius] = _surroundings(np.asarray(self.heights, dtype=float), radius)
+        return self._levels[radius]
+
+    def height_at(self, x: float, y: float) -> float:
+        """The height of the cell under (x, y) in the map's frame; ``nan`` if unknown or outside."""
+        half = self.heights.shape[0] // 2
+        i, j = _cell(float(x), float(y), self.cell, self.centre[0], self.centre[1], half)
+        if 0 <= i < self.heights.shape[0] and 0 <= j < self.heights.shape[1]:
+            return float(self.heights[i, j])
+        return math.nan
+
+
+@dataclass(frozen=True)
+class StepPlaneSettings:
+    """How the map shapes the steps (the robot file's ``[perception]`` values) [m]."""
+
+    edge_margin: float = 0.05
+    edge_step: float = 0.03
+    max_shift: float = 0.1
+    clearance_margin: float = 0.04
+    max_clearance: float = 0.25
+    max_slope: float = 0.25
+
+
+class StepPlanes:
+    """The walker's step-plane input from each cycle's map (see the module's text).
+
+    Args:
+        legs: number of legs.
+        settings: the robot file's values.
+    """
+
+    def __init__(self, legs: int, settings: StepPlaneSettings) -> None:
+        self.settings = settings
+        self.offsets = np.zeros((legs, 3))
+        self.clearances = np.full(legs, np.nan)
+
+    def update(self, terrain: TerrainMap, walker_targets: np.ndarray, walker_tips: np.ndarray,
+               body_position: np.ndarray, body_rotation: np.ndarray, swinging: np.ndarray,
+               swing_height: float) -> tuple[np.ndarray, np.ndarray]:
+        """This cycle's (offsets ``(L, 3)``, clearances ``(L,)``) for the walker.
+
+        Args:
+            terrain: the map and the body's pose in it.
+            walker_targets: each leg's swing target before the shift, walk-plane frame ``(L, 3)``.
+            walker_tips: each leg's walker tip, walk-plane frame ``(L, 3)``.
+            body_position: the body pose's position in the walk-plane frame (the controller's current pose).
+            body_rotation: its rotation (body → walk-plane frame).
+            swinging: legs that swing this cycle (their clearance stays as it was at lift-off).
+            swing_height: the walker's swing height [m].
+        """
+        s = self.settings
+        radius = max(0, math.ceil(s.edge_margin / terrain.cell - 1e-9))
+        top, span = terrain.levels(radius)
+        rotation, position = terrain.rotation, terrain.position
+        transform = rotation @ np.asarray(body_rotation).T  # walk-plane frame → map frame
+        shift = position - transform @ np.asarray(body_position)
+        targets = walker_targets @ transform.T + shift
+        tips = walker_tips @ transform.T + shift
+        yaw = math.atan2(float(rotation[1, 0]), float(rotation[0, 0]))
+        _footholds(terrain.heights, top, span, terrain.cell, terrain.centre[0], terrain.centre[1], targets, tips,
+                   np.asarray(walker_targets, dtype=float), np.asarray(walker_tips, dtype=float),
+                   np.asarray(swinging, dtype=np.bool_), float(swing_height), s.edge_step,
+                   max(0, round(s.max_shift / terrain.cell)), s.clearance_margin, s.max_clearance, yaw,
+                   self.offsets, self.clearances)
+        return self.offsets, self.clearances
