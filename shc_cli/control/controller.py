@@ -706,14 +706,20 @@ class Controller(LegManipulation):
             spec = self.robot.perception or Perception()
             self._step_planes = StepPlanes(len(self.stance), StepPlaneSettings(
                 spec.edge_margin, spec.edge_step, spec.max_shift, spec.clearance_margin, spec.max_clearance,
-                spec.max_slope))
+                spec.max_slope, self.robot.body.size[0], self.robot.body.size[1], spec.lookahead))
             self.walker.max_plane_slope = spec.max_slope
-        vectors = self.walker.legs.vectors
+        legs, cycle = self.walker.legs, self.walker.cycle
+        progress = legs.floats[:, stepping.SWING_PROGRESS]
+        swing_s = cycle.swing_period / cycle.period / cycle.frequency
+        vx, vy, _ = self.walker.desired_velocity()
         pose = self.poser.current
-        return self._step_planes.update(
-            terrain, vectors[:, stepping.DEFAULT] + 0.5 * vectors[:, stepping.STRIDE], vectors[:, stepping.CURRENT],
-            pose.position, pose.rotation, self.walker.legs.floats[:, stepping.SWING_PROGRESS] >= 0.0,
-            self.parameters["swing_height"])
+        planes = self._step_planes
+        self.walker.body_floor = planes.body_floor
+        return planes.update(
+            terrain, legs.vectors[:, stepping.DEFAULT] + 0.5 * legs.vectors[:, stepping.STRIDE],
+            legs.vectors[:, stepping.CURRENT], pose.position, pose.rotation, progress >= 0.0,
+            self.parameters["swing_height"], np.array([vx, vy, 0.0]),
+            swing_s * np.where(progress >= 0.0, 1.0 - progress, 1.0))
 
     def _apply_admittance(self, admittance: AdmittanceController) -> None:
         """Raise each walking leg's tip target by its admittance offset (paper eq. 20, z_d = z_r − Δz)."""

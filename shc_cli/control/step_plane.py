@@ -73,7 +73,7 @@ def _height(top, x, y, cell, ci, cj, half):  # type: ignore[no-untyped-def]
 @njit(cache=True)
 def _footholds(  # type: ignore[no-untyped-def]
     heights, top, span, cell, ci, cj, targets, tips, walker_targets, walker_tips, swinging, swing_height, edge_step,
-    reach, clearance_margin, max_clearance, yaw, offsets, clearances,
+    reach, clearance_margin, max_clearance, yaw, offsets, clearances, references,
 ):
     """Per leg: the target shift into ``offsets`` (walk-plane frame) and, for legs not ``swinging``, the swing
     clearance into ``clearances``. ``targets`` and ``tips`` (L, 3) are in the map frame (their x, y are used),
@@ -81,14 +81,17 @@ def _footholds(  # type: ignore[no-untyped-def]
     n = top.shape[0]
     half = n // 2
     legs = targets.shape[0]
-    # The walk-plane frame's heights in the map: the mean over the stance feet on known cells of (map − walker z).
+    # Each foot's map height minus its walk-plane height where it stands (kept through its swing: where it lifted
+    # off): the step from there to the target is the map's height difference.
     total, count = 0.0, 0
     for leg in range(legs):
         if not swinging[leg]:
             h = _height(heights, tips[leg, 0], tips[leg, 1], cell, ci, cj, half)
             if not math.isnan(h):
-                total += h - walker_tips[leg, 2]
-                count += 1
+                references[leg] = h - walker_tips[leg, 2]
+        if not math.isnan(references[leg]):
+            total += references[leg]
+            count += 1
     c, s = math.cos(yaw), math.sin(yaw)
     for leg in range(legs):
         if swinging[leg] and math.isnan(clearances[leg]):  # (a map that arrives mid-swing)
@@ -98,7 +101,7 @@ def _footholds(  # type: ignore[no-untyped-def]
             if not swinging[leg]:
                 clearances[leg] = swing_height
             continue
-        reference = total / count
+        reference = references[leg] if not math.isnan(references[leg]) else total / count
         tx, ty = targets[leg, 0], targets[leg, 1]
         i0, j0 = _cell(tx, ty, cell, ci, cj, half)
         if not (0 <= i0 < n and 0 <= j0 < n) or math.isnan(top[i0, j0]):  # not seen: blind
@@ -141,6 +144,30 @@ def _footholds(  # type: ignore[no-untyped-def]
                 peak = max(peak, h)
         higher = max(walker_tips[leg, 2] + reference, walker_targets[leg, 2] + reference + dz)
         clearances[leg] = min(max(swing_height, peak - higher + clearance_margin), max(max_clearance, swing_height))
+
+
+@njit(cache=True)
+def _footprint_top(heights, cell, ci, cj, x, y, yaw, back, front, half_width):  # type: ignore[no-untyped-def]
+    """The highest known height under a rectangle ``back`` behind to ``front`` ahead of (x, y) along ``yaw`` and
+    ``half_width`` either side (-inf if none is known)."""
+    n = heights.shape[0]
+    half = n // 2
+    c, s = math.cos(yaw), math.sin(yaw)
+    reach = max(back, front, half_width) * 1.5
+    i_low, j_low = _cell(x - reach, y - reach, cell, ci, cj, half)
+    i_high, j_high = _cell(x + reach, y + reach, cell, ci, cj, half)
+    top = -np.inf
+    for i in range(max(0, i_low), min(n, i_high + 1)):
+        for j in range(max(0, j_low), min(n, j_high + 1)):
+            h = heights[i, j]
+            if math.isnan(h):
+                continue
+            dx = (ci + i - half) * cell - x
+            dy = (cj + j - half) * cell - y
+            along, across = c * dx + s * dy, -s * dx + c * dy
+            if -back <= along <= front and abs(across) <= half_width:
+                top = max(top, h)
+    return top
 
 
 @dataclass(frozen=True, eq=False)
@@ -188,6 +215,9 @@ class StepPlaneSettings:
     clearance_margin: float = 0.04
     max_clearance: float = 0.25
     max_slope: float = 0.25
+    body_length: float = 0.0
+    body_width: float = 0.0
+    lookahead: float = 0.1
 
 
 class StepPlanes:
@@ -202,10 +232,15 @@ class StepPlanes:
         self.settings = settings
         self.offsets = np.zeros((legs, 3))
         self.clearances = np.full(legs, np.nan)
+        self.references = np.full(legs, np.nan)
+        self.body_floor = -np.inf
+        """The highest ground under the body's footprint (and ``lookahead`` ahead of it) in the walk-plane frame
+        [m] (-inf: not seen): the walker keeps the body at least its clearance above it."""
 
     def update(self, terrain: TerrainMap, walker_targets: np.ndarray, walker_tips: np.ndarray,
                body_position: np.ndarray, body_rotation: np.ndarray, swinging: np.ndarray,
-               swing_height: float) -> tuple[np.ndarray, np.ndarray]:
+               swing_height: float, velocity: np.ndarray | None = None,
+               lead: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """This cycle's (offsets ``(L, 3)``, clearances ``(L,)``) for the walker.
 
         Args:
@@ -216,6 +251,9 @@ class StepPlanes:
             body_rotation: its rotation (body → walk-plane frame).
             swinging: legs that swing this cycle (their clearance stays as it was at lift-off).
             swing_height: the walker's swing height [m].
+            velocity: the body's desired velocity in the walk-plane frame (x, y, 0) [m/s] and ``lead`` each leg's
+                time to its touchdown [s]: the target is looked up where it will be in the map when the foot lands
+                (the body moves on meanwhile); ``None``: where it is now.
         """
         s = self.settings
         radius = max(0, math.ceil(s.edge_margin / terrain.cell - 1e-9))
@@ -223,12 +261,21 @@ class StepPlanes:
         rotation, position = terrain.rotation, terrain.position
         transform = rotation @ np.asarray(body_rotation).T  # walk-plane frame → map frame
         shift = position - transform @ np.asarray(body_position)
-        targets = walker_targets @ transform.T + shift
+        ahead = walker_targets if velocity is None or lead is None else \
+            walker_targets + np.asarray(lead)[:, None] * np.asarray(velocity)[None, :]
+        targets = ahead @ transform.T + shift
         tips = walker_tips @ transform.T + shift
         yaw = math.atan2(float(rotation[1, 0]), float(rotation[0, 0]))
         _footholds(terrain.heights, top, span, terrain.cell, terrain.centre[0], terrain.centre[1], targets, tips,
                    np.asarray(walker_targets, dtype=float), np.asarray(walker_tips, dtype=float),
                    np.asarray(swinging, dtype=np.bool_), float(swing_height), s.edge_step,
                    max(0, round(s.max_shift / terrain.cell)), s.clearance_margin, s.max_clearance, yaw,
-                   self.offsets, self.clearances)
+                   self.offsets, self.clearances, self.references)
+        known = self.references[np.isfinite(self.references)]
+        self.body_floor = -np.inf
+        if len(known) and s.body_length > 0.0:
+            top = _footprint_top(terrain.heights, terrain.cell, terrain.centre[0], terrain.centre[1],
+                                 float(position[0]), float(position[1]), yaw, s.body_length / 2.0,
+                                 s.body_length / 2.0 + s.lookahead, s.body_width / 2.0)
+            self.body_floor = float(top - np.mean(known))
         return self.offsets, self.clearances

@@ -67,6 +67,8 @@ class WalkController:
         """This cycle's step-plane input (:mod:`shc_cli.control.step_plane`): each leg's target shift ``(L, 3)``
         in the walk-plane frame and swing clearance ``(L,)`` [m]; ``None``: blind (OpenSHC's behaviour)."""
         self.max_plane_slope = 0.0
+        self.body_floor = -np.inf
+        """With a step-plane input, the walk plane's height at the body is at least this (walk-plane frame) [m]."""
         """With a step-plane input, the walk plane's slope is clamped to this (tan of its pitch and roll)."""
         self._no_offsets = np.zeros((len(self.leg_ids), 3))
         self._no_clearances = np.zeros(len(self.leg_ids))
@@ -128,7 +130,7 @@ class WalkController:
             float(linear_input[1]), float(angular_input),
             self._throttle, self.swing_height, self.swing_width, self.walk_plane, self.walk_plane_normal,
             np.asarray(default_body_position, dtype=float), legs_walking, posing_complete, self._limit_out,
-            self.rough_terrain or perceive, float(step_depth), contacts is not None,
+            self.rough_terrain, float(step_depth), contacts is not None,
             self._no_contacts if contacts is None else np.asarray(contacts, dtype=np.bool_),
             perceive, offsets, clearances,
         )
@@ -179,6 +181,7 @@ class WalkController:
         if slot != stepping.DEFAULT:
             limit = self.max_plane_slope
             self.walk_plane[:2] = np.clip(self.walk_plane[:2], -limit, limit)
+            self.walk_plane[2] = max(float(self.walk_plane[2]), self.body_floor)
         normal = np.array([-self.walk_plane[0], -self.walk_plane[1], 1.0])
         self.walk_plane_normal = normal / np.linalg.norm(normal)
 
