@@ -415,7 +415,8 @@ class Perception(Strict):
     clearance_margin: NonNegative = Field(
         0.04, description="a swing clears the highest point on its path by at least this [m]")
     max_clearance: Positive = Field(0.25, description="the highest swing clearance obstacles may ask for [m]")
-    lookahead: NonNegative = Field(0.1, description="the body stays its clearance above the highest ground under it and this far ahead [m]")
+    lookahead: NonNegative = Field(
+        0.1, description="the body keeps its clearance above the highest ground under it and this far ahead [m]")
     max_slope: NonNegative = Field(
         0.25, description="the walk plane (and the body) follows the footholds' slope up to this (tan of pitch, roll)")
 
