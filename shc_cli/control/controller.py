@@ -707,7 +707,7 @@ class Controller(LegManipulation):
             self._step_planes = StepPlanes(len(self.stance), StepPlaneSettings(
                 spec.edge_margin, spec.edge_step, spec.max_shift, spec.clearance_margin, spec.max_clearance,
                 spec.max_slope, self.robot.body.size[0], self.robot.body.size[1], spec.lookahead))
-            self.walker.max_plane_slope = spec.max_slope
+            self.walker.max_plane_slope, self.walker.floor_deadband = spec.max_slope, spec.edge_step
         legs, cycle = self.walker.legs, self.walker.cycle
         progress = legs.floats[:, stepping.SWING_PROGRESS]
         swing_s = cycle.swing_period / cycle.period / cycle.frequency

@@ -69,6 +69,8 @@ class WalkController:
         self.max_plane_slope = 0.0
         self.body_floor = -np.inf
         """With a step-plane input, the walk plane's height at the body is at least this (walk-plane frame) [m]."""
+        self.floor_deadband = 0.0
+        """A floor less than this above the walk plane is map noise and leaves the plane as it is [m]."""
         """With a step-plane input, the walk plane's slope is clamped to this (tan of its pitch and roll)."""
         self._no_offsets = np.zeros((len(self.leg_ids), 3))
         self._no_clearances = np.zeros(len(self.leg_ids))
@@ -181,7 +183,8 @@ class WalkController:
         if slot != stepping.DEFAULT:
             limit = self.max_plane_slope
             self.walk_plane[:2] = np.clip(self.walk_plane[:2], -limit, limit)
-            self.walk_plane[2] = max(float(self.walk_plane[2]), self.body_floor)
+            if self.body_floor > self.walk_plane[2] + self.floor_deadband:  # (a few mm of map noise: nothing)
+                self.walk_plane[2] = self.body_floor
         normal = np.array([-self.walk_plane[0], -self.walk_plane[1], 1.0])
         self.walk_plane_normal = normal / np.linalg.norm(normal)
 
