@@ -50,3 +50,20 @@ def test_seeing_the_stairs_climbs_farther_than_blind(tmp_path: Path) -> None:
     blind, seeing = walked["off"], walked["rays"]
     assert blind[0] is not None and seeing[0] is not None, walked
     assert seeing[1] is False and seeing[0] > 1.0 and seeing[0] > 1.5 * blind[0], walked
+
+
+def test_sweeps_take_perception_as_a_key_and_refuse_an_unknown_mode(tmp_path: Path,
+                                                                   capsys: pytest.CaptureFixture[str],
+                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    """sweeps/perception.toml loads (blind against seeing per terrain); a bad mode is one line naming the file's
+    line, exit 2."""
+    from shc_cli.spec.sweep import load_sweep
+
+    from .conftest import ROOT
+
+    sweep = load_sweep(ROOT / "sweeps" / "perception.toml")
+    assert {point.options.get("perception") for point in sweep.points} == {"off", "rays"}
+    bad = tmp_path / "bad.toml"
+    bad.write_text('name = "bad"\nduration = 1.0\n[fixed]\nperception = "eyes"\n', encoding="utf-8")
+    code, _, err = run(["sweep", str(bad), "--out", str(tmp_path / "out")], capsys, monkeypatch)
+    assert code == 2 and "bad.toml:4: fixed.perception: 'eyes'" in err and len(err.strip().splitlines()) == 1, err
