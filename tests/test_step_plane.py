@@ -85,7 +85,7 @@ def _one_leg(terrain: TerrainMap, target: tuple[float, float, float], tip: tuple
     (the body pose: identity at the map's body position minus its height)."""
     planes = StepPlanes(1, StepPlaneSettings())
     body = np.asarray(terrain.position)
-    return planes.update(terrain, np.array([target]), np.array([tip]), body.copy(), np.eye(3), np.array([False]),
+    return planes.update(terrain, np.array([target]), np.array([tip]), body.copy(), np.eye(3), np.array([-1.0]),
                          swing_height)
 
 

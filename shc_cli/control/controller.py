@@ -708,18 +708,15 @@ class Controller(LegManipulation):
                 spec.edge_margin, spec.edge_step, spec.max_shift, spec.clearance_margin, spec.max_clearance,
                 spec.max_slope, self.robot.body.size[0], self.robot.body.size[1], spec.lookahead))
             self.walker.max_plane_slope, self.walker.floor_deadband = spec.max_slope, spec.edge_step
-        legs, cycle = self.walker.legs, self.walker.cycle
-        progress = legs.floats[:, stepping.SWING_PROGRESS]
-        swing_s = cycle.swing_period / cycle.period / cycle.frequency
-        vx, vy, _ = self.walker.desired_velocity()
+        legs, cycle, walk = self.walker.legs, self.walker.cycle, self.walker.desired_velocity()
         pose = self.poser.current
         planes = self._step_planes
-        self.walker.body_floor = planes.body_floor
-        return planes.update(
-            terrain, legs.vectors[:, stepping.DEFAULT] + 0.5 * legs.vectors[:, stepping.STRIDE],
-            legs.vectors[:, stepping.CURRENT], pose.position, pose.rotation, progress >= 0.0,
-            self.parameters["swing_height"], np.array([vx, vy, 0.0]),
-            swing_s * np.where(progress >= 0.0, 1.0 - progress, 1.0))
+        self.walker.body_floor = planes.body_floor  # (the last cycle's: the walk plane is fitted after the legs)
+        vectors = legs.vectors
+        return planes.update(terrain, vectors[:, stepping.DEFAULT] + 0.5 * vectors[:, stepping.STRIDE],
+                             vectors[:, stepping.CURRENT], pose.position, pose.rotation,
+                             legs.floats[:, stepping.SWING_PROGRESS], self.parameters["swing_height"], walk[:2],
+                             cycle.swing_period / cycle.period / cycle.frequency)
 
     def _apply_admittance(self, admittance: AdmittanceController) -> None:
         """Raise each walking leg's tip target by its admittance offset (paper eq. 20, z_d = z_r − Δz)."""

@@ -170,6 +170,50 @@ def _footprint_top(heights, cell, ci, cj, x, y, yaw, back, front, half_width):  
     return top
 
 
+@njit(cache=True)
+def _step_plane(  # type: ignore[no-untyped-def]
+    heights, top, span, cell, ci, cj, position, rotation, body_position, body_rotation, walker_targets, walker_tips,
+    progress, swing_height, vx, vy, swing_s, edge_step, reach, clearance_margin, max_clearance, back, front,
+    half_width, offsets, clearances, references,
+):
+    """One cycle of :meth:`StepPlanes.update` in one call: the walk-plane points in the map frame (targets where
+    they will be at touchdown), :func:`_footholds`, and the body's floor (returned; -inf: unknown)."""
+    legs = walker_targets.shape[0]
+    transform = np.empty((3, 3))  # walk-plane frame → map frame: rotation · body_rotationᵀ (no BLAS in kernels)
+    shift = np.empty(3)
+    for i in range(3):
+        for j in range(3):
+            transform[i, j] = (rotation[i, 0] * body_rotation[j, 0] + rotation[i, 1] * body_rotation[j, 1]
+                               + rotation[i, 2] * body_rotation[j, 2])
+    for i in range(3):
+        shift[i] = position[i] - (transform[i, 0] * body_position[0] + transform[i, 1] * body_position[1]
+                                  + transform[i, 2] * body_position[2])
+    targets = np.empty((legs, 3))
+    tips = np.empty((legs, 3))
+    swinging = np.empty(legs, dtype=np.bool_)
+    for leg in range(legs):
+        swinging[leg] = progress[leg] >= 0.0
+        lead = swing_s * (1.0 - progress[leg]) if swinging[leg] else swing_s
+        ahead = (walker_targets[leg, 0] + lead * vx, walker_targets[leg, 1] + lead * vy, walker_targets[leg, 2])
+        for i in range(3):
+            targets[leg, i] = (transform[i, 0] * ahead[0] + transform[i, 1] * ahead[1] + transform[i, 2] * ahead[2]
+                               + shift[i])
+            tips[leg, i] = (transform[i, 0] * walker_tips[leg, 0] + transform[i, 1] * walker_tips[leg, 1]
+                            + transform[i, 2] * walker_tips[leg, 2] + shift[i])
+    yaw = math.atan2(rotation[1, 0], rotation[0, 0])
+    _footholds(heights, top, span, cell, ci, cj, targets, tips, walker_targets, walker_tips, swinging, swing_height,
+               edge_step, reach, clearance_margin, max_clearance, yaw, offsets, clearances, references)
+    total, count = 0.0, 0
+    for leg in range(legs):
+        if not math.isnan(references[leg]):
+            total += references[leg]
+            count += 1
+    if count == 0 or back <= 0.0:
+        return -np.inf
+    return _footprint_top(heights, cell, ci, cj, position[0], position[1], yaw, back, front, half_width) \
+        - total / count
+
+
 @dataclass(frozen=True, eq=False)
 class TerrainMap:
     """A robot-centred grid of terrain heights and the body's pose in its frame (one scan's fused map).
@@ -233,15 +277,16 @@ class StepPlanes:
         self.offsets = np.zeros((legs, 3))
         self.clearances = np.full(legs, np.nan)
         self.references = np.full(legs, np.nan)
+        self._cell, self._radius, self._reach = 0.0, 0, 0
         self.body_floor = -np.inf
         """The highest ground under the body's footprint (and ``lookahead`` ahead of it) in the walk-plane frame
         [m] (-inf: not seen): the walker keeps the body at least its clearance above it."""
 
     def update(self, terrain: TerrainMap, walker_targets: np.ndarray, walker_tips: np.ndarray,
-               body_position: np.ndarray, body_rotation: np.ndarray, swinging: np.ndarray,
-               swing_height: float, velocity: np.ndarray | None = None,
-               lead: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """This cycle's (offsets ``(L, 3)``, clearances ``(L,)``) for the walker.
+               body_position: np.ndarray, body_rotation: np.ndarray, progress: np.ndarray,
+               swing_height: float, velocity: tuple[float, float] = (0.0, 0.0),
+               swing_s: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """This cycle's (offsets ``(L, 3)``, clearances ``(L,)``) for the walker; sets :attr:`body_floor`.
 
         Args:
             terrain: the map and the body's pose in it.
@@ -249,33 +294,23 @@ class StepPlanes:
             walker_tips: each leg's walker tip, walk-plane frame ``(L, 3)``.
             body_position: the body pose's position in the walk-plane frame (the controller's current pose).
             body_rotation: its rotation (body → walk-plane frame).
-            swinging: legs that swing this cycle (their clearance stays as it was at lift-off).
+            progress: each leg's swing progress this cycle (0…1; negative: in stance). A swinging leg keeps the
+                clearance it had at lift-off.
             swing_height: the walker's swing height [m].
-            velocity: the body's desired velocity in the walk-plane frame (x, y, 0) [m/s] and ``lead`` each leg's
-                time to its touchdown [s]: the target is looked up where it will be in the map when the foot lands
-                (the body moves on meanwhile); ``None``: where it is now.
+            velocity: the body's desired velocity (x, y) in the walk-plane frame [m/s] and ``swing_s`` a swing's
+                duration [s]: a target is looked up where it will be in the map when its foot lands (the body
+                moves on meanwhile; a stance leg's as if it lifted off now).
         """
         s = self.settings
-        radius = max(0, math.ceil(s.edge_margin / terrain.cell - 1e-9))
-        top, span = terrain.levels(radius)
-        rotation, position = terrain.rotation, terrain.position
-        transform = rotation @ np.asarray(body_rotation).T  # walk-plane frame → map frame
-        shift = position - transform @ np.asarray(body_position)
-        ahead = walker_targets if velocity is None or lead is None else \
-            walker_targets + np.asarray(lead)[:, None] * np.asarray(velocity)[None, :]
-        targets = ahead @ transform.T + shift
-        tips = walker_tips @ transform.T + shift
-        yaw = math.atan2(float(rotation[1, 0]), float(rotation[0, 0]))
-        _footholds(terrain.heights, top, span, terrain.cell, terrain.centre[0], terrain.centre[1], targets, tips,
-                   np.asarray(walker_targets, dtype=float), np.asarray(walker_tips, dtype=float),
-                   np.asarray(swinging, dtype=np.bool_), float(swing_height), s.edge_step,
-                   max(0, round(s.max_shift / terrain.cell)), s.clearance_margin, s.max_clearance, yaw,
-                   self.offsets, self.clearances, self.references)
-        known = self.references[np.isfinite(self.references)]
-        self.body_floor = -np.inf
-        if len(known) and s.body_length > 0.0:
-            top = _footprint_top(terrain.heights, terrain.cell, terrain.centre[0], terrain.centre[1],
-                                 float(position[0]), float(position[1]), yaw, s.body_length / 2.0,
-                                 s.body_length / 2.0 + s.lookahead, s.body_width / 2.0)
-            self.body_floor = float(top - np.mean(known))
+        if terrain.cell != self._cell:  # (the whole cells of the margins, once per map resolution)
+            self._cell = terrain.cell
+            self._radius = max(0, math.ceil(s.edge_margin / terrain.cell - 1e-9))
+            self._reach = max(0, round(s.max_shift / terrain.cell))
+        top, span = terrain.levels(self._radius)
+        self.body_floor = _step_plane(
+            terrain.heights, top, span, terrain.cell, terrain.centre[0], terrain.centre[1], terrain.position,
+            terrain.rotation, body_position, body_rotation, walker_targets, walker_tips, progress, swing_height,
+            velocity[0], velocity[1], swing_s, s.edge_step, self._reach, s.clearance_margin, s.max_clearance,
+            s.body_length / 2.0, s.body_length / 2.0 + s.lookahead, s.body_width / 2.0, self.offsets,
+            self.clearances, self.references)
         return self.offsets, self.clearances
