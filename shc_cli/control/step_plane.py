@@ -15,7 +15,7 @@ with the cycle's :class:`~shc_cli.control.controller.Command` (the controller st
   point around it;
 * **swing height from obstacles**: before a leg lifts off, its clearance is the walker's swing height or, if
   higher, the highest point of the map along the straight path from the foot to its target above the higher end,
-  plus ``clearance_margin`` (at most ``max_clearance``); it is kept for the whole swing;
+  plus ``clearance_margin`` (at most ``max_clearance``; less than ``edge_step`` above is noise); kept for the swing;
 * **body height and pitch** follow the stance: with the input the walker updates each default tip through where
   its foot landed (OpenSHC's rough-terrain default-tip update, study §5.5) and the walk plane through them carries
   the body (§7.6), its slope clamped to ``max_slope``.
@@ -143,7 +143,10 @@ def _footholds(  # type: ignore[no-untyped-def]
             if not math.isnan(h):
                 peak = max(peak, h)
         higher = max(walker_tips[leg, 2] + reference, walker_targets[leg, 2] + reference + dz)
-        clearances[leg] = min(max(swing_height, peak - higher + clearance_margin), max(max_clearance, swing_height))
+        clearances[leg] = swing_height
+        if peak - higher > edge_step:  # an obstacle, not the map's noise
+            clearances[leg] = min(max(swing_height, peak - higher + clearance_margin),
+                                  max(max_clearance, swing_height))
 
 
 @njit(cache=True)
