@@ -16,9 +16,10 @@ with the cycle's :class:`~shc_cli.control.controller.Command` (the controller st
 * **swing height from obstacles**: before a leg lifts off, its clearance is the walker's swing height or, if
   higher, the highest point of the map along the straight path from the foot to its target above the higher end,
   plus ``clearance_margin`` (at most ``max_clearance``; less than ``edge_step`` above is noise); kept for the swing;
-* **body height and pitch** follow the stance: with the input the walker updates each default tip through where
-  its foot landed (OpenSHC's rough-terrain default-tip update, study §5.5) and the walk plane through them carries
-  the body (§7.6), its slope clamped to ``max_slope``.
+* **body height and pitch**: with the input the walk plane (which carries the body, study §7.6) is the plane
+  through the legs' shifted targets — the predicted footholds, as ATHENA takes the plane of the feet — its slope
+  clamped to ``max_slope``, raised to the highest ground under the body's footprint and ``lookahead`` ahead of it
+  (:attr:`StepPlanes.body_floor`) when that is more than ``edge_step`` above it.
 
 Unknown cells (never seen) leave a leg blind: no shift, the walker's swing height. The kernels are compiled: the
 per-cycle cost is a few µs (``benchmarks/bench_height_map.py``).
