@@ -83,6 +83,8 @@ class SimulationConfig(BaseModel):
             ``commands:FILE``, or a person: ``stdin``, ``keyboard``, ``gamepad[:DEVICE]`` (these imply ``realtime``:
             :attr:`paced`; :mod:`shc_cli.loop.input_choice`).
         watchdog: stdin: seconds without a line before the velocities go to zero [s].
+        perception: ``off`` (blind, as OpenSHC) or ``rays``: a simulated depth sensor's height map is the
+            controller's step-plane input (:mod:`shc_cli.loop.perception`).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -344,3 +346,4 @@ class SimulationOptions(TypedDict, total=False):
     input_mode: str
     watchdog: float
     engine: EngineName
+    perception: Literal["off", "rays"]
