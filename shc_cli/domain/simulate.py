@@ -125,8 +125,11 @@ def simulate(config: SimulationConfig | None = None, progress: OnProgress | None
                 if clock is not None:
                     observers.append(clock)
                 if o.perception == "rays":  # the depth sensor: an observer whose map the commands carry
-                    from shc_cli.loop.perception import RayPerception
+                    from shc_cli.loop.perception import RayCaster, RayPerception
 
+                    if not isinstance(world, RayCaster):
+                        raise SpecError([Issue(None, None, "--perception", f"the {world.name} engine casts no rays",
+                                               "use --engine mujoco or pybullet, or --perception off")])
                     eyes = RayPerception(robot, world, o.seed)
                     observers.insert(0, eyes)
                     source = eyes.wrap(source)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Literal, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -31,6 +31,14 @@ if TYPE_CHECKING:
 PerceptionMode = Literal["off", "rays"]
 """``--perception``: walk blind (OpenSHC) or see the ground through simulated rays."""
 PERCEPTION_MODES: tuple[PerceptionMode, ...] = ("off", "rays")
+
+
+@runtime_checkable
+class RayCaster(Protocol):
+    """An engine's world that casts rays into its terrain (PyBullet's and MuJoCo's ``cast_rays``)."""
+
+    def cast_rays(self, origin: np.ndarray, directions: np.ndarray, reach: float) -> np.ndarray:
+        ...
 
 
 def rotation_of(rpy: np.ndarray) -> np.ndarray:
@@ -52,7 +60,7 @@ class RayPerception:
         seed: seed of the sensor noise.
     """
 
-    def __init__(self, robot: Robot, world: Any, seed: int = 0) -> None:
+    def __init__(self, robot: Robot, world: RayCaster, seed: int = 0) -> None:
         self.spec = robot.perception or Perception()
         self.sensor = DepthSensor(self.spec)
         self.grid = HeightMap.of(self.spec)
@@ -111,6 +119,3 @@ class PerceivingSource:
 
     def close(self) -> None:
         self.source.close()
-
-    def __getattr__(self, name: str) -> Any:  # the wrapped source's other attributes (a path's progress, ...)
-        return getattr(self.source, name)
