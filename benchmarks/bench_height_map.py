@@ -5,7 +5,9 @@
 For each engine and terrain the robot is held in the air at the origin (its sensor sees the terrain ahead); one
 scan is the robot file's ``[perception]`` rays (default 32 × 24) cast at once (MuJoCo ``mj_multiRay``, PyBullet
 ``rayTestBatch``), the points made from them and fused into the height map. Per cycle = per scan × the sensor's
-rate × the control period (a scan every 1/rate s, not every cycle).
+rate × the control period (a scan every 1/rate s, not every cycle). Last, the controller's side with
+``--perception rays`` (:mod:`shc_cli.control.step_plane`): µs per cycle to turn the map into the walker's step-plane
+input, and per scan to find the map's level cells.
 """
 
 from __future__ import annotations
@@ -63,6 +65,34 @@ def main() -> None:
             per_cycle = per_scan * spec.rate * robot.time_delta
             print(f"{engine:9} {text:17} {cast / args.repeat * 1e6:12.0f} {fuse / args.repeat * 1e6:12.0f} "
                   f"{per_cycle:9.0f}")
+            if engine == "mujoco" and text.startswith("stairs"):
+                step_plane_cost(grid, reading.position, args.repeat)
+
+
+def step_plane_cost(grid: HeightMap, position: np.ndarray, repeat: int) -> None:
+    """The controller's per-cycle step-plane input and per-scan level cells on this map (after compiling), in CPU
+    time (``time.process_time``: what the loop pays on an idle core, less inflated by a loaded machine)."""
+    from shc_cli.control.step_plane import StepPlanes, StepPlaneSettings, TerrainMap
+
+    legs = 6
+    targets = np.column_stack([np.linspace(-0.3, 0.4, legs), np.tile([-0.35, 0.35], legs // 2), np.zeros(legs)])
+    planes = StepPlanes(legs, StepPlaneSettings(body_length=0.5, body_width=0.28))
+    progress = np.where(np.arange(legs) % 2 == 0, 0.3, -1.0)
+    body = np.array([0.0, 0.0, 0.2])
+    rounds = max(repeat, 1) * 100
+    TerrainMap(grid.heights, grid.cell, grid.centre, np.asarray(position), np.eye(3)).levels(1)  # compiled
+    started = time.process_time()
+    for _ in range(rounds):
+        TerrainMap(grid.heights, grid.cell, grid.centre, np.asarray(position), np.eye(3)).levels(1)
+    levels = (time.process_time() - started) / rounds
+    terrain = TerrainMap(grid.heights, grid.cell, grid.centre, np.asarray(position), np.eye(3))
+    planes.update(terrain, targets, targets, body, np.eye(3), progress, 0.15, (0.19, 0.0), 0.25)  # compiled
+    started = time.process_time()
+    for _ in range(rounds):
+        planes.update(terrain, targets, targets, body, np.eye(3), progress, 0.15, (0.19, 0.0), 0.25)
+    update = (time.process_time() - started) / rounds
+    print(f"  step-plane input (controller): {update * 1e6:.1f} µs CPU per cycle; level cells "
+          f"{levels * 1e6:.0f} µs CPU per scan ({grid.size}² cells)")
 
 
 if __name__ == "__main__":

@@ -17,9 +17,10 @@ files on the first run) and one untimed run per source tree fills it and numba's
 
 With ``--compare TREE`` (another checkout of shc, e.g. ``git worktree add /tmp/before main~3``) the runs alternate
 between that tree and this one (``PYTHONPATH``), and the same-run ratios are printed: this is how a change is
-measured on a loaded machine.
+measured on a loaded machine. With ``--with "FLAGS"`` the runs alternate between plain ``shc simulate`` and the
+same with FLAGS (e.g. ``--with "--perception rays"``: the depth sensor's cost in the loop, issue 40).
 
-Run:  .venv/bin/python benchmarks/bench_loop.py [--repeats 5] [--duration 60] [--compare TREE] [ROBOT]
+Run:  .venv/bin/python benchmarks/bench_loop.py [--repeats 5] [--duration 60] [--compare TREE | --with FLAGS] [ROBOT]
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shlex
 import statistics
 import subprocess
 import sys
@@ -43,18 +45,20 @@ class Figures:
     """One source tree's runs."""
 
     tree: Path
+    extra: list[str] = field(default_factory=list)
     loop: list[float] = field(default_factory=list)
     overhead: list[float] = field(default_factory=list)
     command: list[float] = field(default_factory=list)
     command_cpu: list[float] = field(default_factory=list)
 
 
-def run_once(tree: Path, out: Path, robot: str | None, duration: float) -> tuple[float, float, dict[str, float]]:
+def run_once(tree: Path, out: Path, robot: str | None, duration: float,
+             extra: list[str] | None = None) -> tuple[float, float, dict[str, float]]:
     """One ``shc simulate`` of ``tree``: (wall s, CPU s, summary)."""
     env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
     env["PYTHONPATH"] = str(tree)
     command = [sys.executable, "-m", "shc_cli.cli", "simulate", *([robot] if robot else []), "--duration",
-               str(duration), "--out", str(out)]
+               str(duration), "--out", str(out), *(extra or [])]
     started = time.perf_counter()
     process = subprocess.Popen(command, env=env, cwd=out.parent, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     _, status, usage = os.wait4(process.pid, 0)
@@ -74,15 +78,18 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--duration", type=float, default=60.0)
     parser.add_argument("--compare", type=Path, default=None, help="another shc source tree, run alternately")
+    parser.add_argument("--with", dest="extra", default=None, help="simulate flags, run alternately with plain runs")
     options = parser.parse_args()
     trees = [Figures(options.compare.resolve()), Figures(HERE)] if options.compare else [Figures(HERE)]
+    if options.extra:
+        trees = [Figures(HERE), Figures(HERE, shlex.split(options.extra))]
     with tempfile.TemporaryDirectory() as folder:
         for number, figures in enumerate(trees):  # untimed: bytecode and numba caches
-            run_once(figures.tree, Path(folder) / f"warm{number}", options.robot, 2.0)
+            run_once(figures.tree, Path(folder) / f"warm{number}", options.robot, 2.0, figures.extra)
         for repeat in range(options.repeats):
             for number, figures in enumerate(trees):
                 out = Path(folder) / f"walk{repeat}-{number}"
-                wall, cpu, summary = run_once(figures.tree, out, options.robot, options.duration)
+                wall, cpu, summary = run_once(figures.tree, out, options.robot, options.duration, figures.extra)
                 figures.loop.append(summary["analysed_time_s"] / summary["running_wall_time_s"])
                 figures.overhead.append(summary["running_wall_time_s"] / summary["running_physics_time_s"])
                 figures.command.append(options.duration / wall)
@@ -90,7 +97,7 @@ def main() -> None:
     print(f"load average {os.getloadavg()[0]:.1f} at the end; {options.repeats} runs per tree, "
           f"{options.duration:g} s walks")
     for figures in trees:
-        print(f"{figures.tree}:")
+        print(f"{figures.tree}{' ' + ' '.join(figures.extra) if figures.extra else ''}:")
         print(f"  loop: median {median(figures.loop)} x real time")
         print(f"  loop wall / mj_step wall: median {median(figures.overhead)}")
         print(f"  whole command: median {median(figures.command)} x real time on the wall clock, "

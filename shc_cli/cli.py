@@ -197,6 +197,7 @@ def simulate(
     = "timeline",
     watchdog: Annotated[float, typer.Option(help=SIMULATE["watchdog"].cli_help)] = 0.5,
     policy: Annotated[Path | None, typer.Option(help=SIMULATE["policy"].cli_help, metavar="FILE")] = None,
+    perception: Annotated[str, typer.Option(help=SIMULATE["perception"].help)] = "off",
 ) -> None:
     """Run the controller on the robot in physics (MuJoCo; PyBullet with --engine): terrains, servos, power, CoT."""
     from shc_cli.loop.gc_pause import paused
@@ -216,7 +217,8 @@ def simulate(
                                    inclination=inclination, admittance=admittance,
                                    fail_leg=",".join(fail_leg) if fail_leg else None, fail_on_fall=fail_on_fall,
                                    overwrite=overwrite, engine=engine, live=live, live_port=live_port,
-                                   realtime=realtime, input_mode=input_mode, watchdog=watchdog, policy=policy)
+                                   realtime=realtime, input_mode=input_mode, watchdog=watchdog, policy=policy,
+                                   perception=perception)
         run_simulate(options, after=lambda run: finish_outputs(run, bag, video))
 
 

@@ -38,13 +38,14 @@ from shc_cli.control.speed_shares import ShareSource
 from shc_cli.control.startup import plan_direct_startup, transition_iterations
 from shc_cli.control.states import LegMode as LegMode
 from shc_cli.control.states import RobotState as RobotState  # re-exported: the controller's interface
+from shc_cli.control.step_plane import StepPlanes, StepPlaneSettings, TerrainMap
 from shc_cli.control.walk import WalkController, WalkState
 from shc_cli.model import kernels
 from shc_cli.model.chains import Chains, FloatArray
 from shc_cli.model.workspace import Workplane, plane_at, search_workspaces, volumetric_workspaces, walkspace
 from shc_cli.spec.autopose import AutoPoseSet
 from shc_cli.spec.gait import Gait
-from shc_cli.spec.robot import ADJUSTABLE, ADJUSTABLE_ADMITTANCE, ADJUSTABLE_WALKER, Robot
+from shc_cli.spec.robot import ADJUSTABLE, ADJUSTABLE_ADMITTANCE, ADJUSTABLE_WALKER, Perception, Robot
 
 UNDEFINED = float(2147483647)
 """OpenSHC's 'undefined position' value, published before a tip has been posed."""
@@ -81,6 +82,9 @@ class Command:
     leg_toggle: str | None = None
     tip_velocity: dict[str, tuple[float, float, float]] = field(default_factory=dict)
     tip_position: dict[str, tuple[float, float, float]] = field(default_factory=dict)
+    terrain: TerrainMap | None = None
+    """The height map and the body's pose in it (a depth sensor's, :mod:`shc_cli.control.step_plane`): OpenSHC's
+    step-plane input for footholds, swing clearance and body height; ``None`` walks blind, as OpenSHC."""
 
 
 
@@ -340,6 +344,9 @@ class Controller(LegManipulation):
                 adm.swing_stiffness_scaler, adm.load_stiffness_scaler, adm.dynamic_stiffness)
         self.uses_sensors = (pose_spec.imu or pose_spec.inclination or posture_spec.enabled or adm.enabled
                              or robot.walker.rough_terrain_mode)
+        self.terrain: TerrainMap | None = None
+        """This cycle's height map (:attr:`Command.terrain`)."""
+        self._step_planes: StepPlanes | None = None
         self.contact_detector = ContactDetector(len(robot.legs), adm.touchdown_threshold, adm.liftoff_threshold)
         self.contacts = np.zeros(len(robot.legs), dtype=bool)
         """Feet on the ground by the force thresholds (touchdown/lift-off), updated when sensors report forces."""
@@ -363,6 +370,7 @@ class Controller(LegManipulation):
         size = math.sqrt(vx * vx + vy * vy)
         if self._throttle and size > 1.0:  # throttle inputs are clipped to norm 1 on arrival
             vx, vy = vx / size, vy / size
+        self.terrain = command.terrain
         if self.state == _RUNNING:
             self.velocity_input = np.array([vx, vy])
             self.angular_input = float(wz) * scaler
@@ -703,6 +711,7 @@ class Controller(LegManipulation):
         walking = self._manual_legs == 0
         sensing = self.sensors is not None and (self.sensors.foot_forces is not None
                                                 or self.sensors.foot_contact is not None)
+        self.walker.step_plane = None if self.terrain is None else self._step_plane(self.terrain)
         self.walker.update(self.velocity_input, self.angular_input, self.poser.walk_plane_pose.position,
                            legs_walking=walking, posing_complete=auto is None or auto.posing_complete,
                            contacts=self.contacts if sensing else None, step_depth=self.parameters["step_depth"])
@@ -723,6 +732,25 @@ class Controller(LegManipulation):
         ik = self.robot.ik
         return self.model.step_ik(self.poser_tips, self.dt, ik.clamp_joint_positions, ik.clamp_joint_velocities,
                                   None if self.failure is None else self.failure.active())
+
+    def _step_plane(self, terrain: TerrainMap) -> tuple[FloatArray, FloatArray]:
+        """This cycle's step-plane input from the map (:mod:`shc_cli.control.step_plane`)."""
+        assert self.walker is not None
+        if self._step_planes is None:
+            spec = self.robot.perception or Perception()
+            self._step_planes = StepPlanes(len(self.stance), StepPlaneSettings(
+                spec.edge_margin, spec.edge_step, spec.max_shift, spec.clearance_margin, spec.max_clearance,
+                spec.max_slope, self.robot.body.size[0], self.robot.body.size[1], spec.lookahead))
+            self.walker.max_plane_slope, self.walker.floor_deadband = spec.max_slope, spec.edge_step
+        legs, cycle, walk = self.walker.legs, self.walker.cycle, self.walker.desired_velocity()
+        pose = self.poser.current
+        planes = self._step_planes
+        self.walker.body_floor = planes.body_floor  # (the last cycle's: the walk plane is fitted after the legs)
+        vectors = legs.vectors
+        return planes.update(terrain, vectors[:, stepping.DEFAULT] + 0.5 * vectors[:, stepping.STRIDE],
+                             vectors[:, stepping.CURRENT], pose.position, pose.rotation,
+                             legs.floats[:, stepping.SWING_PROGRESS], self.parameters["swing_height"], walk[:2],
+                             cycle.swing_period / cycle.period / cycle.frequency)
 
     def _apply_admittance(self, admittance: AdmittanceController) -> None:
         """Raise each walking leg's tip target by its admittance offset (paper eq. 20, z_d = z_r − Δz)."""

@@ -147,7 +147,7 @@ def _update_stride(vectors, leg, vx, vy, omega, scale, swing_height, plane, norm
 def update_tip_position(  # type: ignore[no-untyped-def]
     vectors, nodes, floats, integers, leg, period, swing_start, swing_end, stance_start, stance_end,
     swing_period, stance_period_full, frequency, dt, vx, vy, omega, swing_height, swing_width, plane, normal,
-    rough, step_depth, sensing, contact, body_position,
+    rough, step_depth, sensing, contact, body_position, perceive, offsets, clearances,
 ):
     """Move one leg's walker tip one control cycle along its swing or stance curve (study §5).
 
@@ -155,6 +155,10 @@ def update_tip_position(  # type: ignore[no-untyped-def]
     through where the foot last landed); with foot sensing, the swing target is lowered by ``step_depth`` along
     the walk-plane normal (reactive) and, once the foot touches down in the second half of the swing, the tip
     stops moving towards the ground. Returns whether the default tip moved.
+
+    With ``perceive`` (a height map, :mod:`shc_cli.control.step_plane`) the target is shifted by the leg's
+    ``offsets`` (OpenSHC's proactive step-plane shift, walk-plane frame) and the swing clearance is the leg's
+    ``clearances`` instead of ``swing_height``.
     """
     moved = False
     state = integers[leg, STATE]
@@ -177,6 +181,10 @@ def update_tip_position(  # type: ignore[no-untyped-def]
         size = math.sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2])
         for i in range(3):
             vectors[leg, TARGET, i] -= step_depth * (normal[i] / size)
+    if perceive:
+        for i in range(3):
+            vectors[leg, TARGET, i] += offsets[leg, i]
+        swing_height = clearances[leg]
     scale = (stance_period_full / period) / frequency
     delta = np.empty(3)
     if state == SWING:
@@ -290,7 +298,7 @@ def update_default_tip(vectors, floats, leg, body_position):  # type: ignore[no-
 def walk_legs(  # type: ignore[no-untyped-def]
     vectors, nodes, floats, integers, counters, walk_state, period, swing_start, swing_end, stance_start,
     stance_end, swing_period, stance_period, frequency, dt, vx, vy, omega, swing_height, swing_width, plane,
-    normal, body_position, rough, step_depth, sensing, contacts,
+    normal, body_position, rough, step_depth, sensing, contacts, perceive, offsets, clearances,
 ):
     """OpenSHC's per-leg block of ``updateWalk`` for every leg in id order (counters change during the loop).
 
@@ -334,7 +342,7 @@ def walk_legs(  # type: ignore[no-untyped-def]
         if update_tip_position(vectors, nodes, floats, integers, leg, period, swing_start, swing_end, stance_start,
                                stance_end, swing_period, stance_period, frequency, dt, vx, vy, omega, swing_height,
                                swing_width, plane, normal, rough, step_depth, sensing, contacts[leg],
-                               body_position):
+                               body_position, perceive, offsets, clearances):
             moved += 1
         iterate_phase(integers, floats, leg, period, swing_start, swing_end, stance_start, stance_end)
     return moved
@@ -398,7 +406,7 @@ def walk_update(  # type: ignore[no-untyped-def]
     vectors, nodes, floats, integers, counters, walk, walk_state, table, bearing_step, period, swing_start,
     swing_end, stance_start, stance_end, swing_period, stance_period, frequency, dt, linear_x, linear_y, angular,
     throttle, swing_height, swing_width, plane, normal, body_position, legs_walking, posing_complete, limits_out,
-    rough, step_depth, sensing, contacts,
+    rough, step_depth, sensing, contacts, perceive, offsets, clearances,
 ):
     """One cycle of OpenSHC's ``updateWalk`` (study §4.4, §6; exact notes §2): limits for the input at the
     current tips, new target velocity, acceleration ramp, walk-state transition, the legs, ideal odometry.
@@ -461,7 +469,7 @@ def walk_update(  # type: ignore[no-untyped-def]
     moved = walk_legs(vectors, nodes, floats, integers, counters, walk_state, period, swing_start, swing_end,
                       stance_start, stance_end, swing_period, stance_period, frequency, dt, walk[DESIRED_X],
                       walk[DESIRED_Y], walk[DESIRED_YAW_RATE], swing_height, swing_width, plane, normal,
-                      body_position, rough, step_depth, sensing, contacts)
+                      body_position, rough, step_depth, sensing, contacts, perceive, offsets, clearances)
     # Ideal odometry: compose this cycle's commanded motion.
     sx, sy = walk[DESIRED_X] * dt, walk[DESIRED_Y] * dt
     c, s = math.cos(walk[ODOMETRY_YAW]), math.sin(walk[ODOMETRY_YAW])

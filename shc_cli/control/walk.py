@@ -63,6 +63,17 @@ class WalkController:
         self.walk_plane_normal = np.array([0.0, 0.0, 1.0])
         self._plane_tips: np.ndarray | None = None
         self._no_contacts = np.zeros(len(self.leg_ids), dtype=np.bool_)
+        self.step_plane: tuple[np.ndarray, np.ndarray] | None = None
+        """This cycle's step-plane input (:mod:`shc_cli.control.step_plane`): each leg's target shift ``(L, 3)``
+        in the walk-plane frame and swing clearance ``(L,)`` [m]; ``None``: blind (OpenSHC's behaviour)."""
+        self.max_plane_slope = 0.0
+        self.body_floor = -np.inf
+        """With a step-plane input, the walk plane's height at the body is at least this (walk-plane frame) [m]."""
+        self.floor_deadband = 0.0
+        """A floor less than this above the walk plane is map noise and leaves the plane as it is [m]."""
+        """With a step-plane input, the walk plane's slope is clamped to this (tan of its pitch and roll)."""
+        self._no_offsets = np.zeros((len(self.leg_ids), 3))
+        self._no_clearances = np.zeros(len(self.leg_ids))
 
     @property
     def cycle(self) -> StepCycle:
@@ -112,6 +123,9 @@ class WalkController:
             step_depth: reactive target lowering in rough-terrain mode [m].
         """
         legs = self.legs
+        plane_input = self.step_plane
+        perceive = plane_input is not None
+        offsets, clearances = (self._no_offsets, self._no_clearances) if plane_input is None else plane_input
         state, moved = stepping.walk_update(
             legs.vectors, legs.nodes, legs.floats, legs.integers, self.counters, self._walk, int(self.state),
             self._table, self._bearing_step, *self._cycle_values, self.time_delta, float(linear_input[0]),
@@ -120,10 +134,13 @@ class WalkController:
             np.asarray(default_body_position, dtype=float), legs_walking, posing_complete, self._limit_out,
             self.rough_terrain, float(step_depth), contacts is not None,
             self._no_contacts if contacts is None else np.asarray(contacts, dtype=np.bool_),
+            perceive, offsets, clearances,
         )
         if state != self.state:
             self.state = WalkState(state)
-        if moved or self._plane_tips is None:  # the plane only depends on the default tips
+        if plane_input is not None:  # seeing the ground: the plane of the predicted footholds
+            self._update_walk_plane(stepping.TARGET)
+        elif moved or self._plane_tips is None:  # the plane only depends on the default tips
             self._plane_tips = self.legs.vectors[:, stepping.DEFAULT].copy()
             self._update_walk_plane()
 
@@ -152,13 +169,22 @@ class WalkController:
         """Ideal odometry heading [rad]."""
         return float(self._walk[stepping.ODOMETRY_YAW])
 
-    def _update_walk_plane(self) -> None:
-        """Least-squares plane through the legs' default tips (study §7.6)."""
+    def _update_walk_plane(self, slot: int = stepping.DEFAULT) -> None:
+        """Least-squares plane through the legs' default tips (study §7.6).
+
+        With a step-plane input, through the legs' targets (the predicted footholds, ATHENA-style), its slope
+        clamped to :attr:`max_plane_slope`: the body rises and tilts before the feet step up.
+        """
         if len(self.leg_ids) < 3:
             return
-        tips = self.legs.vectors[:, stepping.DEFAULT]
+        tips = self.legs.vectors[:, slot]
         design = np.column_stack([tips[:, 0], tips[:, 1], np.ones(len(tips))])
         self.walk_plane = np.linalg.inv(design.T @ design) @ design.T @ tips[:, 2]
+        if slot != stepping.DEFAULT:
+            limit = self.max_plane_slope
+            self.walk_plane[:2] = np.clip(self.walk_plane[:2], -limit, limit)
+            if self.body_floor > self.walk_plane[2] + self.floor_deadband:  # (a few mm of map noise: nothing)
+                self.walk_plane[2] = self.body_floor
         normal = np.array([-self.walk_plane[0], -self.walk_plane[1], 1.0])
         self.walk_plane_normal = normal / np.linalg.norm(normal)
 

@@ -84,6 +84,8 @@ class SimulationConfig(BaseModel):
             :attr:`paced`; :mod:`shc_cli.loop.input_choice`).
         watchdog: stdin: seconds without a line before the velocities go to zero [s].
         policy: a policy file acting on the controller once it runs (:mod:`shc_cli.loop.policy.drive`).
+        perception: ``off`` (blind, as OpenSHC) or ``rays``: a simulated depth sensor's height map is the
+            controller's step-plane input (:mod:`shc_cli.loop.perception`).
     """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
@@ -121,6 +123,7 @@ class SimulationConfig(BaseModel):
     input_mode: str = "timeline"
     watchdog: float = 0.5
     policy: Path | None = None
+    perception: Literal["off", "rays"] = "off"
 
     def __init__(self, **options: Any) -> None:
         unknown = [key for key in options if key not in type(self).model_fields]
@@ -346,3 +349,4 @@ class SimulationOptions(TypedDict, total=False):
     watchdog: float
     engine: EngineName
     policy: Path | str | None
+    perception: Literal["off", "rays"]

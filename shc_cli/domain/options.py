@@ -123,6 +123,8 @@ SIMULATE: dict[str, Option] = {option.name: option for option in (
            True, example="0.5"),
     Option("policy", Path, None, "A policy file (.npz, shc_cli.loop.policy.file) acting on the controller once it "
            "runs: gait parameters or residual tip offsets within their ranges (docs/gym.md)."),
+    Option("perception", str, "off", "off (blind, as OpenSHC) or rays: a simulated depth sensor's height map "
+           "shapes footholds, swing height and body height (docs/terrain-adaptation.md)."),
 )}
 """Every option of ``shc simulate``, in its order."""
 

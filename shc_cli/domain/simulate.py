@@ -138,12 +138,23 @@ def _simulation(parts: Assembly, c: SimulationConfig, inputs: RunInputs, progres
     if inputs.path is not None:
         source.close()
         source = inputs.source(controller)
+    path_fields = keep_path(source, run.partial)
     record = PhysicsRecord(robot, backend, c.airborne)
     observers: list[Observer[Reading]] = [record]
     if failure is not None and failure.at_s is not None:
         from shc_cli.loop.leg_fault import FailureEvents
 
         observers.append(FailureEvents(controller))
+    if c.perception == "rays":  # the depth sensor: an observer whose map the commands carry
+        from shc_cli.errors import Issue, SpecError
+        from shc_cli.loop.perception import RayCaster, RayPerception
+
+        if not isinstance(world, RayCaster):
+            raise SpecError([Issue(None, None, "--perception", f"the {world.name} engine casts no rays",
+                                   "use --engine mujoco or pybullet, or --perception off")])
+        eyes = RayPerception(robot, world, c.seed)
+        observers.insert(0, eyes)
+        source = eyes.wrap(source)
 
     def summarise(finished: Finished) -> RunSummary:  # from the finished log
         return _summary(record, finished, c, controller, world, by_hand)
@@ -153,7 +164,6 @@ def _simulation(parts: Assembly, c: SimulationConfig, inputs: RunInputs, progres
 
         plot_simulation(robot, record.plot_series(folder), folder, gait=controller.gait.name)
 
-    path_fields = keep_path(source, run.partial)
     if drive is not None:
         source = drive.source(source)
     return RunSpec(controller, backend, source, LogRecorder(run, robot, backend), StartUp.of(robot), run, summarise,
@@ -177,7 +187,8 @@ def _summary(record: PhysicsRecord, finished: Finished, c: SimulationConfig, con
         "seed": c.seed, "terrain": str(world.terrain.spec), "engine": world.name, "engine_version": world.version,
         "engine_warnings": world.warnings,
         "versions": {"shc": __version__, world.name: world.version, "numpy": np.__version__},
-        **({"input": c.input_mode} if by_hand else {}), **finished.shared})
+        **({"input": c.input_mode} if by_hand else {}),
+        **({"perception": c.perception} if c.perception != "off" else {}), **finished.shared})
 
 
 FLUSH_PACED = 20

@@ -182,6 +182,8 @@ class RunSummary(BaseModel):
     # the simulated world
     seed: int | None = Field(None, description="simulate: seed of every random thing.")
     terrain: str | None = Field(None, description="simulate: the terrain, as --terrain gives it.")
+    perception: str | None = Field(None, description="simulate: 'rays' when a simulated depth sensor's height map "
+                                   "shaped the steps (absent: blind, --perception off).")
     engine: str | None = Field(None, description="simulate: the physics engine (pybullet or mujoco).")
     engine_version: str | None = Field(None, description="simulate: the physics engine's version.")
     engine_warnings: list[str] | None = Field(None, description="simulate: the engine's warnings (e.g. an unstable "

@@ -431,6 +431,17 @@ class Perception(Strict):
     rate: Positive = Field(30.0, description="scans per second [Hz]")
     cell: Positive = Field(0.05, description="side of a height-map cell [m]")
     extent: Positive = Field(1.5, description="the height map reaches this far from the robot in x and y [m]")
+    edge_margin: NonNegative = Field(
+        0.05, description="a foothold keeps this far from a height change of more than edge_step [m]")
+    edge_step: NonNegative = Field(0.03, description="a height change above this within edge_margin is an edge [m]")
+    max_shift: NonNegative = Field(0.1, description="a foothold moves at most this far away from an edge [m]")
+    clearance_margin: NonNegative = Field(
+        0.04, description="a swing clears the highest point on its path by at least this [m]")
+    max_clearance: Positive = Field(0.25, description="the highest swing clearance obstacles may ask for [m]")
+    lookahead: NonNegative = Field(
+        0.1, description="the body keeps its clearance above the highest ground under it and this far ahead [m]")
+    max_slope: NonNegative = Field(
+        0.25, description="the walk plane (and the body) follows the footholds' slope up to this (tan of pitch, roll)")
 
     @model_validator(mode="after")
     def _near_below_far(self) -> Perception:
