@@ -168,23 +168,3 @@ def test_run_hw_refuses_a_joints_policy_before_the_bus_opens(tmp_path: Path) -> 
     with pytest.raises(SpecError, match="a 'joints' policy replaces the controller's targets"):
         run_hardware(HardwareConfig(robot=str(_bus_robot(tmp_path)), ports=["/dev/null-no-bus"],
                                     policy=tmp_path / "joints.npz"))
-
-
-@pytest.mark.slow
-def test_the_ppo_example_exports_a_policy_that_shc_simulate_runs(tmp_path: Path) -> None:
-    """docs/experiments/gym_ppo.py (stable-baselines3 on torch's CPU wheel: the ``rl`` extra) with a small budget:
-    its exported file acts as SB3's deterministic ``predict`` (the script asserts it) and ``shc simulate --policy``
-    walks it."""
-    pytest.importorskip("stable_baselines3")
-    import re
-
-    from .conftest import ROOT
-
-    done = subprocess.run([sys.executable, str(ROOT / "docs" / "experiments" / "gym_ppo.py"), "--timesteps", "16",
-                           "--duration", "1",
-                           "--save", str(tmp_path / "ppo.npz")], capture_output=True, text=True, timeout=900)
-    assert done.returncode == 0, done.stderr
-    assert re.search(r"ppo: CoT [\d.]+ against [\d.]+ of the defaults", done.stdout), done.stdout
-    assert Policy.load(tmp_path / "ppo.npz").info["source"] == "PPO"
-    result = _simulate(tmp_path, "sim", "--policy", str(tmp_path / "ppo.npz"))
-    assert result.returncode == 0, result.stderr
