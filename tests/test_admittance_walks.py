@@ -60,10 +60,11 @@ def _walked(tmp_path: Path, name: str, admittance: bool, **options: object) -> t
 
 def test_admittance_walks_on_flat_ground_as_far_as_without(tmp_path: Path) -> None:
     """The default robot, 5 s at full throttle on flat ground: with admittance it walks ≥ 90 % of the distance it
-    walks without (measured: 97 % over 10 s) and has no NO PROGRESS flag."""
+    walks without (measured: 97 % over 10 s) and has no NO PROGRESS flag. (Without: 0.32 m, at the verified 0.094
+    m/s of its speed limits after the start-up.)"""
     off, _ = _walked(tmp_path, "off", False)
     on, run_on = _walked(tmp_path, "on", True)
-    assert off > 0.5
+    assert off > 0.25
     assert on >= 0.9 * off
     assert not run_on.summary.no_progress and run_on.summary.cot is not None
 

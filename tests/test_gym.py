@@ -20,6 +20,7 @@ from shc_cli.backends.engine import Reading
 from shc_cli.backends.simulated import SimulatedBackend, open_world
 from shc_cli.control.controller import Command, Controller, CycleOutput
 from shc_cli.control.states import RobotState
+from shc_cli.control.verified_limits import source_for
 from shc_cli.control.walk import WalkState
 from shc_cli.domain.config import SimulationConfig
 from shc_cli.gym.env import WalkEnv
@@ -79,7 +80,8 @@ def _simulated_targets(velocity: str, seed: int) -> list[np.ndarray]:
     world = open_world(inputs.robot, config.engine_options(inputs.robot))
     capture = _Capture()
     with SimulatedBackend(inputs.robot, world) as backend:
-        controller = Controller(inputs.robot, inputs.gait, joints=backend.start(), pose_sets=inputs.pose_sets)
+        controller = Controller(inputs.robot, inputs.gait, joints=backend.start(), pose_sets=inputs.pose_sets,
+                                speed_shares=source_for(inputs.robot))  # as the domain makes it
         RunLoop(controller, backend, inputs.source(controller), capture, StartUp.of(inputs.robot)).run()
     return capture.applied
 

@@ -283,7 +283,7 @@ def test_the_api_returns_the_study_and_prints_nothing(tmp_path: Path, capsys: py
     import shc_cli
 
     out = tmp_path / "out"
-    result = shc_cli.optimize(_write(tmp_path, SMALL.format(duration=0.3, seeds="[0]")), trials=2, workers=1, out=out)
+    result = shc_cli.optimize(_write(tmp_path, SMALL.format(duration=1.0, seeds="[0]")), trials=2, workers=1, out=out)
     assert capsys.readouterr().out == ""
     assert isinstance(result, shc_cli.StudyResult) and result.path == out
     assert result.trials == _rows(out / "trials.csv") and [r["trial"] for r in result.trials] == ["0", "1"]

@@ -25,9 +25,10 @@ def _analysis(run_dir: Path, capsys: pytest.CaptureFixture[str], monkeypatch: py
 
 
 def test_plan_walks_the_square_exactly(tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
-    """Kinematically the odometry is the walker's own motion: every waypoint is reached within 1 mm of the ideal
+    """Kinematically the odometry is the walker's own motion: every waypoint is reached within 1.5 mm of the ideal
     body path and 1.2° (the follower settles to 1°), the body keeps to the square within 1 mm RMS, and the robot
-    stops at the last waypoint (the run ends STOPPED, the input over)."""
+    stops at the last waypoint (the run ends STOPPED, the input over). At bullet's verified speed limits the square
+    takes 139 s, its last waypoint 1.09 mm off (with OpenSHC's: 83 s and 0.32 mm, with 2998 IK deviations)."""
     out = tmp_path / "square"
     code, stdout, err = run(["plan", "--path", str(SQUARE), "--out", str(out), "--no-plots"], capsys, monkeypatch)
     assert code == 0, err
@@ -41,9 +42,9 @@ def test_plan_walks_the_square_exactly(tmp_path: Path, capsys, monkeypatch) -> N
     assert result["waypoints_total"] == result["waypoints_reached"] == 4
     errors, headings = result["waypoint_errors_m"], result["waypoint_heading_errors_deg"]
     assert isinstance(errors, list) and isinstance(headings, list)
-    assert max(errors) < 1e-3 and max(abs(h) for h in headings) < 1.2
+    assert max(errors) < 1.5e-3 and max(abs(h) for h in headings) < 1.2
     assert isinstance(result["cross_track_rms_m"], float) and result["cross_track_rms_m"] < 1e-3
-    assert isinstance(result["time_to_goal_s"], float) and 60.0 < result["time_to_goal_s"] < 100.0
+    assert isinstance(result["time_to_goal_s"], float) and 100.0 < result["time_to_goal_s"] < 180.0
     # 8 m at the walkspace's 0.2 m/s is 40 s; four quarter turns at 0.37 rad/s another 17 s; braking and settling
 
 

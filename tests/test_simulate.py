@@ -109,9 +109,8 @@ def test_mammalian_starts_on_the_stand_and_walks_its_bipod(engine: str, tmp_path
 @pytest.mark.parametrize("engine", ENGINES)
 def test_mammalian_cannot_lift_itself_off_the_ground(engine: str, tmp_path: Path, capsys, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     """Why the mammalian starts on a stand: from the ground its front femurs saturate at the MX-106 stall torque
-    and, in PyBullet, it pitches onto its nose during the direct start-up. In MuJoCo the front femurs saturate
-    too but the rear legs carry more (soft contacts share the load differently) and it gets up: a borderline
-    case (docs/physics-model.md, engines)."""
+    and it pitches onto its nose during the direct start-up, in both engines since MuJoCo's friction is Bullet's
+    elliptic cone (docs/physics-model.md, engines; it pitched 0.03–0.3 rad in MuJoCo with the pyramidal cone)."""
     code, _, out = _simulate(tmp_path, "ground", ["bullet_mammalian", "--ground", "--duration", "1", "--no-plots",
                                                   "--engine", engine], capsys, monkeypatch)
     assert code == 0
@@ -120,7 +119,7 @@ def test_mammalian_cannot_lift_itself_off_the_ground(engine: str, tmp_path: Path
     stall = 8.4
     assert max(abs(float(row["AR_femur_torque"])) for row in rows[:150]) > 0.99 * stall
     pitch = max(float(row["pitch"]) for row in rows if row["robot_state"] != "RUNNING")
-    assert pitch > 0.3 if engine == "pybullet" else 0.03 < pitch < 0.3  # nose down [rad]
+    assert pitch > 0.3  # nose down [rad]
 
 
 @pytest.mark.parametrize("substeps", [8, 9])
@@ -256,13 +255,14 @@ def simulate_variant(tmp_path: Path, robot_text: str, args: list[str], out: str,
 def test_a_robot_that_falls_in_its_first_running_cycle_has_no_speed_and_no_cot(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     """ATHENA with an MX-106-like explicit servo law and no rotor inertia is thrown off the floor during start-up
-    (tests/test_servo.py) and the fall check ends the run in its first RUNNING cycle: one cycle's displacement is no
-    walking speed (it was 7 m/s and a CoT of 0.07, which a sweep's CoT plot would take for the best run)."""
+    (tests/test_servo.py) and the fall check, which watches the start-up too, ends the run before it walks: no
+    walking speed (a run that ended in its first RUNNING cycle once gave 7 m/s and a CoT of 0.07, which a sweep's CoT
+    plot would take for the best run)."""
     code, _, summary = simulate_variant(
         tmp_path, 'extends = "athena"\nname = "athena_dxl"\n[servo]\ncontrol = "dynamixel"\nstall_torque = 1.5\n',
         ["--engine", "pybullet"],
         "run", capsys, monkeypatch)
     assert code == 0 and summary["fell"]
-    assert summary["analysed_time_s"] == pytest.approx(0.01)
+    assert summary["analysed_time_s"] <= 0.01
     assert summary["displacement_speed_mps"] == 0.0 and summary["path_speed_mps"] == 0.0
     assert summary["cot"] is None

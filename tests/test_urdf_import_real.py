@@ -95,7 +95,7 @@ def test_third_party_descriptions_import_without_options_with_their_kinematics(
     yaw = math.radians(float(turned.group(1))) if turned else 0.0
     assert _fk_worst(snapped, path, robot_file, yaw=yaw) < 1e-6
     if "snapped" in out:  # PhantomX: base z and coxa axes 8.9e-5 rad apart; the snap moves tips < 0.4 mrad × 0.3 m
-        assert _fk_worst(path.read_text(), path, robot_file, legs_text=snapped) < 1.2e-4
+        assert _fk_worst(path.read_text(), path, robot_file, legs_text=snapped, yaw=yaw) < 1.2e-4
 
 
 @pytest.mark.slow

@@ -42,12 +42,12 @@ SIMULATE = ("scenario", "sim_time_s", "analysed_time_s", "wall_time_s", "running
             "running_physics_time_s", "physics_time_s", "physics_rate_hz", "cycle_frequency_hz", "distance_m",
             "forward_distance_m", "mean_speed_mps", "displacement_speed_mps", "path_speed_mps", "commanded_speed_mps",
             "commanded_distance_m", "walked_share", "no_progress", "true_pose", "mean_power_w", "mass_kg",
-            "servo_model", "cot", "cot_displacement", "walked_m", "max_tilt_rad", "fell", "fault", "seed", "terrain",
-            "engine", "engine_version", "engine_warnings", "versions", "input")
+            "servo_model", "cot", "cot_displacement", "walked_m", "max_tilt_rad", "fell", "fall", "fault", "seed",
+            "terrain", "engine", "engine_version", "engine_warnings", "versions", "input", "perception")
 """``simulate`` (and ``shc ros`` on an engine): physics timings, speeds, power, cost of transport, the fall."""
 HARDWARE = ("scenario", "cycles", "sim_time_s", "port", "baud", "dry_run", "wire_time_ms", "read_retries",
             "bridged_cycles", "bridged_reads", "missed_cycles_max", "missed_reads_fault", "fault", "stopped_by_request",
-            "final_state", "stop_state", "unmeasured", "input", "watchdog_trips")
+            "final_state", "stop_state", "unmeasured", "input", "watchdog_trips", "failed_legs")
 """``run-hw`` (and ``shc ros --backend bus``): the bus, its cycle times and reads, the fault, the final state."""
 ROS = ("cycles", "node", "ros_master", "backend")
 """What ``shc ros`` adds to its backend's kind."""
