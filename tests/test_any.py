@@ -32,7 +32,6 @@ ALLOWED: dict[str, tuple[int, str, str]] = {
     "backends/servo.py": (2, FORCED, "numba dispatchers (untyped)"),
     "commands/analyze.py": (3, DEBT, "JSON rows of shc analyze"),
     "commands/schema.py": (1, DEBT, "a JSON Schema document"),
-    "control/manipulation.py": (1, DEBT, "the controller's stance dict"),
     "domain/bringup/servo_file.py": (1, DEBT, "TOML document values"),
     "domain/config.py": (6, DEBT, "option mappings of SimulationConfig (one option table would type them)"),
     "domain/fit/outputs.py": (1, DEBT, "the fit's JSON document"),

@@ -9,7 +9,6 @@ from .conftest import ROOT
 LIMIT = 600
 """Lines a module may have."""
 OVER: dict[str, int] = {
-    "control/controller.py": 824,  # the controller: split by concern (issue 35's next step)
     "cli.py": 739,  # the option tables: generated from one table (issue 35's option table)
     "view/server.py": 697,
 }
