@@ -8,10 +8,7 @@ from .conftest import ROOT
 
 LIMIT = 600
 """Lines a module may have."""
-OVER: dict[str, int] = {
-    "cli.py": 739,  # the option tables: generated from one table (issue 35's option table)
-    "view/server.py": 697,
-}
+OVER: dict[str, int] = {}
 """Modules still over :data:`LIMIT`, with the lines each may have at most (only ever lowered)."""
 
 
