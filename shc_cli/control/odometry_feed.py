@@ -39,23 +39,24 @@ class OdometryFeed:
         foot forces weigh the feet. Roll and pitch come from the IMU or else the commanded body pose; the IMU's
         heading change (of its orientation; of its angular rate × dt without one) is fused.
         """
+        core = self.c
         if sensors is None:
             self._stance_before = stance
-            roll, pitch, _ = self.c.poser.current.euler()
-            return self.odometry.cycle(self.c.model.tips, roll, pitch, stance)
+            roll, pitch, _ = core.poser.current.euler()
+            return self.odometry.cycle(core.model.tips, roll, pitch, stance)
         if sensors.joints is not None:  # Chains.tips's kernel, into a buffer of the odometry's
-            c, feet = self.c.model.chains, self._measured_feet
+            c, feet = core.model.chains, self._measured_feet
             kernels.tips_kernel(c.base, c.d, c.theta, c.r, c.alpha, np.ascontiguousarray(sensors.joints, dtype=float),
                                 feet)
             use = self._stance_before
         else:
-            feet, use = self.c.model.tips, stance
+            feet, use = core.model.tips, stance
         self._stance_before = stance
         orientation, turn, roll, pitch = sensors.orientation, None, 0.0, 0.0
         if orientation is None:
-            roll, pitch, _ = self.c.poser.current.euler()
+            roll, pitch, _ = core.poser.current.euler()
             if sensors.angular_rate is not None:
-                turn = euler_yaw_rate(roll, pitch, np.asarray(sensors.angular_rate, dtype=float)) * self.c.dt
-        commanded = self.c.walker.desired_angular if self.c.walker is not None else 0.0
+                turn = euler_yaw_rate(roll, pitch, np.asarray(sensors.angular_rate, dtype=float)) * core.dt
+        commanded = core.walker.desired_angular if core.walker is not None else 0.0
         return self.odometry.cycle(feet, roll, pitch, use, turn, sensors.foot_forces, orientation,
                                    sensors.foot_contact, commanded)

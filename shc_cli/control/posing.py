@@ -47,24 +47,25 @@ class Posing:
 
     def update(self, forced_reset: bool) -> None:
         """The body pose of this cycle, from the previous cycle's leg states (OpenSHC ``updateCurrentPose``)."""
-        if self.c.walker is None:
+        c = self.c
+        if c.walker is None:
             progress, planes, normals = np.empty(0), np.empty((0, 3)), np.empty((0, 3))
         else:
-            legs = self.c.walker.legs
+            legs = c.walker.legs
             progress = legs.floats[:, stepping.SWING_PROGRESS]
             planes, normals = legs.vectors[:, stepping.PLANE], legs.vectors[:, stepping.NORMAL]
-        if self.c.state == _RUNNING:
-            reset = _IMMEDIATE_ALL if forced_reset else self.c.pose_reset
-            self.c.poser.update_manual(self.c.pose_input, reset)
+        if c.state == _RUNNING:
+            reset = _IMMEDIATE_ALL if forced_reset else c.pose_reset
+            c.poser.update_manual(c.pose_input, reset)
         auto = None
-        if self.c.autoposer is not None:
-            self._update_auto_pose(self.c.autoposer)
-            auto = self.c.autoposer.body_pose
+        if c.autoposer is not None:
+            self._update_auto_pose(c.autoposer)
+            auto = c.autoposer.body_pose
         feedback: tuple[Pose | None, ...] = ()
-        if self.c.uses_sensors:
+        if c.uses_sensors:
             auto, feedback = self._feedback_poses(auto)
-        self.c.poser.update_current_pose(progress, self.c.gait.swing_phase, self.c.gait.phase_offset, planes, normals,
-                                       auto, feedback)
+        c.poser.update_current_pose(progress, c.gait.swing_phase, c.gait.phase_offset, planes, normals, auto,
+                                    feedback)
 
     def _feedback_poses(self, auto: Pose | None) -> tuple[Pose | None, tuple[Pose | None, ...]]:
         """The sensor-driven pose terms of this cycle: ATHENA posture, inclination, IMU (replacing auto)."""
