@@ -8,11 +8,7 @@ from .conftest import ROOT
 
 LIMIT = 600
 """Lines a module may have."""
-OVER: dict[str, int] = {
-    "control/controller.py": 888,  # the controller: split by concern (issue 35's next step)
-    "cli.py": 760,  # the option tables: generated from one table (issue 35's option table)
-    "view/server.py": 697,
-}
+OVER: dict[str, int] = {}
 """Modules still over :data:`LIMIT`, with the lines each may have at most (only ever lowered)."""
 
 
