@@ -111,8 +111,10 @@ def test_the_body_follows_the_sway_at_the_walkers_phase() -> None:
             for j, group in enumerate(groups):
                 into = (t - j) % len(groups)
                 if min(into, abs(into - swing), len(groups) - into) > 0.02:  # clear of the switching instants
+                    walker = controller.walker
+                    assert walker is not None
                     for leg in group:
-                        state = controller.walker.legs.integers[LEGS.index(leg), stepping.STATE]
+                        state = walker.legs.integers[LEGS.index(leg), stepping.STATE]
                         assert (state == stepping.SWING) == (into < swing), (cycle, leg, t)
     assert out is not None and len(errors) > 1000
     assert max(errors) < 0.005
