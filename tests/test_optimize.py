@@ -220,7 +220,7 @@ def test_interrupted_study_resumes_without_losing_or_rerunning_trials(tmp_path: 
     without simulating them again (their run directories are untouched)."""
     path = _write(tmp_path, SMALL.format(duration=0.5, seeds="[0]"))
     out = tmp_path / "out"
-    command = [sys.executable, "-m", "shc_cli.cli", "optimize", str(path), "--trials", "5", "--workers", "1",
+    command = [sys.executable, "-m", "shc_cli.cli", "optimize", str(path), "--trials", "12", "--workers", "1",
                "--out", str(out)]
     env = {**os.environ, "CI": "1"}
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
@@ -239,13 +239,13 @@ def test_interrupted_study_resumes_without_losing_or_rerunning_trials(tmp_path: 
     assert process.returncode == 130, err  # interrupted: 128 + SIGINT, as plan and simulate
     assert "interrupted by SIGINT" in err and "--resume" in err
     before = {r["trial"]: r for r in _rows(out / "trials.csv") if r["state"] == "complete"}
-    assert 2 <= len(before) < 5
+    assert 2 <= len(before) < 12  # (5 trials were sometimes all done before the signal arrived)
     stamps = {run: (Path(run) / "summary.json").stat().st_mtime_ns for r in before.values()
               for run in r["runs"].split(";")}
     finished = subprocess.run([*command, "--resume"], capture_output=True, text=True, env=env, timeout=300)
     assert finished.returncode == 0, finished.stderr
     after = _rows(out / "trials.csv")
-    assert [r["trial"] for r in after] == ["0", "1", "2", "3", "4"]
+    assert [r["trial"] for r in after] == [str(trial) for trial in range(12)]
     assert all(r["state"] == "complete" for r in after), [(r["trial"], r["state"], r["error"]) for r in after]
     for number, row in before.items():
         assert {k: v for k, v in after[int(number)].items() if k != "trial_wall_s"} == \

@@ -411,7 +411,7 @@ def test_run_hw_walks_on_the_emanual_bus_with_the_default_return_delay(tmp_path:
             assert abs(servo.get(132) - servo.get(GOAL_POSITION)) <= 1
         moved = [max(g for _, g, _, on in s.trace if on) - min(g for _, g, _, on in s.trace if on)
                  for s in bus.servos.values()]
-        assert all(m > 100 for m in moved)  # every joint moved [ticks]
+        assert all(m > 40 for m in moved)  # every joint moved [ticks] (bullet's verified speed limits: slower)
         pings = [p for _, p in bus.instructions(PING)]
         assert pings and pings[0].packet_id == 0xFE
         final_goals = {servo.key: servo.get(GOAL_POSITION) for servo in bus.servos.values()}
