@@ -92,6 +92,45 @@ class StudyReport:
         return sum(1 for r in self.trials if r["state"] == "complete" and bool(r["feasible"]))
 
 
+class _SignalLatch:
+    """Remembers a SIGINT while the study runs, so that one whose KeyboardInterrupt landed in a callback that Python
+    ignores (SQLAlchemy's garbage-collection hook: "Exception ignored in … _collection_gced") still interrupts the
+    study at the next batch instead of being lost (the study then ran to its end and exited 0)."""
+
+    def __init__(self) -> None:
+        self.received = False
+        self._previous: object = None
+
+    def __enter__(self) -> _SignalLatch:
+        import signal
+        import threading
+
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.getsignal(signal.SIGINT)
+            signal.signal(signal.SIGINT, self._handle)
+        return self
+
+    def _handle(self, signum: int, frame: object) -> None:
+        self.received = True
+        previous = self._previous
+        if callable(previous):  # (SIG_IGN and SIG_DFL are not callable)
+            previous(signum, frame)
+        raise KeyboardInterrupt
+
+    def check(self) -> None:
+        """Raise the remembered interruption (a SIGINT whose KeyboardInterrupt was swallowed)."""
+        if self.received:
+            raise KeyboardInterrupt
+
+    def __exit__(self, *exc: object) -> None:
+        import signal
+        import threading
+
+        previous = self._previous
+        if previous is not None and threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGINT, previous)  # type: ignore[arg-type]  # (what getsignal gave)
+
+
 def suggest(trial: optuna.trial.Trial, dimension: Dimension) -> Any:
     """The trial's value of one searched parameter."""
     if dimension.kind == "categorical":
@@ -159,9 +198,11 @@ def run_optimize(file: Path, trials: int | None = None, workers: int | None = No
     started = time.perf_counter()
     ran = 0
     coordinator = 0.0  # [s] asking, telling, storage and trials.csv: the overhead of the search itself
+    signals = _SignalLatch()
     try:
-        with RunPool(executor, count, scheduler) as pool:
+        with RunPool(executor, count, scheduler) as pool, signals:
             while True:
+                signals.check()
                 iteration = time.perf_counter()
                 existing = study.get_trials(deepcopy=False)
                 finished = sum(1 for t in existing if t.state.is_finished())
